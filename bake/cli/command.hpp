@@ -1,0 +1,36 @@
+// Subcommand registry of the clothbake CLI.
+//
+// Each subcommand lives in its own bake/cli/cmd_<name>.cpp and registers itself at static
+// initialisation time (the CLI sources are compiled straight into the executable, so no object is
+// dropped by the linker). setup() adds the subcommand's options and returns the action run when the
+// subcommand is selected; the action returns the process exit code or throws clothbake::Error.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace clothbake::cli {
+
+using Action = std::function<int()>;
+
+struct Command {
+  std::string name;
+  std::string description;
+  std::function<Action(CLI::App& subcommand)> setup;
+};
+
+// Adds a command; returns true so that it can initialise a namespace-scope constant.
+bool register_command(Command command);
+// All registered commands, sorted by name.
+std::vector<Command> registered_commands();
+
+// Prints JSON on stdout (pretty, 2-space indent, trailing newline): the machine output of --json.
+void print_json(const nlohmann::json& value);
+
+// Parses "x,y,z" (whitespace allowed) into three doubles; throws CLI::ValidationError naming the option.
+std::array<double, 3> parse_vec3(const std::string& text, const std::string& option_name);
+
+}  // namespace clothbake::cli

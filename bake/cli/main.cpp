@@ -1,0 +1,87 @@
+// clothbake: the command-line entry point. Subcommands register themselves (see command.hpp).
+// Exit codes (docs/cli.md): 0 ok, 1 usage, 2 input or I/O error, 3 invalid asset, 4 internal error.
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "bake/cli/command.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "common/version.hpp"
+
+namespace clothbake::cli {
+namespace {
+std::vector<Command>& registry() {
+  static std::vector<Command> commands;
+  return commands;
+}
+}  // namespace
+
+bool register_command(Command command) {
+  registry().push_back(std::move(command));
+  return true;
+}
+
+std::vector<Command> registered_commands() {
+  auto commands = registry();
+  std::sort(commands.begin(), commands.end(),
+            [](const Command& a, const Command& b) { return a.name < b.name; });
+  return commands;
+}
+
+void print_json(const nlohmann::json& value) {
+  std::cout << value.dump(2) << '\n';
+  std::cout.flush();
+}
+
+std::array<double, 3> parse_vec3(const std::string& text, const std::string& option_name) {
+  std::array<double, 3> v{};
+  std::string s = text;
+  for (char& ch : s)
+    if (ch == ',') ch = ' ';
+  std::istringstream in(s);
+  std::string rest;
+  if (!(in >> v[0] >> v[1] >> v[2]) || (in >> rest))
+    throw CLI::ValidationError(option_name, "expected three comma-separated numbers x,y,z, got '" + text + "'");
+  return v;
+}
+
+}  // namespace clothbake::cli
+
+int main(int argc, char** argv) {
+  using namespace clothbake;
+  CLI::App app{"clothbake: offline precompute and asset baking for the multi-scale cloth appearance model"};
+  app.set_version_flag("--version", std::string("clothbake ") + CLOTHBAKE_VERSION_STRING);
+  app.require_subcommand(1);
+  app.fallthrough(false);
+  std::map<CLI::App*, cli::Action> actions;
+  for (const auto& command : cli::registered_commands()) {
+    CLI::App* sub = app.add_subcommand(command.name, command.description);
+    actions[sub] = command.setup(*sub);
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e);  // prints help/version on stdout, errors on stderr
+    return code == 0 ? 0 : int(ExitCode::Usage);
+  }
+  try {
+    for (auto& [sub, action] : actions)
+      if (sub->parsed()) return action();
+    return int(ExitCode::Usage);
+  } catch (const CLI::ParseError& e) {
+    // Validation that needs more than CLI11 can express (thrown by an action before any output).
+    report_error(e.what());
+    return int(ExitCode::Usage);
+  } catch (const Error& e) {
+    report_error(e.what());
+    return int(e.code());
+  } catch (const std::bad_alloc&) {
+    report_error("out of memory");
+    return int(ExitCode::Internal);
+  } catch (const std::exception& e) {
+    report_error(std::string("internal error: ") + e.what());
+    return int(ExitCode::Internal);
+  }
+}

@@ -1,0 +1,39 @@
+// Image reading and writing through OpenImageIO: EXR, PNG, TIFF (and anything else OIIO reads),
+// 8-bit, 16-bit or float, 1-4 channels. Pixels are converted to float on read; 8/16-bit integer
+// images are normalised to [0, 1] (OIIO's convention), with no colour-space conversion.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace clothbake {
+
+// A float image, row-major, interleaved channels: value(x, y, c) = pixels[(y * width + x) * channels + c].
+// Row 0 is the top row of the file.
+struct Image {
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  std::vector<float> pixels;
+  std::string source_format;  // e.g. "openexr", "png", "tiff"; empty for in-memory images
+  int source_bits = 0;        // bits per channel in the file (8, 16, 32)
+
+  Image() = default;
+  Image(int w, int h, int c) : width(w), height(h), channels(c), pixels(std::size_t(w) * h * c, 0.f) {}
+  float& at(int x, int y, int c) { return pixels[(std::size_t(y) * width + x) * channels + c]; }
+  float at(int x, int y, int c) const { return pixels[(std::size_t(y) * width + x) * channels + c]; }
+};
+
+// Reads an image file. Throws clothbake::Error(Input) naming the path when the file is missing,
+// unreadable, truncated, empty (zero size) or has more than 4 channels.
+Image read_image(const std::string& path);
+
+enum class PixelType { Float32, Half, UInt8, UInt16 };
+
+// Writes an image; the format follows the extension (.exr, .png, .tif/.tiff). For integer outputs
+// values are clamped to [0, 1] and quantised. Throws clothbake::Error(Input) on I/O failure.
+// Writes to PATH directly: callers that need atomicity write to a temporary name and rename.
+void write_image(const std::string& path, const Image& image, PixelType type);
+
+}  // namespace clothbake
