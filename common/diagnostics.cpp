@@ -38,10 +38,16 @@ void info(const std::string& message) {
   if (!g_quiet) logger().info("{}", message);
 }
 
-void report_error(const std::string& message) { logger().error("error: {}", message); }
+void report_error(const std::string& message) {
+  logger().error("error: {}", message);
+}
 
-void set_quiet(bool quiet) { g_quiet = quiet; }
-bool is_quiet() { return g_quiet; }
+void set_quiet(bool quiet) {
+  g_quiet = quiet;
+}
+bool is_quiet() {
+  return g_quiet;
+}
 
 std::vector<std::string> take_warnings() {
   std::lock_guard lock(g_mutex);

@@ -11,25 +11,30 @@ namespace clothbake {
 
 Image read_image(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw_input_error(fmt::format("{}: file not found", path));
+  if (!std::filesystem::exists(path, ec))
+    throw_input_error(fmt::format("{}: file not found", path));
   if (std::filesystem::is_directory(path, ec))
     throw_input_error(fmt::format("{}: is a directory, expected an image file", path));
   auto in = OIIO::ImageInput::open(path);
   if (!in) {
     std::string why = OIIO::geterror();
-    throw_input_error(fmt::format("{}: cannot read image ({})", path, why.empty() ? "unknown format" : why));
+    throw_input_error(
+        fmt::format("{}: cannot read image ({})", path, why.empty() ? "unknown format" : why));
   }
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0)
-    throw_input_error(fmt::format("{}: image has zero size ({}x{})", path, spec.width, spec.height));
+    throw_input_error(
+        fmt::format("{}: image has zero size ({}x{})", path, spec.width, spec.height));
   if (spec.nchannels < 1 || spec.nchannels > 4)
-    throw_input_error(fmt::format("{}: image has {} channels, expected 1 to 4", path, spec.nchannels));
+    throw_input_error(
+        fmt::format("{}: image has {} channels, expected 1 to 4", path, spec.nchannels));
   Image image(spec.width, spec.height, spec.nchannels);
   image.source_format = in->format_name();
   image.source_bits = int(spec.format.size() * 8);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
     std::string why = in->geterror();
-    throw_input_error(fmt::format("{}: cannot read pixels, file truncated or corrupt ({})", path, why));
+    throw_input_error(
+        fmt::format("{}: cannot read pixels, file truncated or corrupt ({})", path, why));
   }
   in->close();
   return image;
@@ -41,13 +46,22 @@ void write_image(const std::string& path, const Image& image, PixelType type) {
     throw_internal_error(fmt::format("write_image({}): inconsistent image dimensions", path));
   OIIO::TypeDesc format = OIIO::TypeDesc::FLOAT;
   switch (type) {
-    case PixelType::Float32: format = OIIO::TypeDesc::FLOAT; break;
-    case PixelType::Half: format = OIIO::TypeDesc::HALF; break;
-    case PixelType::UInt8: format = OIIO::TypeDesc::UINT8; break;
-    case PixelType::UInt16: format = OIIO::TypeDesc::UINT16; break;
+    case PixelType::Float32:
+      format = OIIO::TypeDesc::FLOAT;
+      break;
+    case PixelType::Half:
+      format = OIIO::TypeDesc::HALF;
+      break;
+    case PixelType::UInt8:
+      format = OIIO::TypeDesc::UINT8;
+      break;
+    case PixelType::UInt16:
+      format = OIIO::TypeDesc::UINT16;
+      break;
   }
   auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw_input_error(fmt::format("{}: cannot create image writer ({})", path, OIIO::geterror()));
+  if (!out)
+    throw_input_error(fmt::format("{}: cannot create image writer ({})", path, OIIO::geterror()));
   OIIO::ImageSpec spec(image.width, image.height, image.channels, format);
   if (format == OIIO::TypeDesc::FLOAT || format == OIIO::TypeDesc::HALF)
     spec.attribute("compression", "zip");
@@ -55,7 +69,8 @@ void write_image(const std::string& path, const Image& image, PixelType type) {
     throw_input_error(fmt::format("{}: cannot open for writing ({})", path, out->geterror()));
   if (!out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()))
     throw_input_error(fmt::format("{}: cannot write image ({})", path, out->geterror()));
-  if (!out->close()) throw_input_error(fmt::format("{}: cannot finish writing ({})", path, out->geterror()));
+  if (!out->close())
+    throw_input_error(fmt::format("{}: cannot finish writing ({})", path, out->geterror()));
 }
 
 }  // namespace clothbake

@@ -9,8 +9,8 @@
 
 namespace clothbake {
 
-// A float image, row-major, interleaved channels: value(x, y, c) = pixels[(y * width + x) * channels + c].
-// Row 0 is the top row of the file.
+// A float image, row-major, interleaved channels: value(x, y, c) = pixels[(y * width + x) *
+// channels + c]. Row 0 is the top row of the file.
 struct Image {
   int width = 0;
   int height = 0;
@@ -20,9 +20,12 @@ struct Image {
   int source_bits = 0;        // bits per channel in the file (8, 16, 32)
 
   Image() = default;
-  Image(int w, int h, int c) : width(w), height(h), channels(c), pixels(std::size_t(w) * h * c, 0.f) {}
+  Image(int w, int h, int c)
+      : width(w), height(h), channels(c), pixels(std::size_t(w) * h * c, 0.f) {}
   float& at(int x, int y, int c) { return pixels[(std::size_t(y) * width + x) * channels + c]; }
-  float at(int x, int y, int c) const { return pixels[(std::size_t(y) * width + x) * channels + c]; }
+  float at(int x, int y, int c) const {
+    return pixels[(std::size_t(y) * width + x) * channels + c];
+  }
 };
 
 // Reads an image file. Throws clothbake::Error(Input) naming the path when the file is missing,

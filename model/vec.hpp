@@ -18,21 +18,42 @@ struct Vec3 {
   constexpr Vec3 operator-() const { return {-x, -y, -z}; }
   constexpr Vec3 operator*(T s) const { return {x * s, y * s, z * s}; }
   constexpr Vec3 operator/(T s) const { return {x / s, y / s, z / s}; }
-  constexpr Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
-  constexpr Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-  constexpr Vec3& operator*=(T s) { x *= s; y *= s; z *= s; return *this; }
+  constexpr Vec3& operator+=(const Vec3& o) {
+    x += o.x;
+    y += o.y;
+    z += o.z;
+    return *this;
+  }
+  constexpr Vec3& operator-=(const Vec3& o) {
+    x -= o.x;
+    y -= o.y;
+    z -= o.z;
+    return *this;
+  }
+  constexpr Vec3& operator*=(T s) {
+    x *= s;
+    y *= s;
+    z *= s;
+    return *this;
+  }
 };
 
 template <class T>
-constexpr Vec3<T> operator*(T s, const Vec3<T>& v) { return v * s; }
+constexpr Vec3<T> operator*(T s, const Vec3<T>& v) {
+  return v * s;
+}
 template <class T>
-constexpr T dot(const Vec3<T>& a, const Vec3<T>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+constexpr T dot(const Vec3<T>& a, const Vec3<T>& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 template <class T>
 constexpr Vec3<T> cross(const Vec3<T>& a, const Vec3<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 template <class T>
-inline T length(const Vec3<T>& v) { return std::sqrt(dot(v, v)); }
+inline T length(const Vec3<T>& v) {
+  return std::sqrt(dot(v, v));
+}
 // Returns v / |v|; the zero vector stays zero (callers that cannot accept it check first).
 template <class T>
 inline Vec3<T> normalize(const Vec3<T>& v) {

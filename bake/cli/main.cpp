@@ -43,7 +43,8 @@ std::array<double, 3> parse_vec3(const std::string& text, const std::string& opt
   std::istringstream in(s);
   std::string rest;
   if (!(in >> v[0] >> v[1] >> v[2]) || (in >> rest))
-    throw CLI::ValidationError(option_name, "expected three comma-separated numbers x,y,z, got '" + text + "'");
+    throw CLI::ValidationError(option_name,
+                               "expected three comma-separated numbers x,y,z, got '" + text + "'");
   return v;
 }
 
@@ -51,7 +52,8 @@ std::array<double, 3> parse_vec3(const std::string& text, const std::string& opt
 
 int main(int argc, char** argv) {
   using namespace clothbake;
-  CLI::App app{"clothbake: offline precompute and asset baking for the multi-scale cloth appearance model"};
+  CLI::App app{
+      "clothbake: offline precompute and asset baking for the multi-scale cloth appearance model"};
   app.set_version_flag("--version", std::string("clothbake ") + CLOTHBAKE_VERSION_STRING);
   app.require_subcommand(1);
   app.fallthrough(false);

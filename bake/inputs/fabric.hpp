@@ -32,18 +32,20 @@ struct FabricMaps {
   std::vector<Vec3f> albedo;      // linear RGB base colour of the yarn at this texel, [0, 1]
 
   std::size_t texel_count() const { return std::size_t(resolution) * std::size_t(resolution); }
-  std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(resolution) + std::size_t(x); }
+  std::size_t index(int x, int y) const {
+    return std::size_t(y) * std::size_t(resolution) + std::size_t(x);
+  }
 };
 
 // Optical parameters of one yarn material (paper Sec. 3; defaults in docs/fabric-format.md).
 struct YarnMaterial {
-  std::string name;                       // "warp", "weft", or a WIF colour name
-  double roughness = 0.3;                 // SGGX fibre roughness sigma, (0, 1]
-  double optical_thickness = 2.0;         // SpongeCake slab optical thickness T, > 0
-  Rgb specular_albedo{0.8, 0.8, 0.8};     // single-scattering albedo alpha of the specular lobes
-  Rgb diffuse_reflectance{0.3, 0.3, 0.3}; // higher-order scattering, reflection
+  std::string name;                        // "warp", "weft", or a WIF colour name
+  double roughness = 0.3;                  // SGGX fibre roughness sigma, (0, 1]
+  double optical_thickness = 2.0;          // SpongeCake slab optical thickness T, > 0
+  Rgb specular_albedo{0.8, 0.8, 0.8};      // single-scattering albedo alpha of the specular lobes
+  Rgb diffuse_reflectance{0.3, 0.3, 0.3};  // higher-order scattering, reflection
   Rgb diffuse_transmittance{0.2, 0.2, 0.2};
-  Rgb color{1.0, 1.0, 1.0};               // yarn colour (multiplies the albedos; the albedo map)
+  Rgb color{1.0, 1.0, 1.0};  // yarn colour (multiplies the albedos; the albedo map)
 };
 
 struct SheenParams {
@@ -53,23 +55,23 @@ struct SheenParams {
 
 // Settings of the bake (defaults follow the paper, Sec. 3.2, 4.2-4.4, 6).
 struct BakeSettings {
-  int resolution = 256;             // texels per tile side of the baked maps
-  int parallax_dirs = 32;           // parallax table: dirs x dirs view directions
-  double parallax_min_cos = 0.6;    // parallax cap: directions with cos(theta) > this
-  int visibility_dirs = 32;         // visibility sampling: dirs x dirs light directions
-  int radiance_dirs = 32;           // Integral-Radiance half-vector bins: dirs x dirs
-  int clusters = 8;                 // N_c visibility clusters
-  bool compress = true;             // C-PCA compress the Integral-Radiance tables
-  int compress_clusters = 4;        // C-PCA clusters k
-  int compress_rank = 10;           // C-PCA rank r
-  uint64_t seed = 1;                // seed of every randomised step (k-means++, verify sampling)
+  int resolution = 256;           // texels per tile side of the baked maps
+  int parallax_dirs = 32;         // parallax table: dirs x dirs view directions
+  double parallax_min_cos = 0.6;  // parallax cap: directions with cos(theta) > this
+  int visibility_dirs = 32;       // visibility sampling: dirs x dirs light directions
+  int radiance_dirs = 32;         // Integral-Radiance half-vector bins: dirs x dirs
+  int clusters = 8;               // N_c visibility clusters
+  bool compress = true;           // C-PCA compress the Integral-Radiance tables
+  int compress_clusters = 4;      // C-PCA clusters k
+  int compress_rank = 10;         // C-PCA rank r
+  uint64_t seed = 1;              // seed of every randomised step (k-means++, verify sampling)
 };
 
 // One input file the fabric was built from, with its content hash (provenance in the asset).
 struct InputFile {
   std::string role;  // "fabric", "height", "tangent", "wif", ...
   std::string path;
-  std::string xxh64; // 16 hex digits of XXH64(content, seed 0)
+  std::string xxh64;  // 16 hex digits of XXH64(content, seed 0)
 };
 
 struct Fabric {
