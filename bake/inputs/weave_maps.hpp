@@ -28,6 +28,7 @@
 
 #include "bake/inputs/fabric.hpp"
 #include "bake/inputs/weave.hpp"
+#include "model/vec.hpp"
 
 namespace clothbake::weave {
 
@@ -69,14 +70,14 @@ TileSize weave_tile_size(const WeaveSpec& spec);
 
 // The surface at one point of the tile, in tile units (for tests, tools and inspection).
 struct WeaveSample {
-  double height = 0;            // tile-side units (height_unit_mm)
-  double dh_du = 0, dh_dv = 0;  // analytic gradient of the height in tile units
-  Vec3f tangent{0, 1, 0};       // unit fibre tangent
-  Vec3f normal{0, 0, 1};        // normalize(-dh_du, -dh_dv, 1)
-  float gap = 1;                // 1 = yarn, 0 = gap
-  int yarn_id = 0;              // 0 = warp, 1 = weft
-  int thread = 0;               // index of the end (warp) or pick (weft) that owns the point
-  Rgb color{1, 1, 1};           // colour of that thread
+  double height = 0;              // tile-side units (height_unit_mm)
+  double dh_du = 0, dh_dv = 0;    // analytic gradient of the height in tile units
+  model::Vec3d tangent{0, 1, 0};  // unit fibre tangent (local frame, tile units)
+  model::Vec3d normal{0, 0, 1};   // normalize(-dh_du, -dh_dv, 1)
+  float gap = 1;                  // 1 = yarn, 0 = gap
+  int yarn_id = 0;                // 0 = warp, 1 = weft
+  int thread = 0;                 // index of the end (warp) or pick (weft) that owns the point
+  Rgb color{1, 1, 1};             // colour of that thread
 };
 
 // Precomputed per-thread layout of a spec: build once, sample many times. Construction validates
@@ -84,25 +85,39 @@ struct WeaveSample {
 class WeaveSurface {
  public:
   explicit WeaveSurface(const WeaveSpec& spec, const std::string& where = "weave");
-  // (u, v) in tile units; any real value, wrapped periodically into [0, 1)^2.
+  // (u, v) in tile units; any finite value, wrapped periodically into [0, 1)^2.
   WeaveSample sample(double u, double v) const;
   const TileSize& tile() const { return tile_; }
   // The height of gap texels: the underside of the fabric, below every yarn top (tile units).
-  double floor_height() const { return floor_; }
+  double floor_height() const { return floor_mm_ / tile_.height_unit_mm; }
 
-  struct Thread {  // one end or pick, all lengths in mm along its own system's axis
-    double start = 0, spacing = 0, half_width = 0, half_height = 0;
+  // One thread (end or pick), lengths in mm.
+  struct Thread {
+    double start = 0, spacing = 0, centre = 0;  // band [start, start + spacing) along its system
+    double half_width = 0, half_height = 0;     // elliptical cross-section
     double cos_twist = 1, sin_twist = 0;
     Rgb color{1, 1, 1};
   };
+  // Where a coordinate falls among the threads of one system (ends along x, picks along y).
+  struct AxisPoint {
+    int owner = 0;              // thread whose band holds the coordinate
+    double offset = 0;          // coordinate - owner centre (mm)
+    int before = 0, after = 0;  // the crossing threads either side (after = before + 1, wrapped)
+    double ease = 0, ease_slope = 0;  // crimp blend (1 - cos(pi t)) / 2 and its derivative (1/mm)
+  };
+  // Locates a coordinate in [0, length) of the ends (x) or picks (y) system.
+  AxisPoint locate_end(double x_mm) const { return locate(ends_, tile_.width_mm, x_mm); }
+  AxisPoint locate_pick(double y_mm) const { return locate(picks_, tile_.height_mm, y_mm); }
+  // The surface where column point `x` (over the ends) meets row point `y` (over the picks).
+  WeaveSample evaluate(const AxisPoint& x, const AxisPoint& y) const;
 
  private:
-  double centre_line(bool warp, int thread, double along_mm, double& slope) const;
+  static AxisPoint locate(const std::vector<Thread>& threads, double length, double coord);
 
   WeaveMatrix matrix_;
   std::vector<Thread> ends_, picks_;
   TileSize tile_;
-  double floor_ = 0;
+  double floor_mm_ = 0;
 };
 
 // N x N maps of one repeat of the weave on the unit tile: height (tile-side units), tangent,
