@@ -81,6 +81,9 @@ struct Fabric {
   SheenParams sheen;
   BakeSettings bake;
   std::vector<InputFile> inputs;
+  // Physical width of the tile (along u) in millimetres, the unit that heights were converted
+  // from; 0 when the description gives no physical size ([tile] units = "tile").
+  double tile_size_mm = 0.0;
 };
 
 }  // namespace clothbake

@@ -1,0 +1,44 @@
+#include "bake/inputs/fabric_files.hpp"
+
+#include <fmt/format.h>
+#include <xxhash.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/error.hpp"
+
+namespace clothbake::inputs {
+
+std::string read_file_bytes(const std::string& path, const std::string& context) {
+  std::string prefix = context.empty() ? path : fmt::format("{}: {}", context, path);
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw_input_error(prefix + ": file not found");
+  if (std::filesystem::is_directory(path, ec))
+    throw_input_error(prefix + ": is a directory, expected a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw_input_error(fmt::format("{}: cannot open ({})", prefix, std::strerror(errno)));
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (in.bad()) throw_input_error(prefix + ": read error");
+  return std::move(bytes).str();
+}
+
+std::string xxh64_hex(std::string_view bytes) {
+  return fmt::format("{:016x}", XXH64(bytes.data(), bytes.size(), 0));
+}
+
+std::string hash_file(const std::string& path, const std::string& context) {
+  return xxh64_hex(read_file_bytes(path, context));
+}
+
+std::string resolve_relative(const std::string& base_dir, const std::string& path) {
+  std::filesystem::path p(path);
+  if (p.is_absolute() || base_dir.empty()) return p.lexically_normal().string();
+  return (std::filesystem::path(base_dir) / p).lexically_normal().string();
+}
+
+}  // namespace clothbake::inputs

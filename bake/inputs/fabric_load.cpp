@@ -1,0 +1,504 @@
+#include "bake/inputs/fabric_load.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "bake/inputs/fabric_files.hpp"
+#include "bake/inputs/fabric_toml.hpp"
+#include "bake/inputs/map_image.hpp"
+#include "bake/inputs/map_normals.hpp"
+#include "bake/inputs/weave.hpp"
+#include "bake/inputs/wif.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+
+namespace clothbake {
+
+const char* fabric_source_name(FabricSource source) {
+  switch (source) {
+    case FabricSource::Images:
+      return "images";
+    case FabricSource::NamedWeave:
+      return "named_weave";
+    case FabricSource::MatrixWeave:
+      return "matrix_weave";
+    case FabricSource::Wif:
+      return "wif";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using inputs::Range;
+using inputs::TomlSection;
+
+// Valid ranges, shared with docs/fabric-format.md (keep them in sync).
+const Range kRoughness{0.0, 1.0, true, false};            // (0, 1]
+const Range kOpticalThickness{0.0, 1000.0, true, false};  // (0, 1000]
+const Range kUnitInterval{0.0, 1.0};                      // [0, 1]
+const Range kPositiveLength{0.0, 1e6, true, false};       // (0, 1e6]
+const Range kPositiveScale{0.0, 1e12, true, false};       // (0, 1e12]
+const Range kSpacing{0.0, 1000.0, true, false};           // (0, 1000] mm
+const Range kWidthFraction{0.0, 1.0, true, false};        // (0, 1]
+const Range kTwist{-90.0, 90.0, true, true};              // (-90, 90) degrees
+const Range kMinCos{0.0, 0.95};                           // [0, 0.95]
+
+const std::vector<std::string> kLengthUnits = {"tile", "um", "mm", "cm", "m", "in"};
+
+double unit_in_mm(const std::string& unit) {
+  if (unit == "um") return 1e-3;
+  if (unit == "mm") return 1.0;
+  if (unit == "cm") return 10.0;
+  if (unit == "m") return 1000.0;
+  if (unit == "in") return 25.4;
+  return 0.0;  // "tile": no physical size
+}
+
+YarnMaterial parse_yarn(const TomlSection& s, const std::string& default_name) {
+  s.check_keys({"name", "roughness", "optical_thickness", "specular_albedo", "diffuse_reflectance",
+                "diffuse_transmittance", "color"});
+  YarnMaterial y;
+  y.name = s.string("name").value_or(default_name);
+  if (y.name.empty()) s.fail("name", "must not be empty");
+  y.roughness = s.real("roughness", kRoughness).value_or(y.roughness);
+  y.optical_thickness =
+      s.real("optical_thickness", kOpticalThickness).value_or(y.optical_thickness);
+  y.specular_albedo = s.rgb("specular_albedo", kUnitInterval).value_or(y.specular_albedo);
+  y.diffuse_reflectance =
+      s.rgb("diffuse_reflectance", kUnitInterval).value_or(y.diffuse_reflectance);
+  y.diffuse_transmittance =
+      s.rgb("diffuse_transmittance", kUnitInterval).value_or(y.diffuse_transmittance);
+  y.color = s.rgb("color", kUnitInterval).value_or(y.color);
+  // Reflection and transmission of the higher-order (diffuse) lobes share the energy that entered.
+  for (int c = 0; c < 3; ++c)
+    if (y.diffuse_reflectance[c] + y.diffuse_transmittance[c] > 1.0 + 1e-9)
+      s.fail("diffuse_transmittance",
+             fmt::format("[{}] = {} plus diffuse_reflectance[{}] = {} exceeds 1 (energy is not "
+                         "conserved)",
+                         c, y.diffuse_transmittance[c], c, y.diffuse_reflectance[c]));
+  return y;
+}
+
+SheenParams parse_sheen(const TomlSection& s) {
+  s.check_keys({"color", "roughness"});
+  SheenParams p;
+  p.color = s.rgb("color", kUnitInterval).value_or(p.color);
+  p.roughness = s.real("roughness", kRoughness).value_or(p.roughness);
+  return p;
+}
+
+BakeSettings parse_bake(const TomlSection& s) {
+  s.check_keys({"resolution", "parallax_dirs", "parallax_min_cos", "visibility_dirs",
+                "radiance_dirs", "clusters", "compress", "compress_clusters", "compress_rank",
+                "seed"});
+  BakeSettings b;
+  b.resolution =
+      int(s.integer("resolution", kMinResolution, kMaxResolution).value_or(b.resolution));
+  b.parallax_dirs = int(s.integer("parallax_dirs", 2, 256).value_or(b.parallax_dirs));
+  b.parallax_min_cos = s.real("parallax_min_cos", kMinCos).value_or(b.parallax_min_cos);
+  b.visibility_dirs = int(s.integer("visibility_dirs", 2, 256).value_or(b.visibility_dirs));
+  b.radiance_dirs = int(s.integer("radiance_dirs", 2, 256).value_or(b.radiance_dirs));
+  b.clusters = int(s.integer("clusters", 1, 64).value_or(b.clusters));
+  b.compress = s.boolean("compress").value_or(b.compress);
+  b.compress_clusters = int(s.integer("compress_clusters", 1, 64).value_or(b.compress_clusters));
+  b.compress_rank = int(s.integer("compress_rank", 1, 256).value_or(b.compress_rank));
+  b.seed = uint64_t(s.integer("seed", 0, INT64_MAX).value_or(int64_t(b.seed)));
+  return b;
+}
+
+weave::YarnGeometry parse_geometry(const TomlSection& s, weave::YarnGeometry g,
+                                   weave::YarnGeometry* overrides_mask = nullptr) {
+  s.check_keys({"spacing_mm", "width", "height_mm", "twist_deg"});
+  // overrides_mask, when given, receives NaN for fields the file does not set.
+  auto set = [&](const char* key, const Range& range, double& field, double& mask) {
+    auto v = s.real(key, range);
+    if (v) field = *v;
+    mask = v ? *v : std::nan("");
+  };
+  weave::YarnGeometry mask;
+  set("spacing_mm", kSpacing, g.spacing_mm, mask.spacing_mm);
+  set("width", kWidthFraction, g.width, mask.width);
+  set("height_mm", kSpacing, g.height_mm, mask.height_mm);
+  set("twist_deg", kTwist, g.twist_deg, mask.twist_deg);
+  if (overrides_mask) *overrides_mask = mask;
+  return g;
+}
+
+// Applies the fields of `mask` that are not NaN to `g`.
+void apply_overrides(weave::YarnGeometry& g, const weave::YarnGeometry& mask) {
+  if (!std::isnan(mask.spacing_mm)) g.spacing_mm = mask.spacing_mm;
+  if (!std::isnan(mask.width)) g.width = mask.width;
+  if (!std::isnan(mask.height_mm)) g.height_mm = mask.height_mm;
+  if (!std::isnan(mask.twist_deg)) g.twist_deg = mask.twist_deg;
+}
+
+std::vector<YarnMaterial> default_weave_yarns() {
+  std::vector<YarnMaterial> yarns(2);
+  yarns[0].name = "warp";
+  yarns[1].name = "weft";
+  return yarns;
+}
+
+// Rethrows an Error from another component with our context in front.
+template <class F>
+auto with_context(const std::string& context, F&& f) {
+  try {
+    return f();
+  } catch (const Error& e) {
+    throw Error(e.code(), fmt::format("{}: {}", context, e.what()));
+  }
+}
+
+// Generates the maps of a weave fabric and fills the bookkeeping fields.
+void build_weave_maps(LoadedFabric& out, weave::WeaveSpec spec, const std::string& where) {
+  Fabric& f = out.fabric;
+  if (f.yarns.size() < 2)
+    throw_input_error(fmt::format(
+        "{}: the weave uses yarn ids 0 (warp) and 1 (weft) but only {} [[yarn]] {} declared; "
+        "declare one [[yarn]] for the warp and one for the weft, in that order",
+        where, f.yarns.size(), f.yarns.size() == 1 ? "is" : "are"));
+  // Threads without a colour of their own take their system's yarn colour.
+  if (spec.end_colors.empty())
+    spec.end_colors.assign(std::size_t(spec.matrix.ends), f.yarns[0].color);
+  if (spec.pick_colors.empty())
+    spec.pick_colors.assign(std::size_t(spec.matrix.picks), f.yarns[1].color);
+  with_context(where, [&] {
+    weave::validate_weave_spec(spec, "weave");
+    return 0;
+  });
+  f.maps = with_context(where, [&] { return weave::generate_weave_maps(spec, f.bake.resolution); });
+  f.tile_size_mm = weave::weave_tile_size(spec).width_mm;
+  for (std::size_t i = 2; i < f.yarns.size(); ++i)
+    warn(
+        fmt::format("{}: yarn[{}] '{}' is declared but a weave only uses yarns 0 (warp) and 1 "
+                    "(weft)",
+                    where, i, f.yarns[i].name));
+  out.weave = std::move(spec);
+}
+
+// Checks cross-map consistency of image maps: yarn ids index declared yarns.
+void check_yarn_ids(const Fabric& f, const std::string& context) {
+  const FabricMaps& m = f.maps;
+  std::vector<bool> used(f.yarns.size(), false);
+  for (int y = 0; y < m.resolution; ++y)
+    for (int x = 0; x < m.resolution; ++x) {
+      uint16_t id = m.yarn_id[m.index(x, y)];
+      if (id >= f.yarns.size())
+        throw_input_error(fmt::format(
+            "{}: pixel ({}, {}) has yarn id {} but only {} yarn{} declared (ids 0..{}); add "
+            "[[yarn]] entries or fix the map",
+            context, x, y, id, f.yarns.size(), f.yarns.size() == 1 ? " is" : "s are",
+            f.yarns.size() - 1));
+      used[id] = true;
+    }
+  for (std::size_t i = 0; i < used.size(); ++i)
+    if (!used[i])
+      warn(fmt::format("{}: yarn[{}] '{}' is declared but no texel uses it", context, i,
+                       f.yarns[i].name));
+}
+
+void warn_if_flat(const Fabric& f, const std::string& context) {
+  const auto& h = f.maps.height;
+  auto [lo, hi] = std::minmax_element(h.begin(), h.end());
+  if (lo != h.end() && *lo == *hi)
+    warn(
+        fmt::format("{}: the height map is constant (h = {}); the fabric is flat, so parallax "
+                    "and self-shadowing will have no effect",
+                    context, *lo));
+}
+
+struct MapsSection {
+  std::string height, tangent, normal, gap, yarn_id, albedo;  // as written in the file
+};
+
+void load_image_maps(LoadedFabric& out, const TomlSection& maps,
+                     const std::optional<TomlSection>& tile, const std::string& toml_path,
+                     const std::string& base_dir, std::optional<int64_t> bake_resolution) {
+  Fabric& f = out.fabric;
+  maps.check_keys({"height", "height_scale", "height_units", "tangent", "normal", "gap", "yarn_id",
+                   "albedo", "albedo_encoding"});
+
+  // Units: the tile's physical size and the unit of stored heights.
+  std::string tile_units = "tile";
+  double tile_size = 1.0;
+  if (tile) {
+    tile->check_keys({"size", "units"});
+    tile_units = tile->choice("units", kLengthUnits).value_or("tile");
+    auto size = tile->real("size", kPositiveLength);
+    if (tile_units == "tile" && size)
+      tile->fail("size",
+                 "has no meaning with units = \"tile\" (the tile side is the unit); set "
+                 "units to \"um\", \"mm\", \"cm\", \"m\" or \"in\"");
+    if (tile_units != "tile" && !size)
+      tile->fail("size", fmt::format("is required when units = \"{}\" (the tile's side length)",
+                                     tile_units));
+    if (size) tile_size = *size;
+  }
+  f.tile_size_mm = tile_units == "tile" ? 0.0 : tile_size * unit_in_mm(tile_units);
+  std::string height_units = maps.choice("height_units", kLengthUnits).value_or(tile_units);
+  if (height_units != "tile" && tile_units == "tile")
+    maps.fail("height_units",
+              fmt::format("= \"{}\" needs the tile's physical size: set [tile] size and units",
+                          height_units));
+  double height_scale = maps.real("height_scale", kPositiveScale).value_or(1.0);
+  double to_tile_units = height_units == "tile" ? 1.0 : unit_in_mm(height_units) / f.tile_size_mm;
+  bool srgb = maps.choice("albedo_encoding", {"linear", "srgb"}).value_or("linear") == "srgb";
+
+  struct Entry {
+    const char* role;
+    bool required;
+  };
+  const Entry entries[] = {{"height", true}, {"tangent", true},  {"normal", false},
+                           {"gap", false},   {"yarn_id", false}, {"albedo", false}};
+  std::vector<inputs::MapImage> images;
+  for (const auto& e : entries) {
+    auto file = maps.string(e.role);
+    if (!file) {
+      if (e.required)
+        maps.fail(e.role, fmt::format("is missing: an image-based fabric needs a {} map ([maps] "
+                                      "{} = \"file.exr\")",
+                                      e.role, e.role));
+      continue;
+    }
+    if (file->empty()) maps.fail(e.role, "must name an image file, got an empty string");
+    std::string path = inputs::resolve_relative(base_dir, *file);
+    std::string context = fmt::format("{}: maps.{} (\"{}\")", maps.where(e.role), e.role, path);
+    inputs::MapImage image = inputs::read_map_image(path, e.role, context);
+    if (!images.empty() && image.image.width != images.front().image.width)
+      throw_input_error(fmt::format(
+          "{}: image is {}x{} but maps.{} is {}x{}; all maps of a fabric must have the same size",
+          context, image.image.width, image.image.height, images.front().role,
+          images.front().image.width, images.front().image.height));
+    f.inputs.push_back({e.role, path, inputs::hash_file(path, context)});
+    images.push_back(std::move(image));
+  }
+
+  const int n = images.front().image.width;
+  if (n < kMinResolution || n > kMaxResolution)
+    throw_input_error(fmt::format("{}: image is {}x{}; map resolution must be in [{}, {}]",
+                                  images.front().context, n, n, kMinResolution, kMaxResolution));
+  if (bake_resolution && *bake_resolution != n)
+    throw_input_error(fmt::format(
+        "{}: bake.resolution = {} but the maps are {}x{}; maps are not resampled: resize them or "
+        "set bake.resolution = {}",
+        toml_path, *bake_resolution, n, n, n));
+  f.bake.resolution = n;
+
+  FabricMaps& m = f.maps;
+  m.resolution = n;
+  const std::size_t texels = std::size_t(n) * n;
+  const inputs::MapImage* albedo_image = nullptr;
+  for (const auto& image : images) {
+    if (image.role == "height")
+      m.height = inputs::decode_height(image, height_scale * to_tile_units);
+    if (image.role == "tangent") m.tangent = inputs::decode_tangents(image);
+    if (image.role == "normal") m.normal = inputs::decode_normals(image);
+    if (image.role == "gap") m.gap = inputs::decode_gap(image);
+    if (image.role == "yarn_id") m.yarn_id = inputs::decode_yarn_ids(image);
+    if (image.role == "albedo") albedo_image = &image;
+  }
+  if (m.normal.empty()) m.normal = inputs::normals_from_height(m.height, n);
+  if (m.gap.empty()) m.gap.assign(texels, 1.0f);
+  if (m.yarn_id.empty()) m.yarn_id.assign(texels, 0);
+
+  if (f.yarns.empty()) {
+    f.yarns.resize(1);
+    f.yarns[0].name = "yarn";
+  }
+  std::string yarn_context = toml_path;
+  for (const auto& image : images)
+    if (image.role == "yarn_id") yarn_context = image.context;
+  check_yarn_ids(f, yarn_context);
+
+  if (albedo_image) {
+    m.albedo = inputs::decode_albedo(*albedo_image, srgb);
+  } else {
+    m.albedo.resize(texels);
+    for (std::size_t i = 0; i < texels; ++i) {
+      const Rgb& c = f.yarns[m.yarn_id[i]].color;
+      m.albedo[i] = Vec3f{float(c[0]), float(c[1]), float(c[2])};
+    }
+  }
+  warn_if_flat(f, images.front().context);
+}
+
+void load_weave(LoadedFabric& out, const TomlSection& w, const std::string& base_dir,
+                const std::string& toml_path) {
+  Fabric& f = out.fabric;
+  w.check_keys({"name", "matrix", "wif", "warp", "weft", "end_colors", "pick_colors"});
+  int sources = int(w.has("name")) + int(w.has("matrix")) + int(w.has("wif"));
+  if (sources != 1)
+    throw_input_error(fmt::format(
+        "{}: [weave] needs exactly one of name = \"twill2/1\", matrix = [\"0101\", ...] or wif = "
+        "\"draft.wif\"; {}",
+        w.where(""), sources == 0 ? "none is given" : "several are given"));
+
+  weave::WeaveSpec spec;
+  weave::YarnGeometry warp_mask, weft_mask;
+  auto warp_section = w.table("warp");
+  auto weft_section = w.table("weft");
+  if (warp_section) spec.warp = parse_geometry(*warp_section, spec.warp, &warp_mask);
+  if (weft_section) spec.weft = parse_geometry(*weft_section, spec.weft, &weft_mask);
+
+  if (auto name = w.string("name")) {
+    std::string where = w.where("name") + ": weave.name";
+    spec.matrix = with_context(where, [&] { return weave::named_weave(*name); });
+    out.source = FabricSource::NamedWeave;
+    out.weave_label = *name;
+  } else if (auto rows = w.string_array("matrix")) {
+    std::string where = w.where("matrix") + ": weave.matrix";
+    spec.matrix = weave::matrix_from_rows(*rows, where);
+    weave::check_weavable(spec.matrix, where);
+    out.source = FabricSource::MatrixWeave;
+    out.weave_label = "matrix";
+  } else {
+    auto file = w.string("wif");
+    if (file->empty()) w.fail("wif", "must name a WIF file, got an empty string");
+    std::string path = inputs::resolve_relative(base_dir, *file);
+    std::string where = fmt::format("{}: weave.wif (\"{}\")", w.where("wif"), path);
+    WifDraft draft = with_context(where, [&] { return read_wif(path); });
+    f.inputs.push_back({"wif", path, inputs::hash_file(path, where)});
+    // The draft's geometry, with what the fabric file states on top (explicit settings win, for
+    // every thread: a WIF has no yarn width or twist).
+    spec = std::move(draft.spec);
+    apply_overrides(spec.warp, warp_mask);
+    apply_overrides(spec.weft, weft_mask);
+    for (auto& g : spec.end_geometry)
+      apply_overrides(g, warp_mask);
+    for (auto& g : spec.pick_geometry)
+      apply_overrides(g, weft_mask);
+    out.source = FabricSource::Wif;
+    out.weave_label =
+        draft.title.empty() ? std::filesystem::path(path).filename().string() : draft.title;
+  }
+
+  if (auto colors = w.rgb_list("end_colors", kUnitInterval)) {
+    if (int(colors->size()) != spec.matrix.ends)
+      w.fail("end_colors", fmt::format("has {} colours but the weave has {} ends (warp threads)",
+                                       colors->size(), spec.matrix.ends));
+    spec.end_colors = *colors;
+  }
+  if (auto colors = w.rgb_list("pick_colors", kUnitInterval)) {
+    if (int(colors->size()) != spec.matrix.picks)
+      w.fail("pick_colors", fmt::format("has {} colours but the weave has {} picks (weft threads)",
+                                        colors->size(), spec.matrix.picks));
+    spec.pick_colors = *colors;
+  }
+  build_weave_maps(out, std::move(spec), fmt::format("{}: [weave]", toml_path));
+}
+
+}  // namespace
+
+LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOptions& options) {
+  LoadedFabric out;
+  Fabric& f = out.fabric;
+  const std::string text = inputs::read_file_bytes(toml_path);
+  f.inputs.push_back({"fabric", toml_path, inputs::xxh64_hex(text)});
+  const toml::table root_table = inputs::parse_toml_text(text, toml_path);
+  const TomlSection root(root_table, toml_path, "");
+  root.check_keys({"name", "tile", "maps", "weave", "yarn", "sheen", "bake"});
+  const std::string base_dir = std::filesystem::path(toml_path).parent_path().string();
+
+  f.name = root.string("name").value_or(std::filesystem::path(toml_path).stem().string());
+  auto maps = root.table("maps");
+  auto weave_section = root.table("weave");
+  auto tile = root.table("tile");
+  if (maps && weave_section)
+    throw_input_error(
+        fmt::format("{}: [maps] and [weave] cannot both be given: a fabric's maps "
+                    "come either from image files or from a weave",
+                    root.where("weave")));
+  if (!maps && !weave_section)
+    throw_input_error(
+        fmt::format("{}: no [maps] or [weave] section: say where the feature maps "
+                    "come from (image files, or a weave name, matrix or WIF draft)",
+                    toml_path));
+  if (weave_section && tile)
+    tile->fail("",
+               "cannot be combined with [weave]: the tile is one repeat of the weave and its "
+               "size follows from the yarn spacings ([weave.warp] spacing_mm, ...)");
+
+  if (auto yarns = root.table_array("yarn")) {
+    for (std::size_t i = 0; i < yarns->size(); ++i) {
+      std::string default_name = weave_section ? (i == 0   ? "warp"
+                                                  : i == 1 ? "weft"
+                                                           : "")
+                                               : std::string();
+      if (default_name.empty()) default_name = fmt::format("yarn{}", i);
+      f.yarns.push_back(parse_yarn((*yarns)[i], default_name));
+      for (std::size_t j = 0; j < i; ++j)
+        if (f.yarns[j].name == f.yarns[i].name)
+          (*yarns)[i].fail("name", fmt::format("= \"{}\" is already the name of yarn[{}]; yarn "
+                                               "names must be unique",
+                                               f.yarns[i].name, j));
+    }
+  }
+  if (auto sheen = root.table("sheen")) f.sheen = parse_sheen(*sheen);
+  std::optional<int64_t> resolution;
+  if (auto bake = root.table("bake")) {
+    f.bake = parse_bake(*bake);
+    if (bake->has("resolution")) resolution = f.bake.resolution;
+  }
+  if (options.resolution) {
+    if (*options.resolution < kMinResolution || *options.resolution > kMaxResolution)
+      throw_input_error(fmt::format("resolution {} is out of range; valid range is [{}, {}]",
+                                    *options.resolution, kMinResolution, kMaxResolution));
+    resolution = *options.resolution;
+    f.bake.resolution = *options.resolution;
+  }
+
+  if (maps) {
+    out.source = FabricSource::Images;
+    load_image_maps(out, *maps, tile, toml_path, base_dir, resolution);
+  } else {
+    if (f.yarns.empty()) f.yarns = default_weave_yarns();
+    load_weave(out, *weave_section, base_dir, toml_path);
+  }
+  return out;
+}
+
+Fabric load_fabric(const std::string& toml_path) {
+  return load_fabric_description(toml_path).fabric;
+}
+
+LoadedFabric fabric_from_named_weave(const std::string& weave_name, int resolution) {
+  LoadedFabric out;
+  out.source = FabricSource::NamedWeave;
+  out.weave_label = weave_name;
+  Fabric& f = out.fabric;
+  f.name = weave_name;
+  f.yarns = default_weave_yarns();
+  f.bake.resolution = resolution;
+  if (resolution < kMinResolution || resolution > kMaxResolution)
+    throw_input_error(fmt::format("resolution {} is out of range; valid range is [{}, {}]",
+                                  resolution, kMinResolution, kMaxResolution));
+  weave::WeaveSpec spec;
+  spec.matrix = weave::named_weave(weave_name);
+  build_weave_maps(out, std::move(spec), fmt::format("weave \"{}\"", weave_name));
+  return out;
+}
+
+LoadedFabric fabric_from_wif(const std::string& wif_path, int resolution) {
+  LoadedFabric out;
+  out.source = FabricSource::Wif;
+  Fabric& f = out.fabric;
+  f.yarns = default_weave_yarns();
+  f.bake.resolution = resolution;
+  if (resolution < kMinResolution || resolution > kMaxResolution)
+    throw_input_error(fmt::format("resolution {} is out of range; valid range is [{}, {}]",
+                                  resolution, kMinResolution, kMaxResolution));
+  WifDraft draft = read_wif(wif_path);
+  f.inputs.push_back({"wif", wif_path, inputs::hash_file(wif_path)});
+  std::string stem = std::filesystem::path(wif_path).stem().string();
+  f.name = draft.title.empty() ? stem : draft.title;
+  out.weave_label =
+      draft.title.empty() ? std::filesystem::path(wif_path).filename().string() : draft.title;
+  build_weave_maps(out, std::move(draft.spec), wif_path);
+  return out;
+}
+
+}  // namespace clothbake

@@ -1,0 +1,332 @@
+#include "bake/inputs/fabric_toml.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "common/error.hpp"
+
+namespace clothbake::inputs {
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  // Two-row dynamic programme; keys are short, so O(|a| |b|) is nothing.
+  std::vector<std::size_t> previous(b.size() + 1), current(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j)
+    previous[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    current[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      std::size_t substitute = previous[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+      current[j] = std::min({previous[j] + 1, current[j - 1] + 1, substitute});
+    }
+    std::swap(previous, current);
+  }
+  return previous[b.size()];
+}
+
+std::string closest_match(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_distance = std::size_t(-1);
+  for (const auto& candidate : candidates) {
+    std::size_t d = edit_distance(word, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  std::size_t allowed = std::max<std::size_t>(2, word.size() / 3);
+  return best_distance <= allowed ? best : std::string();
+}
+
+std::string toml_location(const std::string& file, const toml::source_region& source) {
+  if (source.begin.line == 0) return file;
+  return fmt::format("{}:{}:{}", file, source.begin.line, source.begin.column);
+}
+
+toml::table parse_toml_text(std::string_view text, const std::string& file) {
+  try {
+    return toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    throw Error(ExitCode::Input, fmt::format("{}: TOML syntax error: {}",
+                                             toml_location(file, e.source()), e.description()));
+  }
+}
+
+bool Range::contains(double v) const {
+  if (!std::isfinite(v)) return false;
+  bool above = lo_open ? v > lo : v >= lo;
+  bool below = hi_open ? v < hi : v <= hi;
+  return above && below;
+}
+
+std::string Range::describe() const {
+  bool unbounded_above = hi >= 1e300;
+  bool unbounded_below = lo <= -1e300;
+  if (unbounded_above && unbounded_below) return "any finite number";
+  if (unbounded_above) return fmt::format("{} {}", lo_open ? ">" : ">=", lo);
+  if (unbounded_below) return fmt::format("{} {}", hi_open ? "<" : "<=", hi);
+  return fmt::format("{}{}, {}{}", lo_open ? "(" : "[", lo, hi, hi_open ? ")" : "]");
+}
+
+namespace {
+
+std::string type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::date:
+      return "a date";
+    case toml::node_type::time:
+      return "a time";
+    case toml::node_type::date_time:
+      return "a date-time";
+    default:
+      return "nothing";
+  }
+}
+
+// The value as written, for messages ("-0.2", "\"abc\"").
+std::string show(const toml::node& node) {
+  std::ostringstream out;
+  node.visit([&](const auto& value) {
+    if constexpr (toml::is_string<decltype(value)>)
+      out << '"' << value.get() << '"';
+    else if constexpr (toml::is_number<decltype(value)> || toml::is_boolean<decltype(value)>)
+      out << value;
+    else if constexpr (toml::is_array<decltype(value)>)
+      out << "[...]";
+    else if constexpr (toml::is_table<decltype(value)>)
+      out << "{...}";
+    else
+      out << value;
+  });
+  return out.str();
+}
+
+bool node_number(const toml::node& node, double& out) {
+  if (auto i = node.as_integer()) {
+    out = double(i->get());
+    return true;
+  }
+  if (auto f = node.as_floating_point()) {
+    out = f->get();
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+TomlSection::TomlSection(const toml::table& table, std::string file, std::string prefix)
+    : table_(&table), file_(std::move(file)), prefix_(std::move(prefix)) {}
+
+std::string TomlSection::dotted(std::string_view key) const {
+  if (prefix_.empty()) return std::string(key);
+  if (key.empty()) return prefix_;
+  return prefix_ + "." + std::string(key);
+}
+
+std::string TomlSection::where(std::string_view key) const {
+  if (const toml::node* n = table_->get(key)) return toml_location(file_, n->source());
+  return toml_location(file_, table_->source());
+}
+
+void TomlSection::fail(std::string_view key, const std::string& message) const {
+  throw Error(ExitCode::Input, fmt::format("{}: {} {}", where(key), dotted(key), message));
+}
+
+const toml::node& TomlSection::node(std::string_view key) const {
+  return *table_->get(key);
+}
+
+void TomlSection::check_keys(const std::vector<std::string>& allowed) const {
+  const toml::node* first_bad = nullptr;
+  std::string first_key;
+  for (const auto& [key, value] : *table_) {
+    if (std::find(allowed.begin(), allowed.end(), key.str()) != allowed.end()) continue;
+    const auto& pos = value.source().begin;
+    bool earlier = !first_bad || pos.line < first_bad->source().begin.line ||
+                   (pos.line == first_bad->source().begin.line &&
+                    pos.column < first_bad->source().begin.column);
+    if (earlier) {
+      first_bad = &value;
+      first_key = std::string(key.str());
+    }
+  }
+  if (!first_bad) return;
+  std::string suggestion = closest_match(first_key, allowed);
+  std::string hint;
+  if (!suggestion.empty()) {
+    hint = fmt::format("; did you mean '{}'?", dotted(suggestion));
+  } else {
+    std::string all;
+    for (const auto& k : allowed)
+      all += (all.empty() ? "" : ", ") + k;
+    hint = fmt::format("; valid keys{}: {}", prefix_.empty() ? "" : " in [" + prefix_ + "]", all);
+  }
+  throw Error(ExitCode::Input,
+              fmt::format("{}: unknown key '{}'{}", toml_location(file_, first_bad->source()),
+                          dotted(first_key), hint));
+}
+
+std::optional<double> TomlSection::real(std::string_view key, const Range& range) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  double v = 0;
+  if (!node_number(n, v))
+    fail(key, fmt::format("must be a number ({}), got {} ({})", range.describe(), type_name(n),
+                          show(n)));
+  if (!range.contains(v))
+    fail(key, fmt::format("= {} is out of range; valid range is {}", show(n), range.describe()));
+  return v;
+}
+
+std::optional<int64_t> TomlSection::integer(std::string_view key, int64_t lo, int64_t hi) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  auto i = n.as_integer();
+  if (!i)
+    fail(key,
+         fmt::format("must be an integer in [{}, {}], got {} ({})", lo, hi, type_name(n), show(n)));
+  int64_t v = i->get();
+  if (v < lo || v > hi)
+    fail(key, fmt::format("= {} is out of range; valid range is [{}, {}]", v, lo, hi));
+  return v;
+}
+
+std::optional<bool> TomlSection::boolean(std::string_view key) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  auto b = n.as_boolean();
+  if (!b) fail(key, fmt::format("must be true or false, got {} ({})", type_name(n), show(n)));
+  return b->get();
+}
+
+std::optional<std::string> TomlSection::string(std::string_view key) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  auto s = n.as_string();
+  if (!s) fail(key, fmt::format("must be a string, got {} ({})", type_name(n), show(n)));
+  return s->get();
+}
+
+std::optional<std::string> TomlSection::choice(std::string_view key,
+                                               const std::vector<std::string>& choices) const {
+  auto s = string(key);
+  if (!s) return s;
+  if (std::find(choices.begin(), choices.end(), *s) != choices.end()) return s;
+  std::string all;
+  for (const auto& c : choices)
+    all += (all.empty() ? "\"" : ", \"") + c + "\"";
+  std::string suggestion = closest_match(*s, choices);
+  fail(key,
+       fmt::format("= \"{}\" is not valid; expected one of {}{}", *s, all,
+                   suggestion.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", suggestion)));
+}
+
+std::optional<Rgb> TomlSection::rgb(std::string_view key, const Range& range) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  double grey = 0;
+  if (node_number(n, grey)) {
+    if (!range.contains(grey))
+      fail(key, fmt::format("= {} is out of range; valid range is {}", show(n), range.describe()));
+    return Rgb{grey, grey, grey};
+  }
+  const toml::array* arr = n.as_array();
+  if (!arr || arr->size() != 3)
+    fail(key, fmt::format("must be a number or an array of 3 numbers [r, g, b], got {}{}",
+                          type_name(n), arr ? fmt::format(" of {} elements", arr->size()) : ""));
+  Rgb out{};
+  for (std::size_t c = 0; c < 3; ++c) {
+    double v = 0;
+    if (!node_number(*arr->get(c), v))
+      fail(key, fmt::format("[{}] must be a number, got {}", c, type_name(*arr->get(c))));
+    if (!range.contains(v))
+      fail(key,
+           fmt::format("[{}] = {} is out of range; valid range is {}", c, v, range.describe()));
+    out[c] = v;
+  }
+  return out;
+}
+
+std::optional<std::vector<Rgb>> TomlSection::rgb_list(std::string_view key,
+                                                      const Range& range) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  const toml::array* arr = n.as_array();
+  if (!arr || arr->empty())
+    fail(key, fmt::format("must be a non-empty array of colours [[r, g, b], ...], got {}",
+                          arr ? "an empty array" : type_name(n)));
+  std::vector<Rgb> out;
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const toml::array* colour = arr->get(i)->as_array();
+    if (!colour || colour->size() != 3)
+      fail(key, fmt::format("[{}] must be an array of 3 numbers [r, g, b], got {}", i,
+                            type_name(*arr->get(i))));
+    Rgb rgb{};
+    for (std::size_t c = 0; c < 3; ++c) {
+      double v = 0;
+      if (!node_number(*colour->get(c), v))
+        fail(key,
+             fmt::format("[{}][{}] must be a number, got {}", i, c, type_name(*colour->get(c))));
+      if (!range.contains(v))
+        fail(key, fmt::format("[{}][{}] = {} is out of range; valid range is {}", i, c, v,
+                              range.describe()));
+      rgb[c] = v;
+    }
+    out.push_back(rgb);
+  }
+  return out;
+}
+
+std::optional<std::vector<std::string>> TomlSection::string_array(std::string_view key) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  const toml::array* arr = n.as_array();
+  if (!arr || arr->empty())
+    fail(key, fmt::format("must be a non-empty array of strings, got {}",
+                          arr ? "an empty array" : type_name(n)));
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    auto s = arr->get(i)->as_string();
+    if (!s) fail(key, fmt::format("[{}] must be a string, got {}", i, type_name(*arr->get(i))));
+    out.push_back(s->get());
+  }
+  return out;
+}
+
+std::optional<TomlSection> TomlSection::table(std::string_view key) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  const toml::table* t = n.as_table();
+  if (!t) fail(key, fmt::format("must be a table ([{}]), got {}", dotted(key), type_name(n)));
+  return TomlSection(*t, file_, dotted(key));
+}
+
+std::optional<std::vector<TomlSection>> TomlSection::table_array(std::string_view key) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  const toml::array* arr = n.as_array();
+  if (!arr || !arr->is_array_of_tables())
+    fail(key, fmt::format("must be an array of tables ([[{}]] sections), got {}", dotted(key),
+                          type_name(n)));
+  std::vector<TomlSection> out;
+  for (std::size_t i = 0; i < arr->size(); ++i)
+    out.emplace_back(*arr->get(i)->as_table(), file_, fmt::format("{}[{}]", dotted(key), i));
+  return out;
+}
+
+}  // namespace clothbake::inputs
