@@ -1,0 +1,435 @@
+// Deep validation (validate.hpp).
+#include "formats/reader/validate.hpp"
+
+#include <cinttypes>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+
+#include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/xxh64.hpp"
+
+namespace clothbake::reader {
+namespace {
+
+class Reporter {
+ public:
+  Reporter(FindingCallback callback, void* user) : callback_(callback), user_(user) {}
+
+  void report(Check check, uint32_t section, const char* format, ...)
+#if defined(__GNUC__)
+      __attribute__((format(printf, 4, 5)))
+#endif
+  {
+    char message[Status::kMessageCapacity];
+    va_list args;
+    va_start(args, format);
+    std::vsnprintf(message, sizeof message, format, args);
+    va_end(args);
+    if (is_warning(check))
+      ++summary_.warnings;
+    else
+      ++summary_.errors;
+    if (callback_) callback_(user_, check, section, message);
+  }
+  void report_status(const Status& status, uint32_t section) {
+    report(status.check() == Check::None ? Check::SectionLayout : status.check(), section, "%s",
+           status.message());
+  }
+  ValidationSummary summary() const {
+    return summary_;
+  }
+
+ private:
+  FindingCallback callback_;
+  void* user_;
+  ValidationSummary summary_;
+};
+
+const char* describe(char* buf, std::size_t cap, const SectionInfo& s) {
+  const char* name = section_type_name(s.type);
+  if (name)
+    std::snprintf(buf, cap, "section #%u (%s, instance %u)", unsigned(s.index), name,
+                  unsigned(s.instance));
+  else
+    std::snprintf(buf, cap, "section #%u (type 0x%04x, instance %u)", unsigned(s.index),
+                  unsigned(s.type), unsigned(s.instance));
+  return buf;
+}
+
+bool all_zero(const unsigned char* p, uint64_t n, uint64_t* first_nonzero) {
+  for (uint64_t i = 0; i < n; ++i)
+    if (p[i] != 0) {
+      *first_nonzero = i;
+      return false;
+    }
+  return true;
+}
+
+bool finite_value(const unsigned char* p, ElementType type) {
+  switch (type) {
+    case ElementType::F16: {
+      uint16_t bits;
+      std::memcpy(&bits, p, 2);
+      return ((bits >> 10) & 0x1f) != 0x1f;
+    }
+    case ElementType::F32: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return std::isfinite(v);
+    }
+    case ElementType::F64: {
+      double v;
+      std::memcpy(&v, p, 8);
+      return std::isfinite(v);
+    }
+    default:
+      return true;
+  }
+}
+
+// NaN/Inf in any floating-point section (the writer refuses them, so any is corruption or a
+// foreign writer's bug).
+void check_finite(const SectionInfo& s, Reporter& r) {
+  if (s.codec != Codec::Raw) return;
+  const uint32_t size = element_size(s.element_type);
+  if (s.element_type != ElementType::F16 && s.element_type != ElementType::F32 &&
+      s.element_type != ElementType::F64)
+    return;
+  const uint64_t count = s.raw_size / size;
+  uint64_t bad = 0, first = 0;
+  for (uint64_t i = 0; i < count; ++i)
+    if (!finite_value(s.data + i * size, s.element_type)) {
+      if (bad++ == 0) first = i;
+    }
+  if (bad) {
+    char what[96];
+    r.report(Check::NonFinite, s.index,
+             "%s: %" PRIu64 " NaN or Inf values (first at element %" PRIu64 ")",
+             describe(what, sizeof what, s), bad, first);
+  }
+}
+
+// Metadata: valid UTF-8 (no overlongs, surrogates or code points past U+10FFFF) and a JSON object
+// at the top level (first and last non-blank characters are braces; full JSON parsing is the
+// tool's job, `clothbake validate` does it).
+void check_metadata(const Asset& asset, Reporter& r) {
+  SectionInfo s;
+  Status status = asset.find(SectionType::Metadata, 0, &s);
+  if (!status.ok()) {
+    r.report(Check::MissingSection, kNoSection, "no metadata section (required)");
+    return;
+  }
+  std::string_view text;
+  status = asset.metadata_json(&text);
+  if (!status.ok()) {
+    r.report_status(status, s.index);
+    return;
+  }
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char c = p[i];
+    std::size_t len;
+    uint32_t cp;
+    if (c < 0x80) {
+      if (c == 0) {
+        r.report(Check::Metadata, s.index, "metadata: NUL byte at offset %zu", i);
+        return;
+      }
+      ++i;
+      continue;
+    } else if ((c & 0xe0) == 0xc0) {
+      len = 2, cp = c & 0x1f;
+    } else if ((c & 0xf0) == 0xe0) {
+      len = 3, cp = c & 0x0f;
+    } else if ((c & 0xf8) == 0xf0) {
+      len = 4, cp = c & 0x07;
+    } else {
+      r.report(Check::Metadata, s.index, "metadata: invalid UTF-8 lead byte at offset %zu", i);
+      return;
+    }
+    if (n - i < len) {
+      r.report(Check::Metadata, s.index, "metadata: truncated UTF-8 sequence at offset %zu", i);
+      return;
+    }
+    for (std::size_t k = 1; k < len; ++k) {
+      if ((p[i + k] & 0xc0) != 0x80) {
+        r.report(Check::Metadata, s.index, "metadata: invalid UTF-8 at offset %zu", i + k);
+        return;
+      }
+      cp = (cp << 6) | (p[i + k] & 0x3f);
+    }
+    const uint32_t min_cp = len == 2 ? 0x80 : len == 3 ? 0x800 : 0x10000;
+    if (cp < min_cp || cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff)) {
+      r.report(Check::Metadata, s.index, "metadata: invalid UTF-8 code point at offset %zu", i);
+      return;
+    }
+    i += len;
+  }
+  auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
+  std::size_t first = 0, last = n;
+  while (first < n && blank(text[first]))
+    ++first;
+  while (last > first && blank(text[last - 1]))
+    --last;
+  if (last - first < 2 || text[first] != '{' || text[last - 1] != '}')
+    r.report(Check::Metadata, s.index, "metadata: not a JSON object");
+}
+
+bool in_range(double v, double lo, double hi) {
+  return v >= lo && v <= hi;
+}
+
+void check_fabric_records(const Asset& asset, Reporter& r, uint32_t* yarn_count,
+                          int64_t* info_resolution) {
+  SectionInfo s;
+  const FabricInfoRecord* info = nullptr;
+  if (asset.find(SectionType::FabricInfo, 0, &s).ok()) {
+    Status status = read_fabric_info(asset, &info);
+    if (!status.ok()) {
+      r.report_status(status, s.index);
+      info = nullptr;
+    } else {
+      uint64_t at;
+      if (!all_zero(info->reserved, sizeof info->reserved, &at))
+        r.report(Check::Padding, s.index, "fabric_info: reserved byte %" PRIu64 " is not zero",
+                 uint64_t(offsetof(FabricInfoRecord, reserved)) + at);
+      if (!in_range(info->sheen_roughness, 1e-9, 1.0))
+        r.report(Check::ValueRange, s.index, "fabric_info: sheen_roughness %g is outside (0, 1]",
+                 info->sheen_roughness);
+      if (!(info->tile_size_mm >= 0) || !std::isfinite(info->tile_size_mm))
+        r.report(Check::ValueRange, s.index, "fabric_info: tile_size_mm %g is not >= 0",
+                 info->tile_size_mm);
+      for (double c : info->sheen_color)
+        if (!(c >= 0)) {
+          r.report(Check::ValueRange, s.index, "fabric_info: sheen_color component %g < 0", c);
+          break;
+        }
+      *info_resolution = info->resolution;
+    }
+  }
+  ArrayView<YarnMaterialRecord> yarns;
+  if (asset.find(SectionType::YarnMaterials, 0, &s).ok()) {
+    Status status = read_yarn_materials(asset, &yarns);
+    if (!status.ok()) {
+      r.report_status(status, s.index);
+      return;
+    }
+    *yarn_count = uint32_t(yarns.size);
+    if (info && info->yarn_count != yarns.size)
+      r.report(Check::SectionLayout, s.index,
+               "yarn_materials: %" PRIu64 " records but fabric_info.yarn_count is %u",
+               uint64_t(yarns.size), unsigned(info->yarn_count));
+    for (uint64_t i = 0; i < yarns.size; ++i) {
+      const YarnMaterialRecord& y = yarns[i];
+      if (std::memchr(y.name, 0, sizeof y.name) == nullptr)
+        r.report(Check::SectionLayout, s.index,
+                 "yarn_materials[%" PRIu64 "]: name is not NUL-terminated", i);
+      uint64_t at;
+      if (!all_zero(y.reserved, sizeof y.reserved, &at))
+        r.report(Check::Padding, s.index,
+                 "yarn_materials[%" PRIu64 "]: reserved byte %" PRIu64 " is not zero", i,
+                 uint64_t(offsetof(YarnMaterialRecord, reserved)) + at);
+      if (!in_range(y.roughness, 1e-9, 1.0))
+        r.report(Check::ValueRange, s.index,
+                 "yarn_materials[%" PRIu64 "]: roughness %g is outside (0, 1]", i, y.roughness);
+      if (!(y.optical_thickness > 0) || !std::isfinite(y.optical_thickness))
+        r.report(Check::ValueRange, s.index,
+                 "yarn_materials[%" PRIu64 "]: optical_thickness %g is not > 0", i,
+                 y.optical_thickness);
+      const double* rgb[] = {y.specular_albedo, y.diffuse_reflectance, y.diffuse_transmittance,
+                             y.color};
+      const char* rgb_names[] = {"specular_albedo", "diffuse_reflectance", "diffuse_transmittance",
+                                 "color"};
+      for (int k = 0; k < 4; ++k)
+        for (int c = 0; c < 3; ++c)
+          if (!in_range(rgb[k][c], 0.0, 1.0)) {
+            r.report(Check::ValueRange, s.index,
+                     "yarn_materials[%" PRIu64 "]: %s component %d = %g is outside [0, 1]", i,
+                     rgb_names[k], c, rgb[k][c]);
+            break;
+          }
+    }
+  } else if (info && info->yarn_count != 0) {
+    r.report(Check::MissingSection, kNoSection,
+             "fabric_info.yarn_count is %u but there is no yarn_materials section",
+             unsigned(info->yarn_count));
+  }
+}
+
+void check_feature_maps(const Asset& asset, Reporter& r, uint32_t yarn_count, bool have_yarns,
+                        int64_t info_resolution) {
+  const SectionType map_types[] = {SectionType::HeightMap, SectionType::TangentMap,
+                                   SectionType::NormalMap, SectionType::GapMap,
+                                   SectionType::YarnIdMap, SectionType::AlbedoMap};
+  int present = 0;
+  SectionInfo s;
+  for (SectionType t : map_types)
+    present += asset.find(t, 0, &s).ok() ? 1 : 0;
+  if (present == 0) return;
+  FeatureMapsView maps;
+  Status status = read_feature_maps(asset, &maps);
+  if (!status.ok()) {
+    r.report_status(status, kNoSection);
+    return;
+  }
+  const uint32_t n = maps.resolution;
+  const uint64_t texels = uint64_t(n) * n;
+  if (info_resolution < 0)
+    r.report(Check::MissingSection, kNoSection,
+             "feature maps are present but there is no fabric_info section");
+  else if (uint32_t(info_resolution) != n)
+    r.report(Check::MapResolution, kNoSection,
+             "feature maps are %u x %u but fabric_info.resolution is %u", unsigned(n), unsigned(n),
+             unsigned(info_resolution));
+  auto texel_xy = [n](uint64_t t, unsigned* x, unsigned* y) {
+    *x = unsigned(t % n);
+    *y = unsigned(t / n);
+  };
+  // Ranges of the scalar maps and the yarn ids.
+  uint64_t bad = 0, first = 0;
+  for (uint64_t t = 0; t < texels; ++t)
+    if (!(maps.gap[t] >= 0.f && maps.gap[t] <= 1.f) && bad++ == 0) first = t;
+  if (bad) {
+    unsigned x, y;
+    texel_xy(first, &x, &y);
+    r.report(Check::ValueRange, kNoSection,
+             "gap map: %" PRIu64 " texels outside [0, 1] (first at x=%u, y=%u: %g)", bad, x, y,
+             double(maps.gap[first]));
+  }
+  bad = 0;
+  for (uint64_t t = 0; t < texels * 3; ++t)
+    if (!(maps.albedo[t] >= 0.f && maps.albedo[t] <= 1.f) && bad++ == 0) first = t / 3;
+  if (bad) {
+    unsigned x, y;
+    texel_xy(first, &x, &y);
+    r.report(Check::ValueRange, kNoSection,
+             "albedo map: %" PRIu64 " values outside [0, 1] (first at x=%u, y=%u)", bad, x, y);
+  }
+  if (have_yarns) {
+    bad = 0;
+    for (uint64_t t = 0; t < texels; ++t)
+      if (maps.yarn_id[t] >= yarn_count && bad++ == 0) first = t;
+    if (bad) {
+      unsigned x, y;
+      texel_xy(first, &x, &y);
+      r.report(Check::YarnIdRange, kNoSection,
+               "yarn_id map: %" PRIu64 " texels name a yarn >= %u (first at x=%u, y=%u: %u)", bad,
+               unsigned(yarn_count), x, y, unsigned(maps.yarn_id[first]));
+    }
+  } else {
+    r.report(Check::MissingSection, kNoSection,
+             "feature maps are present but there is no yarn_materials section");
+  }
+  // Unit vectors (tolerance for float rounding and 8-bit sources), normal z > 0.
+  struct Named {
+    const char* name;
+    const ArrayView<float>* map;
+  } vectors[] = {{"tangent", &maps.tangent}, {"normal", &maps.normal}};
+  for (const auto& v : vectors) {
+    bad = 0;
+    for (uint64_t t = 0; t < texels; ++t) {
+      const float* p = v.map->data + 3 * t;
+      const double len = std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]);
+      if (!(std::fabs(len - 1.0) <= 1e-3) && bad++ == 0) first = t;
+    }
+    if (bad) {
+      unsigned x, y;
+      texel_xy(first, &x, &y);
+      r.report(Check::NotUnitVector, kNoSection,
+               "%s map: %" PRIu64 " texels are not unit vectors (first at x=%u, y=%u)", v.name, bad,
+               x, y);
+    }
+  }
+  bad = 0;
+  for (uint64_t t = 0; t < texels; ++t)
+    if (!(maps.normal[3 * t + 2] > 0.f) && bad++ == 0) first = t;
+  if (bad) {
+    unsigned x, y;
+    texel_xy(first, &x, &y);
+    r.report(Check::ValueRange, kNoSection,
+             "normal map: %" PRIu64 " texels have z <= 0 (first at x=%u, y=%u)", bad, x, y);
+  }
+}
+
+}  // namespace
+
+ValidationSummary validate_asset(const Asset& asset, FindingCallback callback,
+                                 void* user) noexcept {
+  Reporter r(callback, user);
+  if (!asset.is_open()) {
+    r.report(Check::None, kNoSection, "asset is not open");
+    return r.summary();
+  }
+  const FileHeader& header = asset.header();
+  const unsigned char* bytes = asset.bytes();
+  const bool newer_minor = header.version_minor > kFormatMinor;
+  if (newer_minor)
+    r.report(Check::NewerMinor, kNoSection,
+             "asset format %u.%u is newer than this reader (%u.%u): sections it does not know are "
+             "skipped",
+             unsigned(header.version_major), unsigned(header.version_minor), unsigned(kFormatMajor),
+             unsigned(kFormatMinor));
+  uint64_t at;
+  if (!all_zero(header.reserved, sizeof header.reserved, &at))
+    r.report(Check::Padding, kNoSection, "header: reserved byte %" PRIu64 " is not zero",
+             uint64_t(offsetof(FileHeader, reserved)) + at);
+
+  // Per section: checksum, padding after it, known type and version, finite floats.
+  const uint64_t table_end =
+      sizeof(FileHeader) + uint64_t(header.section_count) * header.section_entry_size;
+  uint64_t cursor = table_end;  // end of the previous structure
+  char what[96];
+  for (uint32_t i = 0; i < asset.section_count(); ++i) {
+    SectionInfo s;
+    if (!asset.section(i, &s).ok()) continue;
+    describe(what, sizeof what, s);
+    if (!all_zero(bytes + cursor, s.offset - cursor, &at))
+      r.report(Check::Padding, kNoSection,
+               "padding byte at offset %" PRIu64 " (before %s) is not zero", cursor + at, what);
+    cursor = s.offset + s.stored_size;
+    Status status = asset.verify_section(s);
+    if (!status.ok()) {
+      r.report_status(status, i);
+      continue;  // the content is not trustworthy: skip its semantic checks
+    }
+    if (section_type_name(s.type) == nullptr) {
+      r.report(Check::UnknownSection, i, "%s: unknown type, skipped", what);
+      continue;
+    }
+    if (s.codec != Codec::Raw) {
+      r.report(Check::UnknownCodecNewer, i, "%s: codec %u unknown to this reader, skipped", what,
+               unsigned(s.codec));
+      continue;
+    }
+    const uint16_t known = known_section_version(s.type);
+    if (known != 0 && (s.version == 0 || s.version > known)) {
+      if (s.version > known && newer_minor)
+        r.report(Check::NewerSectionVersion, i, "%s: payload version %u is newer than %u, skipped",
+                 what, unsigned(s.version), unsigned(known));
+      else
+        r.report(Check::SectionLayout, i, "%s: payload version %u is not defined (this reader: %u)",
+                 what, unsigned(s.version), unsigned(known));
+      continue;
+    }
+    check_finite(s, r);
+  }
+  if (!all_zero(bytes + cursor, header.file_size - cursor, &at))
+    r.report(Check::Padding, kNoSection,
+             "padding byte at offset %" PRIu64 " (end of file) is not zero", cursor + at);
+  // Stop before semantic checks if the bytes cannot be trusted.
+  if (r.summary().errors > 0) return r.summary();
+
+  check_metadata(asset, r);
+  uint32_t yarn_count = 0;
+  int64_t info_resolution = -1;  // -1: no fabric_info
+  check_fabric_records(asset, r, &yarn_count, &info_resolution);
+  SectionInfo s;
+  const bool have_yarns = asset.find(SectionType::YarnMaterials, 0, &s).ok();
+  check_feature_maps(asset, r, yarn_count, have_yarns, info_resolution);
+  return r.summary();
+}
+
+}  // namespace clothbake::reader

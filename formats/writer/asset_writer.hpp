@@ -1,0 +1,85 @@
+// Writer of the clothbake asset container (format 1; docs/format.md). C++20.
+//
+// Sections are built in memory (make_*_section), then laid out deterministically: sorted by
+// (type, instance), each at the next multiple of 64, zero padding, no timestamps or host names,
+// XXH64 checksums from libxxhash. The same sections always give the same bytes.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "formats/reader/layout.hpp"
+#include "formats/writer/sink.hpp"
+
+namespace clothbake::formats {
+
+using reader::ElementType;
+using reader::SectionType;
+
+// One section, ready to be written. Build it with the make_*_section functions, which enforce
+// the invariants (shape matches payload, no NaN/Inf).
+struct Section {
+  SectionType type{};
+  uint32_t instance = 0;
+  uint16_t version = 1;
+  ElementType element = ElementType::U8;
+  std::vector<uint32_t> dims;  // rank = dims.size() <= 4; empty only for Opaque
+  std::vector<std::byte> payload;
+};
+
+// "height" or "type 0x0777", plus " instance I" when instance != 0: for messages.
+std::string section_label(SectionType type, uint32_t instance);
+
+// A typed-array section holding a copy of `values` with shape `dims` (slowest first). Elements are
+// float, double, reader::Half or an integer type. Throws clothbake::Error:
+//  - ExitCode::Input if a floating-point value is NaN or Inf, naming the section, the element
+//    index and its multi-index ("height: element 17 [0, 17] is NaN");
+//  - ExitCode::Internal if the dims do not match values.size() or the rank exceeds 4.
+template <class T>
+Section make_array_section(SectionType type, uint32_t instance, std::span<const T> values,
+                           std::vector<uint32_t> dims, uint16_t version = 1);
+
+// Records of a fixed-size struct (FabricInfoRecord, YarnMaterialRecord...) as a u8 array of shape
+// {count, sizeof(Record)}. The caller zero-initialises records (padding must be zero).
+template <class Record>
+Section make_record_section(SectionType type, uint32_t instance, std::span<const Record> records,
+                            uint16_t version = 1) {
+  static_assert(std::is_trivially_copyable_v<Record>);
+  std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(records.data()),
+                                 records.size_bytes());
+  return make_array_section<uint8_t>(type, instance, bytes,
+                                     {uint32_t(records.size()), uint32_t(sizeof(Record))}, version);
+}
+
+// The Metadata section: `metadata` as UTF-8 JSON, keys sorted, 2-space indent (invalid UTF-8 in
+// strings is replaced by U+FFFD rather than failing).
+Section make_metadata_section(const nlohmann::json& metadata);
+
+// Checks a set of sections for writing: rank <= 4, payload size = shape x element size, unique
+// (type, instance). Throws Error(Internal) naming the section on failure.
+void check_sections(std::span<const Section> sections);
+
+// The table order: sections sorted by (type, instance). Pointers into `sections`.
+std::vector<const Section*> table_order(std::span<const Section> sections);
+
+// Bytes of a complete asset written through `sink` (header, table, payloads, padding). Returns
+// the file size. Throws what the sink throws, and Error(Internal) for invalid sections.
+uint64_t write_asset(std::span<const Section> sections, Sink& sink);
+
+// The asset in memory (for tests and the golden file).
+std::vector<std::byte> serialize_asset(std::span<const Section> sections);
+
+// Size the asset will have, without writing it.
+uint64_t asset_size(std::span<const Section> sections);
+
+// Writes the asset atomically to `path` (see atomic_file.hpp for the guarantees and errors).
+struct OutputOptions;
+void write_asset_file(const std::filesystem::path& path, std::span<const Section> sections,
+                      const OutputOptions& options);
+
+}  // namespace clothbake::formats

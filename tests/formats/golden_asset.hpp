@@ -1,0 +1,33 @@
+// The small v1 asset checked in as tests/formats/data/golden_v1.cbk: the 4 x 4 test fabric's
+// records and feature maps plus a fixed metadata object (no tool version, so that a version bump
+// does not change the bytes). Regenerate deliberately (docs/format.md, "Golden file"):
+//   CLOTHBAKE_REGENERATE_GOLDEN=1 build-*/bin/formats_golden_test
+#pragma once
+
+#include <vector>
+
+#include "formats/writer/asset_writer.hpp"
+#include "formats/writer/fabric_sections.hpp"
+#include "tests/formats/test_fabric.hpp"
+
+namespace clothbake::test_support {
+
+inline std::vector<formats::Section> golden_sections() {
+  const Fabric fabric = make_test_fabric(4, "golden");
+  std::vector<formats::Section> sections = formats::fabric_record_sections(fabric);
+  for (auto& s : formats::feature_map_sections(fabric.maps))
+    sections.push_back(std::move(s));
+  nlohmann::json metadata;
+  metadata["format"] = "clothbake-asset";
+  metadata["tool"] = {{"name", "clothbake"}, {"version", "golden"}};
+  metadata["fabric"] = formats::fabric_metadata(fabric);
+  metadata["stages"] = {"load_fabric", "feature_maps", "write"};
+  sections.push_back(formats::make_metadata_section(metadata));
+  return sections;
+}
+
+inline std::string golden_path() {
+  return CLOTHBAKE_SOURCE_DIR "/tests/formats/data/golden_v1.cbk";
+}
+
+}  // namespace clothbake::test_support

@@ -1,0 +1,25 @@
+# ctest -R fuzz_reader_20s: (compile the harness with clang++ if CLANGXX is set, then) run the
+# fuzzer for SECONDS on a scratch copy of the seed corpus. A crash fails the test and leaves the
+# reproducer (crash-*) in WORK_DIR.
+file(REMOVE_RECURSE ${WORK_DIR}/corpus)
+file(MAKE_DIRECTORY ${WORK_DIR}/corpus)
+file(GLOB _seeds ${SEED_CORPUS}/*)
+file(COPY ${_seeds} DESTINATION ${WORK_DIR}/corpus)
+if(CLANGXX)
+  string(REPLACE "|" ";" _sources "${SOURCES}")
+  string(REPLACE "|" ";" _flags "${FLAGS}")
+  execute_process(COMMAND ${CLANGXX} -std=c++17 ${_flags} -I${INCLUDE_DIR} ${_sources} -o ${FUZZER}
+                  RESULT_VARIABLE rc ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "compiling the fuzzer with ${CLANGXX} failed:\n${err}")
+  endif()
+endif()
+execute_process(COMMAND ${FUZZER} -max_total_time=${SECONDS} -print_final_stats=1
+                        -artifact_prefix=${WORK_DIR}/ ${WORK_DIR}/corpus
+                WORKING_DIRECTORY ${WORK_DIR}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+string(REGEX MATCH "stat::number_of_executed_units: *[0-9]+" _runs "${err}")
+message(STATUS "reader fuzzer: ${_runs}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the reader fuzzer found a crash (exit ${rc}):\n${err}")
+endif()
