@@ -49,7 +49,8 @@ std::string valid_satin_moves(int n) {
   std::string list;
   for (int m = 2; m < n - 1; ++m) {
     if (std::gcd(n, m) != 1) continue;
-    list += (list.empty() ? "" : ", ") + std::to_string(m);
+    if (!list.empty()) list += ", ";
+    list += std::to_string(m);
   }
   return list.empty() ? "none" : list;
 }

@@ -595,7 +595,10 @@ void Parser::read_colors(const System& warp, const System& weft) {
 std::string shaft_list(const ShaftSet& set) {
   std::string out;
   for (std::size_t s = 1; s < set.size(); ++s)
-    if (set.test(s)) out += (out.empty() ? "" : ",") + std::to_string(s);
+    if (set.test(s)) {
+      if (!out.empty()) out += ',';
+      out += std::to_string(s);
+    }
   return out.empty() ? "none" : out;
 }
 
