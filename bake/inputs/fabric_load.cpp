@@ -254,26 +254,29 @@ void load_image_maps(LoadedFabric& out, const TomlSection& maps,
   };
   const Entry entries[] = {{"height", true}, {"tangent", true},  {"normal", false},
                            {"gap", false},   {"yarn_id", false}, {"albedo", false}};
+  // Every key is checked before any image is read, so that a missing key is reported first.
+  for (const auto& e : entries) {
+    auto file = maps.string(e.role);
+    if (!file && e.required)
+      maps.fail(e.role, fmt::format("is missing: an image-based fabric needs a {} map ([maps] "
+                                    "{} = \"file.exr\")",
+                                    e.role, e.role));
+    if (file && file->empty()) maps.fail(e.role, "must name an image file, got an empty string");
+  }
   std::vector<inputs::MapImage> images;
   for (const auto& e : entries) {
     auto file = maps.string(e.role);
-    if (!file) {
-      if (e.required)
-        maps.fail(e.role, fmt::format("is missing: an image-based fabric needs a {} map ([maps] "
-                                      "{} = \"file.exr\")",
-                                      e.role, e.role));
-      continue;
-    }
-    if (file->empty()) maps.fail(e.role, "must name an image file, got an empty string");
+    if (!file) continue;
     std::string path = inputs::resolve_relative(base_dir, *file);
-    std::string context = fmt::format("{}: maps.{} (\"{}\")", maps.where(e.role), e.role, path);
-    inputs::MapImage image = inputs::read_map_image(path, e.role, context);
+    std::string key_context = fmt::format("{}: maps.{}", maps.where(e.role), e.role);
+    inputs::MapImage image = inputs::read_map_image(path, e.role, key_context);
+    const std::string& context = image.context;
     if (!images.empty() && image.image.width != images.front().image.width)
       throw_input_error(fmt::format(
           "{}: image is {}x{} but maps.{} is {}x{}; all maps of a fabric must have the same size",
           context, image.image.width, image.image.height, images.front().role,
           images.front().image.width, images.front().image.height));
-    f.inputs.push_back({e.role, path, inputs::hash_file(path, context)});
+    f.inputs.push_back({e.role, path, inputs::hash_file(path, key_context)});
     images.push_back(std::move(image));
   }
 

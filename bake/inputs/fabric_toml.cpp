@@ -29,6 +29,13 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
 std::string closest_match(std::string_view word, const std::vector<std::string>& candidates) {
   std::string best;
   std::size_t best_distance = std::size_t(-1);
+  // A truncated or extended key ("spacing" for "spacing_mm") is a typo whatever its distance.
+  if (word.size() >= 3)
+    for (const auto& candidate : candidates)
+      if (candidate.size() != word.size() &&
+          (candidate.rfind(word, 0) == 0 || std::string_view(word).rfind(candidate, 0) == 0) &&
+          std::min(candidate.size(), word.size()) >= 3)
+        return candidate;
   for (const auto& candidate : candidates) {
     std::size_t d = edit_distance(word, candidate);
     if (d < best_distance) {
@@ -103,7 +110,10 @@ std::string show(const toml::node& node) {
   node.visit([&](const auto& value) {
     if constexpr (toml::is_string<decltype(value)>)
       out << '"' << value.get() << '"';
-    else if constexpr (toml::is_number<decltype(value)> || toml::is_boolean<decltype(value)>)
+    else if constexpr (toml::is_floating_point<decltype(value)>)
+      out << fmt::format("{}",
+                         value.get());  // shortest form that round-trips: -0.2, not -0.2000...1
+    else if constexpr (toml::is_integer<decltype(value)> || toml::is_boolean<decltype(value)>)
       out << value;
     else if constexpr (toml::is_array<decltype(value)>)
       out << "[...]";
@@ -144,7 +154,10 @@ std::string TomlSection::where(std::string_view key) const {
 }
 
 void TomlSection::fail(std::string_view key, const std::string& message) const {
-  throw Error(ExitCode::Input, fmt::format("{}: {} {}", where(key), dotted(key), message));
+  // "color[1] = 1.5 ..." for element messages, "color must be ..." otherwise.
+  const char* separator = !message.empty() && message[0] == '[' ? "" : " ";
+  throw Error(ExitCode::Input,
+              fmt::format("{}: {}{}{}", where(key), dotted(key), separator, message));
 }
 
 const toml::node& TomlSection::node(std::string_view key) const {

@@ -109,16 +109,17 @@ std::vector<Vec3f> decode_vectors(const MapImage& map, bool is_normal) {
 }  // namespace
 
 MapImage read_map_image(const std::string& path, const std::string& role,
-                        const std::string& context) {
+                        const std::string& key_context) {
   const ChannelRule& rule = rule_for(role);
   MapImage map;
   map.role = role;
   map.path = path;
-  map.context = context;
+  map.context = fmt::format("{}: {}", key_context, path);
+  const std::string& context = map.context;
   try {
-    map.image = read_image(path);
+    map.image = read_image(path);  // its messages start with the path
   } catch (const Error& e) {
-    throw Error(e.code(), fmt::format("{}: {}", context, e.what()));
+    throw Error(e.code(), fmt::format("{}: {}", key_context, e.what()));
   }
   const Image& im = map.image;
   bool accepted = false;

@@ -32,17 +32,18 @@ inline constexpr float kMinVectorLength = 0.01f;
 struct MapImage {
   std::string role;     // "height", "tangent", ... (the key in [maps])
   std::string path;     // resolved path of the image file
-  std::string context;  // message prefix, e.g. "fabric.toml: maps.height (\"h.png\")"
+  std::string context;  // message prefix for pixels, e.g. "fabric.toml:3:10: maps.height: /d/h.png"
   Image image;
   bool integer_encoded = false;  // 8/16-bit integer pixels (normalised to [0, 1] by OIIO)
   int bits = 32;                 // bits per channel in the file
 };
 
 // Reads the image at `path` for map `role` and checks its channel count against the table above.
-// `context` prefixes every message. Throws Error(Input) for a missing, unreadable or truncated
+// `key_context` (the TOML file, line and key) prefixes every message, followed by the image path.
+// Throws Error(Input) for a missing, unreadable or truncated
 // file, a wrong channel count, a zero-size or non-square image.
 MapImage read_map_image(const std::string& path, const std::string& role,
-                        const std::string& context);
+                        const std::string& key_context);
 
 // Decoders: each checks every pixel it uses (NaN/Inf, range, zero length, non-integer id) and
 // throws Error(Input) naming the pixel. Output is row-major, resolution^2 entries.

@@ -1,0 +1,140 @@
+// The strict TOML layer: edit distance, suggestions, typed getters and their messages.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "bake/inputs/fabric_toml.hpp"
+#include "test_support.hpp"
+
+namespace clothbake::inputs {
+namespace {
+
+using clothbake::testing::error_message;
+using ::testing::HasSubstr;
+
+TEST(EditDistance, ClassicCases) {
+  EXPECT_EQ(edit_distance("", ""), 0u);
+  EXPECT_EQ(edit_distance("abc", ""), 3u);
+  EXPECT_EQ(edit_distance("", "abc"), 3u);
+  EXPECT_EQ(edit_distance("kitten", "sitting"), 3u);  // the textbook example
+  EXPECT_EQ(edit_distance("flaw", "lawn"), 2u);
+  EXPECT_EQ(edit_distance("roughnes", "roughness"), 1u);
+  EXPECT_EQ(edit_distance("colour", "color"), 1u);
+  // Symmetric.
+  EXPECT_EQ(edit_distance("resolutoin", "resolution"), edit_distance("resolution", "resolutoin"));
+  EXPECT_EQ(edit_distance("resolutoin", "resolution"), 2u);  // a transposition costs 2
+}
+
+TEST(ClosestMatch, SuggestsOnlyPlausibleTypos) {
+  std::vector<std::string> keys = {"roughness", "optical_thickness", "color", "name"};
+  EXPECT_EQ(closest_match("roughnes", keys), "roughness");
+  EXPECT_EQ(closest_match("colour", keys), "color");
+  EXPECT_EQ(closest_match("optical_thicknes", keys), "optical_thickness");
+  EXPECT_EQ(closest_match("zzzzzzzz", keys), "");
+  EXPECT_EQ(closest_match("x", {}), "");
+}
+
+TEST(Range, ContainsAndDescribe) {
+  Range r{0.0, 1.0, true, false};
+  EXPECT_FALSE(r.contains(0.0));
+  EXPECT_TRUE(r.contains(1e-9));
+  EXPECT_TRUE(r.contains(1.0));
+  EXPECT_FALSE(r.contains(1.0 + 1e-12));
+  EXPECT_FALSE(r.contains(std::nan("")));
+  EXPECT_FALSE(r.contains(INFINITY));
+  EXPECT_EQ(r.describe(), "(0, 1]");
+  EXPECT_EQ((Range{0.0, 1.0}).describe(), "[0, 1]");
+  EXPECT_EQ((Range{0.0, 1e300, true, false}).describe(), "> 0");
+}
+
+TEST(ParseToml, SyntaxErrorNamesLineAndColumn) {
+  std::string msg = error_message([] { parse_toml_text("a = 1\nb = = 2\n", "f.toml"); });
+  EXPECT_THAT(msg, HasSubstr("f.toml:2:"));
+  EXPECT_THAT(msg, HasSubstr("TOML syntax error"));
+}
+
+struct Doc {
+  toml::table table;
+  TomlSection root;
+  explicit Doc(const std::string& text)
+      : table(parse_toml_text(text, "d.toml")), root(table, "d.toml", "") {}
+};
+
+TEST(TomlSection, UnknownKeyGetsSuggestionWithLocation) {
+  Doc doc("[bake]\nresolution = 64\nclustres = 8\n");
+  auto bake = doc.root.table("bake");
+  ASSERT_TRUE(bake);
+  std::string msg = error_message([&] { bake->check_keys({"resolution", "clusters"}); });
+  EXPECT_THAT(msg, HasSubstr("d.toml:3:"));
+  EXPECT_THAT(msg, HasSubstr("unknown key 'bake.clustres'"));
+  EXPECT_THAT(msg, HasSubstr("did you mean 'bake.clusters'?"));
+}
+
+TEST(TomlSection, UnknownKeyWithoutSuggestionListsValidKeys) {
+  Doc doc("[sheen]\nbanana = 1\n");
+  std::string msg = error_message([&] {
+    doc.root.table("sheen")->check_keys({"color", "roughness"});
+  });
+  EXPECT_THAT(msg, HasSubstr("unknown key 'sheen.banana'"));
+  EXPECT_THAT(msg, HasSubstr("valid keys in [sheen]: color, roughness"));
+}
+
+TEST(TomlSection, FirstUnknownKeyInFileOrderIsReported) {
+  // toml++ stores keys sorted; the message must still point at the first one in the file.
+  Doc doc("zeta = 1\nalpha = 2\n");
+  std::string msg = error_message([&] { doc.root.check_keys({"name"}); });
+  EXPECT_THAT(msg, HasSubstr("'zeta'"));
+  EXPECT_THAT(msg, HasSubstr("d.toml:1:"));
+}
+
+TEST(TomlSection, TypedGetters) {
+  Doc doc(
+      "r = 0.5\ni = 3\nb = true\ns = \"x\"\ngrey = 0.25\nrgb = [0.1, 0.2, 0.3]\n"
+      "list = [[0, 0, 0], [1, 1, 1]]\nwhole = 1\n");
+  const auto& s = doc.root;
+  EXPECT_EQ(*s.real("r", Range{0, 1}), 0.5);
+  EXPECT_EQ(*s.real("whole", Range{0, 1}), 1.0);  // integers are accepted as reals
+  EXPECT_EQ(*s.integer("i", 0, 10), 3);
+  EXPECT_TRUE(*s.boolean("b"));
+  EXPECT_EQ(*s.string("s"), "x");
+  EXPECT_EQ(*s.rgb("grey", Range{0, 1}), (Rgb{0.25, 0.25, 0.25}));
+  EXPECT_EQ(*s.rgb("rgb", Range{0, 1}), (Rgb{0.1, 0.2, 0.3}));
+  EXPECT_EQ(s.rgb_list("list", Range{0, 1})->size(), 2u);
+  EXPECT_FALSE(s.real("absent", Range{0, 1}).has_value());
+}
+
+TEST(TomlSection, WrongTypeNamesKeyLineAndExpectation) {
+  Doc doc("[bake]\nresolution = \"256\"\nratio = 0.5\n");
+  auto bake = *doc.root.table("bake");
+  std::string msg = error_message([&] { bake.integer("resolution", 4, 8192); });
+  EXPECT_THAT(msg, HasSubstr("d.toml:2:"));
+  EXPECT_THAT(msg, HasSubstr("bake.resolution must be an integer in [4, 8192], got a string"));
+  msg = error_message([&] { bake.integer("ratio", 0, 10); });
+  EXPECT_THAT(msg, HasSubstr("bake.ratio must be an integer"));
+}
+
+TEST(TomlSection, OutOfRangeNamesValidRange) {
+  Doc doc("[[yarn]]\nroughness = -0.2\ncolor = [0.5, 1.5, 0.5]\n");
+  auto yarns = *doc.root.table_array("yarn");
+  std::string msg = error_message([&] { yarns[0].real("roughness", Range{0, 1, true, false}); });
+  EXPECT_THAT(msg, HasSubstr("d.toml:2:"));
+  EXPECT_THAT(msg, HasSubstr("yarn[0].roughness = -0.2 is out of range; valid range is (0, 1]"));
+  msg = error_message([&] { yarns[0].rgb("color", Range{0, 1}); });
+  EXPECT_THAT(msg, HasSubstr("yarn[0].color[1] = 1.5 is out of range"));
+}
+
+TEST(TomlSection, ChoiceSuggestsClosest) {
+  Doc doc("units = \"mn\"\n");
+  std::string msg = error_message([&] { doc.root.choice("units", {"tile", "mm", "cm"}); });
+  EXPECT_THAT(msg, HasSubstr("units = \"mn\" is not valid"));
+  EXPECT_THAT(msg, HasSubstr("did you mean \"mm\"?"));
+}
+
+TEST(TomlSection, TableOfWrongKind) {
+  Doc doc("bake = 3\nyarn = 2\n");
+  EXPECT_THAT(error_message([&] { doc.root.table("bake"); }), HasSubstr("bake must be a table"));
+  EXPECT_THAT(error_message([&] { doc.root.table_array("yarn"); }),
+              HasSubstr("yarn must be an array of tables"));
+}
+
+}  // namespace
+}  // namespace clothbake::inputs
