@@ -288,11 +288,11 @@ WeaveSample WeaveSurface::sample(double u, double v) const {
   return evaluate(locate_end(x), locate_pick(y));
 }
 
-FabricMaps generate_weave_maps(const WeaveSpec& spec, int resolution) {
+FabricMaps generate_weave_maps(const WeaveSpec& spec, int resolution, const std::string& where) {
   if (resolution < 1 || resolution > kMaxMapResolution)
-    throw_input_error("weave maps: resolution " + std::to_string(resolution) + " is outside 1.." +
+    throw_input_error(where + ": map resolution " + std::to_string(resolution) + " is outside 1.." +
                       std::to_string(kMaxMapResolution));
-  const WeaveSurface surface(spec);
+  const WeaveSurface surface(spec, where);
   const int n = resolution;
   // Each column (row) meets the same threads on every row (column): locate them once.
   std::vector<WeaveSurface::AxisPoint> columns(static_cast<std::size_t>(n));

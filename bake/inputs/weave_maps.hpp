@@ -124,7 +124,9 @@ class WeaveSurface {
 // normal, gap I(x), yarn_id (0 = warp, 1 = weft), albedo (thread colour; gap texels take the colour
 // of the nearest thread). Each texel is the analytic surface at its centre u = (x + 0.5) / N, so
 // the maps are exactly periodic. Deterministic, independent of the thread count. Throws
-// Error(Input) for a bad spec or resolution outside [1, kMaxMapResolution].
-FabricMaps generate_weave_maps(const WeaveSpec& spec, int resolution);
+// Error(Input) for a bad spec or resolution outside [1, kMaxMapResolution]; `where` prefixes those
+// messages (e.g. "fabric.toml: [weave]").
+FabricMaps generate_weave_maps(const WeaveSpec& spec, int resolution,
+                               const std::string& where = "weave");
 
 }  // namespace clothbake::weave

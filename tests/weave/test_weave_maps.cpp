@@ -433,6 +433,14 @@ TEST(WeaveMaps, BadSpecsAreRejectedNamingTheField) {
     expect_input_error([&] { validate_weave_spec(spec, "fabric.toml: [weave]"); },
                        "fabric.toml: [weave]");
   }
-  expect_input_error([] { generate_weave_maps(rich_spec(), 0); }, "resolution 0");
+  expect_input_error([] { generate_weave_maps(rich_spec(), 0, "f.toml: [weave]"); },
+                     "f.toml: [weave]: map resolution 0");
+  expect_input_error(
+      [] {
+        WeaveSpec spec = rich_spec();
+        spec.warp.width = -1;
+        generate_weave_maps(spec, 8, "f.toml: [weave]");
+      },
+      "f.toml: [weave]: warp.width");
   expect_input_error([] { generate_weave_maps(rich_spec(), kMaxMapResolution + 1); }, "resolution");
 }
