@@ -1,0 +1,94 @@
+// Visibility cluster sections: label map and mean visibility (cluster_sections.hpp).
+#include "formats/reader/cluster_sections.hpp"
+
+#include <cmath>
+
+#include "model/directions.hpp"
+
+namespace clothbake::reader {
+
+Status VisibilityClusterView::open(const Asset& asset) noexcept {
+  *this = VisibilityClusterView();
+  SectionInfo labels_s, mean_s;
+  Status s = asset.find(SectionType::ClusterLabels, 0, &labels_s);
+  if (s.ok()) s = asset.find(SectionType::ClusterMeanVisibility, 0, &mean_s);
+  if (s.code() == ErrorCode::NotFound)
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no visibility clusters (cluster_labels and "
+                         "cluster_mean_visibility)");
+  if (!s.ok()) return s;
+  if (labels_s.version != 1 || mean_s.version != 1)
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "cluster sections: payload version must be 1");
+  ArrayView<uint8_t> labels;
+  ArrayView<float> mean;
+  s = asset.view_of(labels_s, &labels);
+  if (s.ok()) s = asset.view_of(mean_s, &mean);
+  if (!s.ok()) return s;
+  if (labels.rank != 2 || labels.dims[0] != labels.dims[1] || labels.dims[0] == 0)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "cluster_labels must be u8 {N, N}");
+  if (mean.rank != 3 || mean.dims[0] == 0 || mean.dims[0] > kMaxVisibilityClusters ||
+      mean.dims[1] != mean.dims[2] || mean.dims[1] == 0 || mean.dims[1] > kMaxVisibilityDirs)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "cluster_mean_visibility must be f32 {C, n, n} with 1 <= C <= 255 and "
+                         "1 <= n <= 256");
+  const uint32_t clusters = mean.dims[0];
+  uint64_t seen[4] = {0, 0, 0, 0};  // bit set of labels that occur
+  for (uint64_t t = 0; t < labels.size; ++t) {
+    const uint32_t l = labels[t];
+    if (l >= clusters)
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "cluster_labels: texel (%llu, %llu) has label %u >= %u clusters",
+                           static_cast<unsigned long long>(t % labels.dims[0]),
+                           static_cast<unsigned long long>(t / labels.dims[0]), unsigned(l),
+                           unsigned(clusters));
+    seen[l / 64] |= uint64_t(1) << (l % 64);
+  }
+  for (uint32_t c = 0; c < clusters; ++c)
+    if (!(seen[c / 64] >> (c % 64) & 1))
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "cluster_labels: cluster %u has no texel", unsigned(c));
+  for (uint64_t t = 0; t < mean.size; ++t)
+    if (!(mean[t] >= 0.0f && mean[t] <= 2.0f))
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "cluster_mean_visibility: value %llu is not in [0, 2]",
+                           static_cast<unsigned long long>(t));
+  labels_ = labels.data;
+  mean_ = mean.data;
+  n_ = labels.dims[0];
+  clusters_ = clusters;
+  dirs_ = mean.dims[1];
+  return {};
+}
+
+uint32_t VisibilityClusterView::label(int64_t x, int64_t y) const noexcept {
+  const int64_t n = int64_t(n_);
+  int64_t xm = x % n, ym = y % n;
+  if (xm < 0) xm += n;
+  if (ym < 0) ym += n;
+  return labels_[uint64_t(ym) * n_ + uint64_t(xm)];
+}
+
+Status VisibilityClusterView::mean_visibility(uint32_t cluster, const double w[3],
+                                              double* out) const noexcept {
+  if (!is_open() || out == nullptr || w == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "mean_visibility: not open");
+  if (cluster >= clusters_)
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "mean_visibility: cluster %u out of range (%u clusters)",
+                         unsigned(cluster), unsigned(clusters_));
+  if (!std::isfinite(w[0]) || !std::isfinite(w[1]) || !std::isfinite(w[2]) ||
+      !(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] > 0.0))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "mean_visibility: direction must be finite and non-zero");
+  const model::DirectionGrid<double> grid{int(dirs_), 0.0};
+  const model::BinBilinear<double> b = grid.bilinear(model::Vec3d(w[0], w[1], w[2]));
+  double v = 0.0;
+  for (int k = 0; k < 4; ++k)
+    v += b.weight[k] * mean_visibility_bin(cluster, uint32_t(b.index[k]));
+  *out = v;
+  return {};
+}
+
+}  // namespace clothbake::reader

@@ -1,0 +1,46 @@
+// Half-vector bin quadrature and the 2-sigma rule (bake/tables/half_vector_bins.hpp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "bake/tables/half_vector_bins.hpp"
+#include "common/error.hpp"
+#include "model/directions.hpp"
+
+using namespace clothbake;
+using namespace clothbake::tables;
+
+TEST(HalfVectorBins, QuadratureDirectionsAreUnitAndInsideTheirBin) {
+  const HalfVectorBins q = make_half_vector_bins(16, 3);
+  ASSERT_EQ(q.x.size(), std::size_t(16 * 16 * 9));
+  model::DirectionGrid<double> grid{16, 0.0};
+  for (int b = 0; b < q.bin_count(); ++b)
+    for (int k = b * 9; k < (b + 1) * 9; ++k) {
+      model::Vec3d d(q.x[std::size_t(k)], q.y[std::size_t(k)], q.z[std::size_t(k)]);
+      ASSERT_NEAR(model::length(d), 1.0, 1e-6);
+      ASSERT_GE(d.z, 0.0);
+      ASSERT_EQ(grid.bin_of(d), b) << "sample " << k;
+    }
+}
+
+TEST(HalfVectorBins, TwoSigmaRule) {
+  // The paper: 32^2 bins resolve roughness 0.04 (bin width sqrt(2 pi) / 32 = 0.0783 <= 0.08).
+  EXPECT_TRUE(bins_resolve_roughness(32, 0.04));
+  EXPECT_FALSE(bins_resolve_roughness(32, 0.039));
+  EXPECT_EQ(bins_per_side_for_roughness(0.04), 32);
+  EXPECT_EQ(bins_per_side_for_roughness(0.01), 126);  // ceil(125.33)
+  EXPECT_TRUE(bins_resolve_roughness(126, 0.01));
+  EXPECT_FALSE(bins_resolve_roughness(125, 0.01));
+  EXPECT_NEAR(bin_angular_width(32), std::sqrt(2 * M_PI) / 32, 1e-15);
+  // Quadrature density: sub-cell spacing <= sigma / 2, clamped to [2, 8].
+  EXPECT_EQ(default_samples_per_side(32, 0.3), 2);
+  EXPECT_EQ(default_samples_per_side(32, 0.04), 4);
+  EXPECT_EQ(default_samples_per_side(32, 0.01), 8);
+}
+
+TEST(HalfVectorBins, RejectsBadSizes) {
+  EXPECT_THROW(make_half_vector_bins(0, 2), Error);
+  EXPECT_THROW(make_half_vector_bins(300, 2), Error);
+  EXPECT_THROW(make_half_vector_bins(8, 0), Error);
+  EXPECT_THROW(make_half_vector_bins(8, 17), Error);
+}
