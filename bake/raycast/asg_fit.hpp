@@ -1,0 +1,48 @@
+// Least-squares fit of one anisotropic spherical Gaussian (model/asg.hpp) to sampled binary
+// visibility (docs/raycast.md, "ASG fit").
+//
+// Given K directions d_k of equal solid angle on the upper hemisphere and V_k in {0, 1}, finds
+// axis, rotation, bandwidths and amplitude minimising sum_k (G(d_k) - V_k)^2, and reports the RMS
+// error sqrt(sum / K) (the solid-angle RMS, since the samples have equal solid angle).
+//
+// Method (deterministic, bounded, fixed budget): texels that see all or none of the sampled sky get
+// an exact closed form (axis +z, bandwidths 0, amplitude 1 or 0, error 0). Otherwise two starts are
+// scored (a flat lobe of the optimal amplitude, and a lobe from the moments of the visible
+// directions: axis = their mean, bandwidths from their spread about it) and the better one is
+// refined by Levenberg-Marquardt (Eigen, 6 parameters: a rotation increment of the frame, lambda,
+// mu, c) with at most kMaxEvaluations objective evaluations; every step is projected into the
+// bounds (bandwidths [0, kAsgMaxBandwidth], amplitude [0, kAsgMaxAmplitude], axis in the upper
+// hemisphere) and accepted only if it lowers the objective, so the fit cannot diverge.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "model/asg.hpp"
+#include "model/vec.hpp"
+
+namespace clothbake::raycast {
+
+// The sample directions of a fit, as structure of arrays (unit vectors, z >= 0).
+struct FitDirections {
+  std::vector<double> x, y, z;
+  std::size_t size() const { return x.size(); }
+};
+
+struct AsgFitResult {
+  model::AsgParams<double> params;  // canonical (lambda >= mu, rotation in [0, pi))
+  double rms_error = 0.0;           // of the fitted (unquantised) lobe
+  int evaluations = 0;              // objective evaluations used (<= kMaxEvaluations)
+};
+
+inline constexpr int kAsgFitMaxEvaluations = 24;
+
+// visible[k] in {0, 1} for direction k. Safe for any input of matching sizes (K >= 1); the result
+// is always finite and within the bounds above.
+AsgFitResult fit_asg(const FitDirections& directions, const uint8_t* visible);
+
+// RMS error of lobe `params` against the samples.
+double asg_rms_error(const FitDirections& directions, const uint8_t* visible,
+                     const model::AsgParams<double>& params);
+
+}  // namespace clothbake::raycast

@@ -1,0 +1,214 @@
+#include "bake/raycast/parallax.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "bake/raycast/heightfield_scene.hpp"
+#include "bake/raycast/texel_blocks.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "model/directions.hpp"
+
+namespace clothbake::raycast {
+namespace {
+
+constexpr double kCodeMax = 65535.0;
+
+void atomic_max(std::atomic<double>& target, double value) {
+  double current = target.load(std::memory_order_relaxed);
+  while (value > current &&
+         !target.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
+  }
+}
+
+}  // namespace
+
+void validate_parallax_settings(const ParallaxSettings& settings) {
+  if (settings.dirs < 1 || settings.dirs > 256)
+    throw_input_error("bake.parallax_dirs = " + std::to_string(settings.dirs) +
+                      " is out of range: expected 1 to 256 (directions per side of the grid)");
+  if (!(settings.min_cos >= 0.0 && settings.min_cos < 1.0))
+    throw_input_error("bake.parallax_min_cos = " + std::to_string(settings.min_cos) +
+                      " is out of range: expected 0 <= min_cos < 1 (the paper uses 0.6)");
+  if (settings.rings < -1 || settings.rings > 64)
+    throw_input_error("parallax rings = " + std::to_string(settings.rings) +
+                      " is out of range: expected -1 (automatic) or 0 to 64");
+}
+
+int parallax_rings_for(double height_range, double min_cos_of_directions) {
+  double c = std::clamp(min_cos_of_directions, 1e-6, 1.0);
+  double travel = height_range * std::sqrt(std::max(0.0, 1.0 - c * c)) / c;
+  if (!std::isfinite(travel)) return 4;
+  return int(std::clamp(std::ceil(travel), 1.0, 4.0));
+}
+
+ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& settings) {
+  validate_parallax_settings(settings);
+  const int n = maps.resolution;
+  if (n < 1 || maps.height.size() != maps.texel_count())
+    throw_input_error("height map: expected " + std::to_string(maps.texel_count()) +
+                      " texels for resolution " + std::to_string(n) + ", got " +
+                      std::to_string(maps.height.size()));
+  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      float h = maps.height[maps.index(x, y)];
+      if (!std::isfinite(h))
+        throw_input_error("height map: texel (" + std::to_string(x) + ", " + std::to_string(y) +
+                          ") is not a finite number");
+      z_min = std::min(z_min, double(h));
+      z_max = std::max(z_max, double(h));
+    }
+
+  ParallaxTable table;
+  table.resolution = n;
+  table.dirs = settings.dirs;
+  table.min_cos = settings.min_cos;
+  table.reference_height = z_max;
+  const std::size_t texels = table.texel_count();
+  const int dir_count = settings.dirs * settings.dirs;
+  table.depth.assign(std::size_t(dir_count) * texels, 0);
+  const double range = z_max - z_min;
+  if (!(range > 0.0)) return table;  // flat: every ray hits the reference plane, r = 0
+  table.depth_scale = range / kCodeMax;
+
+  model::DirectionGrid<double> grid{settings.dirs, settings.min_cos};
+  std::vector<model::Vec3d> view(static_cast<std::size_t>(dir_count));
+  double lowest = 1.0;
+  for (int j = 0; j < settings.dirs; ++j)
+    for (int i = 0; i < settings.dirs; ++i) {
+      view[std::size_t(grid.bin_index(i, j))] = grid.bin_center(i, j);
+      lowest = std::min(lowest, grid.bin_center(i, j).z);
+    }
+  const int rings = settings.rings >= 0 ? settings.rings : parallax_rings_for(range, lowest);
+  PeriodicHeightField field(maps.height, n, rings);
+  table.stats.rings = rings;
+
+  // Rays start slightly above the reference plane (so that a texel at z_ref is hit at t > 0) and
+  // end slightly below the lowest height (every ray must hit before; see unresolved below).
+  const double lift = std::max(1e-3 * range, 1e-6);
+  const double z_origin = z_max + lift;
+  RayCounters counters;
+  std::atomic<uint64_t> recast{0}, unresolved{0};
+  std::atomic<double> max_error{0.0};
+  std::vector<std::atomic<uint16_t>> max_code(static_cast<std::size_t>(dir_count));
+  for (auto& m : max_code)
+    m.store(0);
+
+  const TexelBlocks blocks(n);
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, blocks.tile_count()), [&](const tbb::blocked_range<int>& r) {
+        RayPacket packet;
+        std::array<double, RayPacket::kWidth> t_hit;
+        std::array<int, RayPacket::kWidth> lane_texel;
+        double local_max_error = 0.0;
+        for (int tile = r.begin(); tile != r.end(); ++tile) {
+          for (int dir = 0; dir < dir_count; ++dir) {
+            const model::Vec3d o = view[std::size_t(dir)];
+            const double t_max = (lift + range + lift) / o.z;
+            uint16_t tile_max_code = 0;
+            for (int p = 0; p < blocks.packets_per_tile(); ++p) {
+              packet.count = blocks.packet_texels(tile, p, lane_texel);
+              for (int l = 0; l < packet.count; ++l) {
+                int x = lane_texel[l] % n, y = lane_texel[l] / n;
+                packet.ox[l] = (x + 0.5) / n;
+                packet.oy[l] = (y + 0.5) / n;
+                packet.oz[l] = z_origin;
+                packet.dx[l] = -o.x;
+                packet.dy[l] = -o.y;
+                packet.dz[l] = -o.z;
+                packet.t_max[l] = t_max;
+              }
+              if (packet.count == 0) continue;
+              field.first_hits(packet, t_hit, &counters);
+              for (int l = 0; l < packet.count; ++l) {
+                double t = t_hit[l];
+                if (!(t < std::numeric_limits<double>::infinity())) {
+                  // An Embree edge leak (its triangle test is not watertight): cast again from
+                  // origins moved by a fraction of a float ulp-scale step, deterministically.
+                  for (int attempt = 1; attempt <= 2 && !(t < t_max * 2); ++attempt) {
+                    model::Vec3d origin{packet.ox[l] + attempt * 3.1e-7,
+                                        packet.oy[l] + attempt * 1.7e-7, z_origin};
+                    SurfaceHit h = field.first_hit(origin, -o, t_max);
+                    if (h.hit) t = h.t;
+                  }
+                  recast.fetch_add(1, std::memory_order_relaxed);
+                  if (!(t < t_max * 2)) {
+                    unresolved.fetch_add(1, std::memory_order_relaxed);
+                    t = t_max;
+                  }
+                }
+                double depth = std::clamp(t * o.z - lift, 0.0, range);
+                double code = std::round(depth / table.depth_scale);
+                code = std::clamp(code, 0.0, kCodeMax);
+                local_max_error =
+                    std::max(local_max_error, std::abs(depth - code * table.depth_scale));
+                uint16_t c16 = uint16_t(code);
+                tile_max_code = std::max(tile_max_code, c16);
+                table.depth[std::size_t(dir) * texels + std::size_t(lane_texel[l])] = c16;
+              }
+            }
+            auto& m = max_code[std::size_t(dir)];
+            uint16_t cur = m.load(std::memory_order_relaxed);
+            while (tile_max_code > cur &&
+                   !m.compare_exchange_weak(cur, tile_max_code, std::memory_order_relaxed)) {
+            }
+          }
+        }
+        atomic_max(max_error, local_max_error);
+      });
+
+  table.stats.rays = counters.rays.load();
+  table.stats.segments = counters.segments.load();
+  table.stats.recast_rays = recast.load();
+  table.stats.unresolved_rays = unresolved.load();
+  table.stats.max_quantization_error = max_error.load();
+  for (int dir = 0; dir < dir_count; ++dir) {
+    const model::Vec3d o = view[std::size_t(dir)];
+    double tan_theta = std::sqrt(o.x * o.x + o.y * o.y) / o.z;
+    table.stats.max_sideways =
+        std::max(table.stats.max_sideways,
+                 max_code[std::size_t(dir)].load() * table.depth_scale * tan_theta);
+  }
+
+  if (table.stats.unresolved_rays > 0)
+    warn("parallax: " + std::to_string(table.stats.unresolved_rays) + " of " +
+         std::to_string(table.stats.rays) +
+         " rays never hit the height field (numerical leaks through triangle edges); their depth "
+         "was set to the bottom of the height range, so those table entries cannot be trusted");
+  if (table.stats.max_sideways > 1.0)
+    warn("parallax: the height range " + std::to_string(range) +
+         " (tile-side units) makes parallax offsets reach " +
+         std::to_string(table.stats.max_sideways) +
+         " tiles sideways; the table is exact for this height field, but a fabric this tall "
+         "relative to its tile is outside what the surface model is meant for (check the height "
+         "units)");
+  return table;
+}
+
+std::vector<uint32_t> parallax_sat(const ParallaxTable& table) {
+  const int n = table.resolution;
+  const std::size_t texels = table.texel_count();
+  const int dir_count = table.dirs * table.dirs;
+  std::vector<uint32_t> sat(table.depth.size());
+  tbb::parallel_for(0, dir_count, [&](int dir) {
+    const uint16_t* src = table.depth.data() + std::size_t(dir) * texels;
+    uint32_t* dst = sat.data() + std::size_t(dir) * texels;
+    for (int y = 0; y < n; ++y) {
+      uint32_t row = 0;  // unsigned arithmetic wraps modulo 2^32 by definition
+      for (int x = 0; x < n; ++x) {
+        row += src[std::size_t(y) * n + x];
+        dst[std::size_t(y) * n + x] = row + (y > 0 ? dst[std::size_t(y - 1) * n + x] : 0u);
+      }
+    }
+  });
+  return sat;
+}
+
+}  // namespace clothbake::raycast

@@ -1,0 +1,224 @@
+#include "bake/raycast/visibility.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include "bake/raycast/asg_fit.hpp"
+#include "bake/raycast/heightfield_scene.hpp"
+#include "bake/raycast/parallax.hpp"
+#include "bake/raycast/texel_blocks.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "model/directions.hpp"
+
+namespace clothbake::raycast {
+
+double VisibilitySamples::visible_fraction(std::size_t texel) const {
+  const int count = dirs * dirs;
+  if (count == 0) return 0.0;
+  std::size_t seen = 0;
+  for (int w = 0; w < words_per_texel; ++w)
+    seen += std::size_t(std::popcount(bits[texel * std::size_t(words_per_texel) + w]));
+  return double(seen) / double(count);
+}
+
+void validate_visibility_settings(const VisibilitySettings& settings) {
+  if (settings.dirs < 1 || settings.dirs > 256)
+    throw_input_error("bake.visibility_dirs = " + std::to_string(settings.dirs) +
+                      " is out of range: expected 1 to 256 (directions per side of the grid)");
+  if (!(settings.normal_offset_texels > 0.0 && settings.normal_offset_texels <= 1.0))
+    throw_input_error(
+        "visibility normal offset = " + std::to_string(settings.normal_offset_texels) +
+        " texels is out of range: expected 0 < offset <= 1");
+  if (settings.rings < -1 || settings.rings > 64)
+    throw_input_error("visibility rings = " + std::to_string(settings.rings) +
+                      " is out of range: expected -1 (automatic) or 0 to 64");
+  if (!(settings.fit_warn_rms > 0.0))
+    throw_input_error("visibility fit warning threshold must be > 0");
+}
+
+VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings) {
+  validate_visibility_settings(settings);
+  const int n = maps.resolution;
+  if (n < 1 || maps.height.size() != maps.texel_count())
+    throw_input_error("height map: expected " + std::to_string(maps.texel_count()) +
+                      " texels for resolution " + std::to_string(n) + ", got " +
+                      std::to_string(maps.height.size()));
+  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      float h = maps.height[maps.index(x, y)];
+      if (!std::isfinite(h))
+        throw_input_error("height map: texel (" + std::to_string(x) + ", " + std::to_string(y) +
+                          ") is not a finite number");
+      z_min = std::min(z_min, double(h));
+      z_max = std::max(z_max, double(h));
+    }
+
+  VisibilitySamples samples;
+  samples.resolution = n;
+  samples.dirs = settings.dirs;
+  const int dir_count = settings.dirs * settings.dirs;
+  samples.words_per_texel = (dir_count + 63) / 64;
+  const std::size_t texels = maps.texel_count();
+  samples.bits.assign(texels * std::size_t(samples.words_per_texel), 0);
+  auto set_all_visible = [&](std::size_t texel) {
+    for (int dir = 0; dir < dir_count; ++dir)
+      samples.bits[texel * samples.words_per_texel + dir / 64] |= uint64_t(1) << (dir % 64);
+  };
+  const double range = z_max - z_min;
+  if (!(range > 0.0)) {
+    for (std::size_t t = 0; t < texels; ++t)
+      set_all_visible(t);
+    return samples;
+  }
+
+  model::DirectionGrid<double> grid{settings.dirs, 0.0};
+  std::vector<model::Vec3d> light(static_cast<std::size_t>(dir_count));
+  double lowest = 1.0;
+  for (int j = 0; j < settings.dirs; ++j)
+    for (int i = 0; i < settings.dirs; ++i) {
+      light[std::size_t(grid.bin_index(i, j))] = grid.bin_center(i, j);
+      lowest = std::min(lowest, grid.bin_center(i, j).z);
+    }
+  const int rings = settings.rings >= 0 ? settings.rings : parallax_rings_for(range, lowest);
+  PeriodicHeightField field(maps.height, n, rings);
+  samples.rings = rings;
+
+  // Ray origins: texel-centre vertex + offset along the central-difference normal.
+  const double offset = settings.normal_offset_texels / double(n);
+  std::vector<model::Vec3d> origin(texels);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x)
+      origin[maps.index(x, y)] = field.lifted_surface_point(x, y, offset);
+
+  RayCounters counters;
+  const TexelBlocks blocks(n);
+  const int words = samples.words_per_texel;
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, blocks.tile_count()), [&](const tbb::blocked_range<int>& r) {
+        RayPacket packet;
+        std::array<bool, RayPacket::kWidth> hit;
+        std::array<int, RayPacket::kWidth> lane_texel;
+        for (int tile = r.begin(); tile != r.end(); ++tile) {
+          for (int dir = 0; dir < dir_count; ++dir) {
+            const model::Vec3d w = light[std::size_t(dir)];
+            for (int p = 0; p < blocks.packets_per_tile(); ++p) {
+              packet.count = blocks.packet_texels(tile, p, lane_texel);
+              if (packet.count == 0) continue;
+              for (int l = 0; l < packet.count; ++l) {
+                const model::Vec3d& o = origin[std::size_t(lane_texel[l])];
+                packet.ox[l] = o.x;
+                packet.oy[l] = o.y;
+                packet.oz[l] = o.z;
+                packet.dx[l] = w.x;
+                packet.dy[l] = w.y;
+                packet.dz[l] = w.z;
+                // Above z_max nothing can be hit: the ray ends there (a lane with t_max <= 0, from
+                // a point above every height, is not cast and counts as visible).
+                packet.t_max[l] = (z_max - o.z) / w.z + 1e-6;
+              }
+              field.occluded(packet, hit, &counters);
+              for (int l = 0; l < packet.count; ++l)
+                if (!hit[l])
+                  samples.bits[std::size_t(lane_texel[l]) * words + dir / 64] |= uint64_t(1)
+                                                                                 << (dir % 64);
+            }
+          }
+        }
+      });
+  samples.rays = counters.rays.load();
+  samples.segments = counters.segments.load();
+  return samples;
+}
+
+VisibilityAsgs fit_visibility(const VisibilitySamples& samples,
+                              const VisibilitySettings& settings) {
+  validate_visibility_settings(settings);
+  VisibilityAsgs out;
+  out.resolution = samples.resolution;
+  const std::size_t texels = std::size_t(samples.resolution) * std::size_t(samples.resolution);
+  out.records.resize(texels);
+  out.fit_error.resize(texels);
+  const int dir_count = samples.dirs * samples.dirs;
+  model::DirectionGrid<double> grid{samples.dirs, 0.0};
+  FitDirections directions;
+  directions.x.resize(std::size_t(dir_count));
+  directions.y.resize(std::size_t(dir_count));
+  directions.z.resize(std::size_t(dir_count));
+  for (int j = 0; j < samples.dirs; ++j)
+    for (int i = 0; i < samples.dirs; ++i) {
+      model::Vec3d d = grid.bin_center(i, j);
+      std::size_t k = std::size_t(grid.bin_index(i, j));
+      directions.x[k] = d.x;
+      directions.y[k] = d.y;
+      directions.z[k] = d.z;
+    }
+
+  struct Summary {
+    double max = -1;
+    std::size_t worst = 0, above = 0;
+    uint64_t evaluations = 0;
+  };
+  auto combine = [](Summary a, const Summary& b) {
+    if (b.max > a.max || (b.max == a.max && b.worst < a.worst)) {
+      a.max = b.max;
+      a.worst = b.worst;
+    }
+    a.above += b.above;
+    a.evaluations += b.evaluations;
+    return a;
+  };
+  Summary total = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, texels, 64), Summary{},
+      [&](const tbb::blocked_range<std::size_t>& r, Summary s) {
+        std::vector<uint8_t> visible(static_cast<std::size_t>(dir_count));
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+          for (int dir = 0; dir < dir_count; ++dir)
+            visible[dir] = samples.visible(t, dir) ? 1 : 0;
+          AsgFitResult fit = fit_asg(directions, visible.data());
+          model::AsgRecord record = model::pack_asg(fit.params);
+          double err = asg_rms_error(directions, visible.data(), model::unpack_asg<double>(record));
+          out.records[t] = record;
+          out.fit_error[t] = float(err);
+          if (err > s.max) {
+            s.max = err;
+            s.worst = t;
+          }
+          s.above += err > settings.fit_warn_rms ? 1 : 0;
+          s.evaluations += uint64_t(fit.evaluations);
+        }
+        return s;
+      },
+      combine);
+  // The mean is recomputed in texel order so that it does not depend on how TBB split the range.
+  double sum = 0;
+  for (float e : out.fit_error)
+    sum += double(e);
+  out.mean_fit_error = texels ? sum / double(texels) : 0.0;
+  out.max_fit_error = std::max(total.max, 0.0);
+  out.worst_texel = total.worst;
+  out.texels_above_warning = total.above;
+  out.fit_evaluations = total.evaluations;
+  if (out.texels_above_warning > 0) {
+    const std::size_t n = std::size_t(samples.resolution);
+    char worst[64];
+    std::snprintf(worst, sizeof worst, "%.3f", out.max_fit_error);
+    warn("visibility: " + std::to_string(out.texels_above_warning) + " of " +
+         std::to_string(texels) + " texels have an ASG fit RMS error above " +
+         std::to_string(settings.fit_warn_rms) + " (worst " + worst + " at texel (" +
+         std::to_string(out.worst_texel % n) + ", " + std::to_string(out.worst_texel / n) +
+         ")): one lobe cannot represent their visibility, so V from their ASG is unreliable");
+  }
+  return out;
+}
+
+}  // namespace clothbake::raycast

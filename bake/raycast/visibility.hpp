@@ -1,0 +1,67 @@
+// Per-texel visibility V(x, w) of the periodic height field and its ASG fit (paper Sec. 3.1, 4.2;
+// docs/raycast.md, "Visibility").
+//
+// V(x, w) = 1 when a ray from the texel's surface point towards light direction w escapes above the
+// highest point of the height field without hitting it. The surface point is the mesh vertex at the
+// texel centre, (u, v, height), moved along the height field's geometric normal (central
+// differences) by `normal_offset_texels` texel sizes, so the ray does not hit the triangles it
+// starts on through rounding. Directions are the bin centres of DirectionGrid{dirs, 0} (equal solid
+// angle over the hemisphere z > 0 of the macro surface).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "bake/inputs/fabric.hpp"
+#include "model/asg.hpp"
+
+namespace clothbake::raycast {
+
+struct VisibilitySettings {
+  int dirs = 32;                       // n: n x n light directions, [1, 256]
+  double normal_offset_texels = 0.01;  // ray origin offset along the normal, in texel sizes, > 0
+  int rings = -1;                      // neighbour tiles replicated each side; -1: automatic
+  double fit_warn_rms = 0.3;           // warn about texels whose ASG fit RMS error exceeds this
+};
+
+// Binary samples, one bit per (texel, direction): bit (dir % 64) of word texel * words + dir / 64.
+struct VisibilitySamples {
+  int resolution = 0;
+  int dirs = 0;
+  int words_per_texel = 0;
+  std::vector<uint64_t> bits;
+  uint64_t rays = 0, segments = 0;
+  int rings = 0;
+
+  bool visible(std::size_t texel, int dir) const {
+    return (bits[texel * std::size_t(words_per_texel) + std::size_t(dir / 64)] >> (dir % 64)) & 1u;
+  }
+  // Fraction of the sampled hemisphere that texel sees.
+  double visible_fraction(std::size_t texel) const;
+};
+
+struct VisibilityAsgs {
+  int resolution = 0;
+  std::vector<model::AsgRecord> records;  // y * N + x: the packed lobe
+  std::vector<float> fit_error;           // RMS over the samples of the packed lobe, in [0, 2]
+  // Statistics.
+  double mean_fit_error = 0.0, max_fit_error = 0.0;
+  std::size_t worst_texel = 0;
+  std::size_t texels_above_warning = 0;
+  uint64_t fit_evaluations = 0;
+};
+
+void validate_visibility_settings(const VisibilitySettings& settings);
+
+// Casts N^2 x dirs^2 occlusion rays (16-wide packets of 4 x 4 texels sharing one direction, TBB
+// over texel tiles; result independent of the thread count). Throws Error(Input) for bad settings
+// or a non-finite height (naming the texel). A flat map sees the whole sky (every bit set) without
+// casting rays.
+VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings);
+
+// Fits one ASG per texel (bake/raycast/asg_fit.hpp), packs it, and records the RMS error of the
+// packed lobe. Warns once, naming the count and the worst texel, when texels exceed
+// settings.fit_warn_rms.
+VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const VisibilitySettings& settings);
+
+}  // namespace clothbake::raycast
