@@ -170,6 +170,61 @@ Lobe moment_start(const FitDirections& d, const uint8_t* visible) {
   return lobe;
 }
 
+// A zero-bandwidth lobe is the half-space above a plane: exactly the sky of a texel on a tilted
+// facet. Its axis cannot be found by gradients (moving the cut plane changes the objective only
+// where samples cross it), so the tilt is searched directly: axes in the vertical plane through the
+// mean visible direction, tilted by beta in [0, pi/2] from the zenith, golden-section search on the
+// objective with the best amplitude (closed form: E = sum V - (sum_in V)^2 / count_in).
+Lobe half_space_start(const FitDirections& d, const uint8_t* visible, int* evaluations) {
+  Eigen::Vector2d azimuth = Eigen::Vector2d::Zero();
+  double total = 0;
+  for (std::size_t k = 0; k < d.size(); ++k)
+    if (visible[k]) {
+      azimuth += Eigen::Vector2d(d.x[k], d.y[k]);
+      total += 1;
+    }
+  Eigen::Vector2d h =
+      azimuth.norm() > 1e-9 ? Eigen::Vector2d(azimuth.normalized()) : Eigen::Vector2d(1, 0);
+  auto energy = [&](double beta, double* amplitude) {
+    const double ax = std::sin(beta) * h.x(), ay = std::sin(beta) * h.y(), az = std::cos(beta);
+    double inside = 0, seen_inside = 0;
+    for (std::size_t k = 0; k < d.size(); ++k)
+      if (ax * d.x[k] + ay * d.y[k] + az * d.z[k] > 0) {
+        inside += 1;
+        seen_inside += visible[k];
+      }
+    ++*evaluations;
+    double c = inside > 0 ? std::min(seen_inside / inside, kAsgMaxAmplitude) : 0.0;
+    if (amplitude) *amplitude = c;
+    return total - 2 * c * seen_inside + c * c * inside;
+  };
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  double lo = 0, hi = 0.5 * model::kPi<double>;
+  double b1 = hi - golden * (hi - lo), b2 = lo + golden * (hi - lo);
+  double e1 = energy(b1, nullptr), e2 = energy(b2, nullptr);
+  for (int it = 0; it < 10; ++it) {
+    if (e1 <= e2) {
+      hi = b2, b2 = b1, e2 = e1;
+      b1 = hi - golden * (hi - lo);
+      e1 = energy(b1, nullptr);
+    } else {
+      lo = b1, b1 = b2, e1 = e2;
+      b2 = lo + golden * (hi - lo);
+      e2 = energy(b2, nullptr);
+    }
+  }
+  Lobe lobe;
+  double beta = e1 <= e2 ? b1 : b2;
+  // The flat lobe about +z (beta = 0) is always a candidate: the search may miss the end point.
+  if (energy(0.0, nullptr) <= std::min(e1, e2)) beta = 0.0;
+  Eigen::Vector3d z(std::sin(beta) * h.x(), std::sin(beta) * h.y(), std::cos(beta));
+  lobe.frame.col(2) = z;
+  lobe.frame.col(0) = z.unitOrthogonal();
+  project_frame(lobe.frame);
+  energy(beta, &lobe.c);
+  return lobe;
+}
+
 }  // namespace
 
 double asg_rms_error(const FitDirections& directions, const uint8_t* visible,
@@ -197,22 +252,25 @@ AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible) {
     return result;
   }
 
-  Lobe flat;
-  flat.c = double(seen) / double(k_count);
+  // Starts: the moments of the visible directions, and the best half-space (which includes the
+  // flat lobe about +z, beta = 0); the better one is refined.
+  int evaluations = 0;
   Lobe lobe = moment_start(d, visible);
   double energy = objective(d, visible, lobe);
-  double flat_energy = objective(d, visible, flat);
-  int evaluations = 2;
-  if (flat_energy < energy) {
-    lobe = flat;
-    energy = flat_energy;
+  Lobe half = half_space_start(d, visible, &evaluations);
+  double half_energy = objective(d, visible, half);
+  evaluations += 2;
+  if (half_energy < energy) {
+    lobe = half;
+    energy = half_energy;
   }
 
   double damping = 1e-3;
   Matrix6 jtj;
   Vector6 jtr;
   bool fresh = false;  // normal equations up to date for `lobe`
-  while (evaluations < kAsgFitMaxEvaluations) {
+  const int budget = evaluations + kAsgFitMaxRefinements;
+  while (evaluations < budget) {
     if (!fresh) {
       normal_equations(d, visible, lobe, jtj, jtr);
       fresh = true;

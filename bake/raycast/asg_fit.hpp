@@ -7,12 +7,13 @@
 //
 // Method (deterministic, bounded, fixed budget): texels that see all or none of the sampled sky get
 // an exact closed form (axis +z, bandwidths 0, amplitude 1 or 0, error 0). Otherwise two starts are
-// scored (a flat lobe of the optimal amplitude, and a lobe from the moments of the visible
-// directions: axis = their mean, bandwidths from their spread about it) and the better one is
-// refined by Levenberg-Marquardt (Eigen, 6 parameters: a rotation increment of the frame, lambda,
-// mu, c) with at most kMaxEvaluations objective evaluations; every step is projected into the
-// bounds (bandwidths [0, kAsgMaxBandwidth], amplitude [0, kAsgMaxAmplitude], axis in the upper
-// hemisphere) and accepted only if it lowers the objective, so the fit cannot diverge.
+// scored (a lobe from the moments of the visible directions: axis = their mean, bandwidths from
+// their spread about it; and the best zero-bandwidth lobe, i.e. half-space, with its axis tilted
+// towards the mean, found by golden-section search since gradients cannot move a cut plane) and the
+// better one is refined by Levenberg-Marquardt (Eigen, 6 parameters: a rotation increment of the
+// frame, lambda, mu, c) with at most kAsgFitMaxRefinements trial steps; every step is projected
+// into the bounds (bandwidths [0, kAsgMaxBandwidth], amplitude [0, kAsgMaxAmplitude], axis in the
+// upper hemisphere) and accepted only if it lowers the objective, so the fit cannot diverge.
 #pragma once
 
 #include <cstdint>
@@ -35,7 +36,10 @@ struct AsgFitResult {
   int evaluations = 0;              // objective evaluations used (<= kMaxEvaluations)
 };
 
-inline constexpr int kAsgFitMaxEvaluations = 24;
+// Objective evaluations: 14 for the half-space search, 2 to score the starts, then at most
+// kAsgFitMaxRefinements Levenberg-Marquardt trial steps.
+inline constexpr int kAsgFitMaxRefinements = 24;
+inline constexpr int kAsgFitMaxEvaluations = 14 + 2 + kAsgFitMaxRefinements;
 
 // visible[k] in {0, 1} for direction k. Safe for any input of matching sizes (K >= 1); the result
 // is always finite and within the bounds above.
