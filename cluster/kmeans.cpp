@@ -15,25 +15,6 @@
 
 namespace clothbake::cluster {
 
-const char* nearest_search_name(NearestSearch search) {
-  switch (search) {
-    case NearestSearch::Auto:
-      return "auto";
-    case NearestSearch::BruteForce:
-      return "brute_force";
-    case NearestSearch::KdTree:
-      return "kd_tree";
-  }
-  return "unknown";
-}
-
-NearestSearch choose_nearest_search(int clusters, std::size_t dim) {
-  // benchmarks/cluster (docs/tables.md, "Nearest-centre search"): the FLANN kd-tree only beats the
-  // double-precision brute force for many centres in few dimensions.
-  if (clusters >= 64 && dim <= 16) return NearestSearch::KdTree;
-  return NearestSearch::BruteForce;
-}
-
 namespace {
 
 struct Blocks {
@@ -232,15 +213,13 @@ KMeansResult kmeans(const PointSet& points, const KMeansOptions& options) {
     const int requested = int(std::min<std::size_t>(std::size_t(options.clusters), n));
     k = seed_centres(points, blocks, requested, options.seed, centres);
   }
-  result.search =
-      options.search == NearestSearch::Auto ? choose_nearest_search(k, dim) : options.search;
 
   std::vector<int32_t> labels(n, -1), previous(n, -1);
   std::vector<double> distance2(n, 0.0);
   std::vector<uint64_t> sizes(std::size_t(k), 0);
   std::vector<uint64_t> block_changes(blocks.blocks);
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
-    auto search = make_centre_search(result.search, centres.data(), k, dim);
+    auto search = make_centre_search(centres.data(), k, dim);
     for_each_block(blocks, [&](std::size_t b) {
       search->assign(points, blocks.begin(b), blocks.end(b), labels.data(), distance2.data());
       uint64_t changes = 0;

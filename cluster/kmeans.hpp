@@ -14,10 +14,11 @@
 // in block order; ties in the nearest-centre search go to the lower centre index. The seeding
 // RNG is SplitMix64 (cluster/rng.hpp), specified bit for bit.
 //
-// Nearest-centre search: brute force (exact, double precision) or an exact FLANN kd-tree over the
-// centres (cluster/nearest_centre.hpp; distances in float, so near-ties may resolve differently
-// from brute force). benchmarks/cluster measures both; docs/tables.md has the figures and the
-// rule NearestSearch::Auto applies.
+// Nearest-centre search: brute force over the centres in double precision (ties to the lower
+// index). A FLANN kd-tree over the centres was measured against it (docs/tables.md, "Nearest-centre
+// search"): it only won for 3-dimensional points with 256 or more centres, a case clothbake never
+// has (ASG embeddings have 11 dimensions and 8 centres, C-PCA vectors thousands of dimensions and a
+// few centres), so it was removed.
 #pragma once
 
 #include <cstddef>
@@ -37,19 +38,10 @@ struct PointSet {
   const float* point(std::size_t i) const { return data + i * dim; }
 };
 
-enum class NearestSearch {
-  Auto,        // the faster of the two for (clusters, dim): see choose_nearest_search
-  BruteForce,  // every centre, double precision
-  KdTree,      // FLANN single kd-tree over the centres, exact search, float distances
-};
-
-const char* nearest_search_name(NearestSearch search);
-
 struct KMeansOptions {
   int clusters = 8;          // requested k >= 1
   int max_iterations = 100;  // Lloyd iterations after seeding, >= 1
   uint64_t seed = 1;         // k-means++ seed
-  NearestSearch search = NearestSearch::Auto;
   // Warm start: clusters x dim centres (row-major) used instead of k-means++ when not empty (e.g.
   // C-PCA reclustering from the previous iteration's clusters). Not owned.
   const double* initial_centres = nullptr;
@@ -67,12 +59,7 @@ struct KMeansResult {
   int iterations = 0;           // Lloyd iterations run
   bool converged = false;       // true when the last iteration changed no label
   int empty_repairs = 0;        // clusters re-seeded because they became empty
-  NearestSearch search = NearestSearch::BruteForce;  // the search actually used
 };
-
-// The search Auto picks for k centres of dimension dim (from the measurements in
-// benchmarks/cluster: brute force unless the kd-tree measured faster for that size).
-NearestSearch choose_nearest_search(int clusters, std::size_t dim);
 
 // Clusters `points`. Errors (clothbake::Error, ExitCode::Input): no points, dim == 0,
 // clusters < 1, max_iterations < 1, a non-finite coordinate (naming the point and coordinate) or

@@ -1,10 +1,7 @@
-// Nearest-centre search: brute force and FLANN kd-tree (see nearest_centre.hpp).
+// Brute-force nearest-centre search (nearest_centre.hpp).
 #include "cluster/nearest_centre.hpp"
 
-#include <flann/flann.hpp>
 #include <limits>
-
-#include "common/error.hpp"
 
 namespace clothbake::cluster {
 
@@ -63,57 +60,11 @@ class BruteForceSearch final : public CentreSearch {
   std::size_t dim_;
 };
 
-class KdTreeSearch final : public CentreSearch {
- public:
-  KdTreeSearch(const double* centres, int clusters, std::size_t dim)
-      : centres_(centres, centres + std::size_t(clusters) * dim),
-        centres_f_(centres_.begin(), centres_.end()),
-        dim_(dim),
-        index_(flann::Matrix<float>(centres_f_.data(), std::size_t(clusters), dim),
-               flann::KDTreeSingleIndexParams(/*leaf_max_size=*/4)) {
-    index_.buildIndex();
-  }
-
-  void assign(const PointSet& points, std::size_t begin, std::size_t end, int32_t* labels,
-              double* distance2) const override {
-    const std::size_t n = end - begin;
-    if (n == 0) return;
-    std::vector<std::size_t> indices(n);
-    std::vector<float> dists(n);
-    flann::Matrix<float> queries(const_cast<float*>(points.point(begin)), n, dim_);
-    flann::Matrix<std::size_t> index_matrix(indices.data(), n, 1);
-    flann::Matrix<float> dist_matrix(dists.data(), n, 1);
-    flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED, /*eps=*/0.0f, /*sorted=*/true);
-    params.cores = 1;  // parallelism comes from the caller's fixed blocks
-    index_.knnSearch(queries, index_matrix, dist_matrix, 1, params);
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t c = indices[k];
-      labels[begin + k] = int32_t(c);
-      distance2[begin + k] = squared_distance(points.point(begin + k), &centres_[c * dim_], dim_);
-    }
-  }
-
- private:
-  std::vector<double> centres_;
-  std::vector<float> centres_f_;
-  std::size_t dim_;
-  // knnSearch is logically const (no state changes during a search).
-  mutable flann::Index<flann::L2<float>> index_;
-};
-
 }  // namespace
 
-std::unique_ptr<CentreSearch> make_centre_search(NearestSearch kind, const double* centres,
-                                                 int clusters, std::size_t dim) {
-  switch (kind) {
-    case NearestSearch::KdTree:
-      return std::make_unique<KdTreeSearch>(centres, clusters, dim);
-    case NearestSearch::BruteForce:
-      return std::make_unique<BruteForceSearch>(centres, clusters, dim);
-    case NearestSearch::Auto:
-      break;
-  }
-  throw_internal_error("make_centre_search: NearestSearch::Auto must be resolved first");
+std::unique_ptr<CentreSearch> make_centre_search(const double* centres, int clusters,
+                                                 std::size_t dim) {
+  return std::make_unique<BruteForceSearch>(centres, clusters, dim);
 }
 
 }  // namespace clothbake::cluster

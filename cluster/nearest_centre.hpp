@@ -1,11 +1,6 @@
-// Nearest-centre search for K-means assignment: brute force or a FLANN kd-tree over the centres.
-// Internal to cluster/ (kmeans.cpp and benchmarks/cluster use it).
-//
-// Both assign a range of points to their nearest centre and write the label and the squared
-// distance (in double, recomputed from the chosen centre so that both paths report comparable
-// inertia). Brute force compares every centre in double precision, ties to the lower index. The
-// kd-tree (flann::KDTreeSingleIndex, exact search) compares in float: it returns the true nearest
-// centre up to float rounding, so a near-tie may resolve to the other centre.
+// Nearest-centre search for K-means assignment: brute force over every centre in double precision,
+// ties to the lower index (kmeans.hpp says why there is no kd-tree). Internal to cluster/
+// (kmeans.cpp and benchmarks/cluster use it).
 #pragma once
 
 #include <cstddef>
@@ -27,8 +22,8 @@ class CentreSearch {
 };
 
 // A search over `clusters` centres (row-major, dim doubles each; copied).
-std::unique_ptr<CentreSearch> make_centre_search(NearestSearch kind, const double* centres,
-                                                 int clusters, std::size_t dim);
+std::unique_ptr<CentreSearch> make_centre_search(const double* centres, int clusters,
+                                                 std::size_t dim);
 
 // Squared Euclidean distance between a float point and a double centre, summed in a fixed order.
 double squared_distance(const float* point, const double* centre, std::size_t dim);

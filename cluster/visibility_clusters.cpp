@@ -89,7 +89,6 @@ VisibilityClusters cluster_visibility(int resolution, std::span<const model::Asg
   kopt.clusters = options.clusters;
   kopt.max_iterations = options.max_iterations;
   kopt.seed = options.seed;
-  kopt.search = options.search;
   VisibilityClusters out;
   out.kmeans = kmeans(PointSet{embedding.data(), asgs.size(), kAsgEmbeddingDim}, kopt);
   out.resolution = resolution;

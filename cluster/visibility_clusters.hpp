@@ -40,7 +40,6 @@ struct VisibilityClusterOptions {
   int visibility_dirs = 32;      // mean-visibility grid: dirs x dirs hemisphere bins, 1..256
   int samples_per_bin_side = 2;  // s: s x s stratified ASG samples per bin, 1..16
   AsgEmbeddingWeights weights;   // embedding weights
-  NearestSearch search = NearestSearch::Auto;
 };
 
 struct ClusterStats {

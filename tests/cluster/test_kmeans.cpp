@@ -64,17 +64,13 @@ KMeansResult run_with_threads(const PointSet& p, const KMeansOptions& o, int thr
 }  // namespace
 
 TEST(KMeans, RecoversSeparatedBlobsExactly) {
-  for (NearestSearch search : {NearestSearch::BruteForce, NearestSearch::KdTree}) {
-    Blobs b = make_blobs(8, 11, 5000, 3);
-    KMeansOptions o;
-    o.clusters = 8;
-    o.search = search;
-    KMeansResult r = kmeans(b.points(), o);
-    ASSERT_EQ(r.clusters, 8);
-    EXPECT_TRUE(r.converged);
-    EXPECT_TRUE(same_partition(r.labels, b.truth)) << nearest_search_name(search);
-    EXPECT_EQ(r.search, search);
-  }
+  Blobs b = make_blobs(8, 11, 5000, 3);
+  KMeansOptions o;
+  o.clusters = 8;
+  KMeansResult r = kmeans(b.points(), o);
+  ASSERT_EQ(r.clusters, 8);
+  EXPECT_TRUE(r.converged);
+  EXPECT_TRUE(same_partition(r.labels, b.truth));
 }
 
 TEST(KMeans, ResultSatisfiesLloydConditionsAndStatisticsMatchBruteForce) {
@@ -189,28 +185,6 @@ TEST(KMeans, FewerDistinctPointsThanClusters) {
   EXPECT_EQ(r.clusters, 2);
 }
 
-TEST(KMeans, KdTreeMatchesBruteForceOnManyCentres) {
-  Blobs b = make_blobs(64, 6, 6000, 9);
-  std::vector<double> centres(64 * 6);
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(-50, 250);
-  for (double& c : centres)
-    c = u(rng);
-  auto brute = make_centre_search(NearestSearch::BruteForce, centres.data(), 64, 6);
-  auto tree = make_centre_search(NearestSearch::KdTree, centres.data(), 64, 6);
-  std::vector<int32_t> lb(6000), lt(6000);
-  std::vector<double> db(6000), dt(6000);
-  brute->assign(b.points(), 0, 6000, lb.data(), db.data());
-  tree->assign(b.points(), 0, 6000, lt.data(), dt.data());
-  int differ = 0;
-  for (std::size_t i = 0; i < 6000; ++i)
-    if (lb[i] != lt[i]) {
-      ++differ;
-      EXPECT_NEAR(db[i], dt[i], 1e-4 * db[i]) << "a disagreement must be a near-tie";
-    }
-  EXPECT_LE(differ, 3);
-}
-
 TEST(KMeans, RejectsBadInput) {
   std::vector<float> data = {0.0f, 1.0f, 2.0f, 3.0f};
   KMeansOptions o;
@@ -226,8 +200,4 @@ TEST(KMeans, RejectsBadInput) {
     EXPECT_EQ(e.code(), clothbake::ExitCode::Input);
     EXPECT_NE(std::string(e.what()).find("point 1 coordinate 0"), std::string::npos) << e.what();
   }
-}
-
-TEST(KMeans, AutoPicksBruteForceForEightCentres) {
-  EXPECT_EQ(choose_nearest_search(8, 11), NearestSearch::BruteForce);
 }
