@@ -126,13 +126,12 @@ inline T sheen_pdf(const Vec3<T>& wi, const Vec3<T>& wo, T roughness) {
   return sheen_ltc_density(sheen_ltc(wo.z, roughness), wi, wo);
 }
 
-// Draws wi from the LTC lobe of wo with uniform numbers u1, u2 in [0, 1): a cosine-distributed
-// direction mapped by M. The estimator weight f cos / pdf is exactly sheen_albedo(wo.z, roughness).
-// Returns a unit vector with z >= 0, or the zero vector if wo.z <= 0 (no sheen from below).
+// Draws wi from the LTC density of a given lobe for wo with uniform numbers u1, u2 in [0, 1): a
+// cosine-distributed direction mapped by M. Returns a unit vector with z >= 0, or the zero vector
+// if wo.z <= 0. Exposed for tests and the fitting tool.
 template <class T>
-inline Vec3<T> sheen_sample(const Vec3<T>& wo, T roughness, T u1, T u2) {
+inline Vec3<T> sheen_ltc_sample(const SheenLtc<T>& ltc, const Vec3<T>& wo, T u1, T u2) {
   if (!(wo.z > T(0))) return {T(0), T(0), T(0)};
-  const SheenLtc<T> ltc = sheen_ltc(wo.z, roughness);
   // Cosine-weighted hemisphere (Malley's method on the unit disk).
   const T r = std::sqrt(sheen_detail::unit_clamp(u1));
   const T phi = T(2) * kPi<T> * sheen_detail::unit_clamp(u2);
@@ -143,6 +142,15 @@ inline Vec3<T> sheen_sample(const Vec3<T>& wo, T roughness, T u1, T u2) {
   T c, s;
   sheen_detail::wo_azimuth(wo, c, s);
   return {local.x * c - local.y * s, local.x * s + local.y * c, local.z};
+}
+
+// Draws wi from the sheen lobe of wo with uniform numbers u1, u2 in [0, 1). The estimator weight
+// f cos / pdf is exactly sheen_albedo(wo.z, roughness). Returns a unit vector with z >= 0, or the
+// zero vector if wo.z <= 0 (no sheen from below).
+template <class T>
+inline Vec3<T> sheen_sample(const Vec3<T>& wo, T roughness, T u1, T u2) {
+  if (!(wo.z > T(0))) return {T(0), T(0), T(0)};
+  return sheen_ltc_sample(sheen_ltc(wo.z, roughness), wo, u1, u2);
 }
 
 }  // namespace clothbake::model

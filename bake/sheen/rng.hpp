@@ -1,0 +1,45 @@
+// A small deterministic random number generator for the sheen layer simulation: xoshiro256++
+// (Blackman and Vigna 2019) seeded through splitmix64, so that a (seed, stream) pair gives the same
+// sequence on every platform and thread count. Not cryptographic.
+#pragma once
+
+#include <cstdint>
+
+namespace clothbake::sheen {
+
+class Rng {
+ public:
+  // One independent stream per (seed, stream): e.g. stream = table entry index.
+  Rng(uint64_t seed, uint64_t stream) {
+    uint64_t s = seed ^ (stream * 0xD1B54A32D192ED03ull + 0x8BB84B93962EACC9ull);
+    for (uint64_t& word : state_)
+      word = splitmix64(s);
+  }
+
+  uint64_t next_u64() {
+    const uint64_t result = rotl(state_[0] + state_[3], 23) + state_[0];
+    const uint64_t t = state_[1] << 17;
+    state_[2] ^= state_[0];
+    state_[3] ^= state_[1];
+    state_[1] ^= state_[2];
+    state_[0] ^= state_[3];
+    state_[2] ^= t;
+    state_[3] = rotl(state_[3], 45);
+    return result;
+  }
+
+  // Uniform double in [0, 1) with 53 random bits.
+  double uniform() { return double(next_u64() >> 11) * 0x1.0p-53; }
+
+ private:
+  static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+  static uint64_t splitmix64(uint64_t& s) {
+    uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  uint64_t state_[4];
+};
+
+}  // namespace clothbake::sheen

@@ -1,0 +1,21 @@
+// Writes a fitted sheen table as the C++17 header model/sheen_table.hpp that model/sheen.hpp reads,
+// and writes files atomically.
+#pragma once
+
+#include <string>
+
+#include "bake/sheen/sheen_fit.hpp"
+
+namespace clothbake::sheen {
+
+// The header text: generator settings and fit statistics in comments and constants, then
+// kTable[roughness index][cos index] = {a, b, R} as float literals that round-trip exactly.
+// Contains no timestamps or paths: the same fit gives the same bytes.
+std::string format_sheen_table_header(const SheenTableFit& fit);
+
+// Writes text to path through a temporary file in the same directory and a rename, so that path is
+// either untouched or complete. Throws clothbake::Error (ExitCode::Input) naming the path on any
+// I/O failure, after removing the temporary file.
+void write_file_atomically(const std::string& path, const std::string& text);
+
+}  // namespace clothbake::sheen
