@@ -20,7 +20,7 @@ void BM_Parallax(benchmark::State& state) {
   settings.rings = int(state.range(2));
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                               std::size_t(state.range(3)));
-  FabricMaps maps = raycast::testing::plain_weave_maps(n);
+  FabricMaps maps = raycast::rctest::plain_weave_maps(n);
   uint64_t rays = 0, segments = 0;
   for (auto _ : state) {
     raycast::ParallaxTable table = raycast::bake_parallax(maps, settings);

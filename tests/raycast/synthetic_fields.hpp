@@ -10,7 +10,7 @@
 
 #include "bake/inputs/fabric.hpp"
 
-namespace clothbake::raycast::testing {
+namespace clothbake::raycast::rctest {
 
 inline FabricMaps maps_from(int n, const std::function<double(double, double)>& height) {
   FabricMaps maps;
@@ -43,4 +43,4 @@ inline FabricMaps plain_weave_maps(int n, int threads = 4, double thickness = 0.
   });
 }
 
-}  // namespace clothbake::raycast::testing
+}  // namespace clothbake::raycast::rctest
