@@ -4,6 +4,7 @@
 // anything fails: the files are built in a temporary directory next to DIR and moved into place.
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -57,12 +58,14 @@ Action setup_pattern(CLI::App& app) {
       comment = fmt::format("Generated from the named weave \"{}\".", o->weave_name);
     } else if (!o->wif.empty()) {
       loaded = fabric_from_wif(o->wif, o->resolution.value_or(kDefaultPatternResolution));
-      comment = fmt::format("Generated from the WIF draft {}.", o->wif);
+      comment = fmt::format("Generated from the WIF draft {}.",
+                            std::filesystem::path(o->wif).filename().string());
     } else {
       LoadOptions load_options;
       load_options.resolution = o->resolution;
       loaded = load_fabric_description(o->fabric, load_options);
-      comment = fmt::format("Generated from the fabric description {}.", o->fabric);
+      comment = fmt::format("Generated from the fabric description {}.",
+                            std::filesystem::path(o->fabric).filename().string());
     }
     std::vector<WrittenFile> files = write_fabric_directory(loaded.fabric, o->output, comment);
     std::vector<std::string> warnings = take_warnings();

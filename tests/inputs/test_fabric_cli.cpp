@@ -190,6 +190,21 @@ TEST(CliPattern, FromAFabricFileAndNotJson) {
   EXPECT_THAT(read_text(dir / "d/fabric.toml"), HasSubstr("name = \"silk diamond point twill\""));
 }
 
+TEST(CliPattern, WifDraftJson) {
+  ScratchDir dir;
+  ProcessResult r = run_cli(
+      dir, {"pattern", "--wif", std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/wif/twill-2-2.wif",
+            "--resolution", "16", "-o", dir / "w", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  nlohmann::json doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["source"], "wif");
+  EXPECT_EQ(doc["weave"]["matrix"].size(), doc["weave"]["picks"].get<std::size_t>());
+  EXPECT_EQ(doc["weave"]["end_colors"].size(), doc["weave"]["ends"].get<std::size_t>());
+  EXPECT_EQ(doc["inputs"][0]["role"], "wif");
+  EXPECT_THAT(read_text(dir / "w/fabric.toml"),
+              HasSubstr("Generated from the WIF draft twill-2-2.wif."));
+}
+
 TEST(CliPattern, FailuresWriteNothing) {
   ScratchDir dir;
   ProcessResult r = run_cli(dir, {"pattern", "--weave", "twil2/1", "-o", dir / "out", "--json"});

@@ -8,6 +8,7 @@
 
 #include "bake/inputs/fabric_files.hpp"
 #include "bake/inputs/fabric_load.hpp"
+#include "bake/inputs/wif.hpp"
 #include "common/diagnostics.hpp"
 #include "test_support.hpp"
 
@@ -413,6 +414,29 @@ TEST_F(FabricLoad, MatrixWeaveWithThreadColours) {
             (std::vector<std::string>{"1100", "0110", "0011", "1001"}));
   EXPECT_EQ(loaded.weave->end_colors.size(), 4u);
   EXPECT_EQ(loaded.weave->pick_colors, std::vector<Rgb>(4, Rgb{1, 1, 1}));
+}
+
+TEST_F(FabricLoad, WifWeaveWithGeometryOverrides) {
+  ScratchDir dir;
+  std::string wif = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/wif/twill-2-2.wif";
+  write_text(dir / "w.toml", "[weave]\nwif = \"" + wif +
+                                 "\"\n[weave.warp]\ntwist_deg = -15\n[bake]\nresolution = 16\n");
+  LoadedFabric loaded = load_fabric_description(dir / "w.toml");
+  EXPECT_EQ(loaded.source, FabricSource::Wif);
+  ASSERT_TRUE(loaded.weave);
+  EXPECT_EQ(loaded.weave->warp.twist_deg, -15.0);
+  for (const auto& g : loaded.weave->end_geometry)
+    EXPECT_EQ(g.twist_deg, -15.0);
+  WifDraft draft = read_wif(wif);
+  EXPECT_EQ(loaded.weave->matrix, draft.spec.matrix);
+  EXPECT_EQ(loaded.weave->weft.twist_deg, draft.spec.weft.twist_deg) << "only stated keys override";
+  ASSERT_EQ(loaded.fabric.inputs.size(), 2u);
+  EXPECT_EQ(loaded.fabric.inputs[1].role, "wif");
+  EXPECT_EQ(loaded.fabric.inputs[1].xxh64, inputs::hash_file(wif));
+  // pattern --wif builds the same maps with the draft's own geometry.
+  LoadedFabric direct = fabric_from_wif(wif, 16);
+  EXPECT_EQ(direct.weave->matrix, draft.spec.matrix);
+  EXPECT_EQ(direct.fabric.maps.resolution, 16);
 }
 
 TEST_F(FabricLoad, WeaveErrors) {
