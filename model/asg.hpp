@@ -35,7 +35,8 @@ namespace clothbake::model {
 // half-width of 1/64 rad, far below the ~0.08 rad bin size of a 32 x 32 hemisphere grid.
 inline constexpr double kAsgMaxBandwidth = 4096.0;
 // Largest amplitude a record can hold (a least-squares fit of a 0/1 function may overshoot 1).
-inline constexpr double kAsgMaxAmplitude = 2.0;
+// Amplitudes are stored in steps of 1/32768 so that 0 and 1 (unoccluded) are exact.
+inline constexpr double kAsgMaxAmplitude = 65535.0 / 32768.0;
 
 // An ASG with an explicit frame. Invariant (not checked): x, y, z orthonormal, right-handed.
 template <class T>
@@ -172,7 +173,7 @@ inline T asg_integral_sharp(const Asg<T>& g) {
 //   rotation       : psi = rotation * pi / 65536, in [0, pi)
 //   lambda, mu     : bandwidth = kAsgMaxBandwidth * (q / 65535)^2 (square-root code: relative
 //                    precision where small bandwidths need it)
-//   amplitude      : c = kAsgMaxAmplitude * q / 65535
+//   amplitude      : c = q / 32768 (so 1 is exact), in [0, kAsgMaxAmplitude]
 // Quantisation changes G by at most ~2e-3 (tests/asg measures it).
 struct AsgRecord {
   uint16_t axis_u = 32768, axis_v = 32768;
@@ -207,7 +208,7 @@ inline AsgRecord pack_asg(const AsgParams<T>& params) {
   r.rotation = uint16_t(((q % 65536) + 65536) % 65536);
   r.lambda = detail::quantize_unit(std::sqrt(std::max(p.lambda, 0.0) / kAsgMaxBandwidth));
   r.mu = detail::quantize_unit(std::sqrt(std::max(p.mu, 0.0) / kAsgMaxBandwidth));
-  r.amplitude = detail::quantize_unit(p.amplitude / kAsgMaxAmplitude);
+  r.amplitude = detail::quantize_unit(p.amplitude / kAsgMaxAmplitude);  // = round(c * 32768)
   return r;
 }
 
@@ -222,7 +223,7 @@ inline AsgParams<T> unpack_asg(const AsgRecord& r) {
   p.rotation = T(r.rotation * kPi<double> / 65536.0);
   p.lambda = T(kAsgMaxBandwidth * sl * sl);
   p.mu = T(kAsgMaxBandwidth * sm * sm);
-  p.amplitude = T(kAsgMaxAmplitude * (r.amplitude / 65535.0));
+  p.amplitude = T(r.amplitude / 32768.0);
   return p;
 }
 

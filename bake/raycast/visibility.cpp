@@ -186,7 +186,9 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples,
             visible[dir] = samples.visible(t, dir) ? 1 : 0;
           AsgFitResult fit = fit_asg(directions, visible.data());
           model::AsgRecord record = model::pack_asg(fit.params);
-          double err = asg_rms_error(directions, visible.data(), model::unpack_asg<double>(record));
+          // The error of what is stored (the packed lobe), rounded to the stored float.
+          const double err = double(
+              float(asg_rms_error(directions, visible.data(), model::unpack_asg<double>(record))));
           out.records[t] = record;
           out.fit_error[t] = float(err);
           if (err > s.max) {
