@@ -187,9 +187,9 @@ void BM_QueryRaw(benchmark::State& state) {
   for (auto _ : state) {
     const Query& q = queries[i++ & 4095];
     if (all)
-      f.tables.query_all(q.rect, q.h, out);
+      f.tables.try_query_all(q.rect, q.h, out);
     else
-      f.tables.query(q.rect, q.h, uint32_t(i & 7), out);
+      f.tables.try_query(q.rect, q.h, uint32_t(i & 7), out);
     benchmark::DoNotOptimize(out[0]);
   }
   state.SetItemsProcessed(int64_t(state.iterations()));
@@ -197,6 +197,39 @@ void BM_QueryRaw(benchmark::State& state) {
                  (all ? ", all 8 clusters" : ", one cluster"));
 }
 BENCHMARK(BM_QueryRaw)->ArgsProduct({{0, 1}, {0, 1}});
+
+}  // namespace
+
+namespace {
+
+// The pieces of a query: bin weights (direction -> 4 bins) and the footprint plan.
+void BM_QueryPartBinWeights(benchmark::State& state) {
+  const auto queries = make_queries(0);
+  std::size_t i = 0;
+  reader::BinWeights w;
+  for (auto _ : state) {
+    reader::radiance_bin_weights(32, queries[i++ & 4095].h, &w);
+    benchmark::DoNotOptimize(w);
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+BENCHMARK(BM_QueryPartBinWeights);
+
+void BM_QueryHot(benchmark::State& state) {
+  QueryFixture& f = query_fixture();
+  const reader::Footprint r{10.25, 20.5, 14.25, 24.0};
+  const double h[3] = {0.1, 0.2, 0.9};
+  double out[8];
+  for (auto _ : state) {
+    if (state.range(0))
+      f.tables.try_query_all(r, h, out);
+    else
+      f.tables.try_query(r, h, 3, out);
+    benchmark::DoNotOptimize(out[0]);
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+BENCHMARK(BM_QueryHot)->Arg(0)->Arg(1);
 
 }  // namespace
 

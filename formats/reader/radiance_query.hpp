@@ -52,6 +52,8 @@ struct FootprintPlan {
 // Reduces `rect` to one tile of side n. InvalidArgument for non-finite corners, x1 < x0, y1 < y0,
 // a footprint wider than kMaxFootprintTiles tiles or corners beyond 2^40 texels, or n == 0.
 Status plan_footprint(const Footprint& rect, uint32_t n, FootprintPlan* out) noexcept;
+// The same without a message (the hot path): false where plan_footprint fails.
+bool make_footprint_plan(const Footprint& rect, uint32_t n, FootprintPlan* out) noexcept;
 
 // Bilinear weights over at most 4 distinct half-vector bins (duplicates merged, zero weights
 // dropped), for a grid of bins_per_side^2 bins on the folded upper hemisphere.
@@ -64,6 +66,8 @@ struct BinWeights {
 // InvalidArgument for a zero or non-finite h, or bins_per_side == 0. bins_per_side == 1 gives the
 // single bin with weight 1 for any h (even zero).
 Status radiance_bin_weights(uint32_t bins_per_side, const double h[3], BinWeights* out) noexcept;
+// The same without a message (the hot path).
+bool make_bin_weights(uint32_t bins_per_side, const double h[3], BinWeights* out) noexcept;
 
 // The query interface every table representation implements.
 class RadianceTables {
@@ -71,18 +75,36 @@ class RadianceTables {
   virtual ~RadianceTables() = default;
 
   virtual RadianceTableKind kind() const noexcept = 0;
-  virtual uint32_t resolution() const noexcept = 0;     // N
+  virtual uint32_t resolution() const noexcept = 0;     // N (0 while not open)
   virtual uint32_t bins_per_side() const noexcept = 0;  // n (1: no h dependence)
   // Clusters of the label map: query_all writes this many values; clusters without a stored table
   // answer 0.
   virtual uint32_t cluster_count() const noexcept = 0;
 
-  // F_c(rect, h) for one cluster c < cluster_count(). Errors: InvalidArgument (rect, h, cluster).
+  // F_c(rect, h) for one cluster c < cluster_count(). Errors: InvalidArgument naming the bad
+  // argument (rect, h, cluster, null output) or "not open".
   virtual Status query(const Footprint& rect, const double h[3], uint32_t cluster,
                        double* out) const noexcept = 0;
   // F_c(rect, h) for every cluster at once (out has cluster_count() entries).
   virtual Status query_all(const Footprint& rect, const double h[3],
                            double* out) const noexcept = 0;
+
+  // The hot path: the same answers, false (out unspecified) instead of a Status on error, so that
+  // a renderer does not pay for building messages (a Status carries a 320-byte buffer). The
+  // defaults forward to query()/query_all(); representations override them with a direct path.
+  virtual bool try_query(const Footprint& rect, const double h[3], uint32_t cluster,
+                         double* out) const noexcept {
+    return out != nullptr && query(rect, h, cluster, out).ok();
+  }
+  virtual bool try_query_all(const Footprint& rect, const double h[3], double* out) const noexcept {
+    return out != nullptr && query_all(rect, h, out).ok();
+  }
+
+ protected:
+  // For implementations whose fast path failed: the InvalidArgument Status that says why
+  // (tables not open, null output, cluster out of range when `cluster` is given, bad rect or h).
+  Status diagnose(const Footprint& rect, const double h[3], const uint32_t* cluster,
+                  const double* out) const noexcept;
 };
 
 }  // namespace clothbake::reader

@@ -28,52 +28,141 @@ Status find_part(const Asset& asset, RadianceTableKind kind, RadiancePart part,
   return {};
 }
 
-// One SAT point (x, y) in [0, N]^2: the offsets of S(i, j), S(i+1, j), S(i, j+1), S(i+1, j+1)
-// (column 0; -1 where the SAT is zero because i or j is 0) and the fractions a, b.
-struct PointLookup {
+// One SAT point (x, y) in [0, N]^2 of a footprint plan: the element offsets (column 0) of
+// S(i, j), S(i+1, j), S(i, j+1), S(i+1, j+1) with a mask that zeroes the corners on the i = 0 or
+// j = 0 border (where the exclusive SAT is 0 and nothing is stored), the fractions a, b, and the
+// bracket of the plan it belongs to with its sign.
+struct PlanPoint {
   int64_t off[4];
-  double a, b;
+  uint64_t mask[4];
+  double a, b, ab;
+  bool frac;
+  bool negative;
+  int bracket;
 };
 
-inline PointLookup lookup(double x, double y, uint32_t n, uint32_t columns) noexcept {
-  uint32_t i = x >= double(n) ? n - 1 : uint32_t(x);
-  uint32_t j = y >= double(n) ? n - 1 : uint32_t(y);
-  PointLookup p;
+// The SAT points of a whole footprint plan (radiance_query.hpp): bracket 0 always (4 points),
+// 1 when crossing tiles in x, 2 in y, 3 in both; F = sum_k coefficient[k] * bracket_k.
+struct PlanPoints {
+  PlanPoint p[9];
+  int count = 0;
+  double coefficient[4] = {1.0, 0.0, 0.0, 0.0};
+  int brackets = 1;
+};
+
+inline void add_point(PlanPoints& pp, double x, double y, uint32_t n, uint32_t columns,
+                      bool negative, int bracket) noexcept {
+  const uint32_t i = x >= double(n) ? n - 1 : uint32_t(x);
+  const uint32_t j = y >= double(n) ? n - 1 : uint32_t(y);
+  PlanPoint& p = pp.p[pp.count++];
   p.a = x - double(i);
   p.b = y - double(j);
-  auto offset = [&](uint32_t ii, uint32_t jj) -> int64_t {
-    if (ii == 0 || jj == 0) return -1;
-    return (int64_t(jj - 1) * int64_t(n) + int64_t(ii - 1)) * int64_t(columns);
-  };
-  p.off[0] = offset(i, j);
-  p.off[1] = offset(i + 1, j);
-  p.off[2] = offset(i, j + 1);
-  p.off[3] = offset(i + 1, j + 1);
-  return p;
+  p.ab = p.a * p.b;
+  p.frac = p.a != 0.0 || p.b != 0.0;
+  p.negative = negative;
+  p.bracket = bracket;
+  const uint32_t ci[4] = {i, i + 1, i, i + 1}, cj[4] = {j, j, j + 1, j + 1};
+  for (int c = 0; c < 4; ++c) {
+    const bool zero = ci[c] == 0 || cj[c] == 0;
+    p.off[c] = zero ? 0 : (int64_t(cj[c] - 1) * int64_t(n) + int64_t(ci[c] - 1)) * int64_t(columns);
+    p.mask[c] = zero ? 0 : ~uint64_t(0);
+  }
 }
 
-// Accumulates sign * I(point) for columns [0, count) of `base` (one bin, column `first`):
-// integer part (wrapping uint64, exact) and fractional part (double).
+inline PlanPoints plan_points(const FootprintPlan& plan, uint32_t n, uint32_t columns) noexcept {
+  PlanPoints pp;
+  const double size = double(n);
+  add_point(pp, plan.rx1, plan.ry1, n, columns, false, 0);
+  add_point(pp, plan.x0, plan.ry1, n, columns, true, 0);
+  add_point(pp, plan.rx1, plan.y0, n, columns, true, 0);
+  add_point(pp, plan.x0, plan.y0, n, columns, false, 0);
+  if (plan.qx > 0) {
+    add_point(pp, size, plan.ry1, n, columns, false, 1);
+    add_point(pp, size, plan.y0, n, columns, true, 1);
+    pp.coefficient[1] = plan.qx;
+  }
+  if (plan.qy > 0) {
+    add_point(pp, plan.rx1, size, n, columns, false, 2);
+    add_point(pp, plan.x0, size, n, columns, true, 2);
+    pp.coefficient[2] = plan.qy;
+  }
+  if (plan.qx > 0 && plan.qy > 0) {
+    add_point(pp, size, size, n, columns, false, 3);
+    pp.coefficient[3] = plan.qx * plan.qy;
+  }
+  pp.brackets = 4;
+  return pp;
+}
+
+// F of one column in integer steps: `base` points at (bin, column 0 + column). Integer parts are
+// summed in wrapping uint64 arithmetic (exact: the true bracket values fit in int64), fractional
+// coverage in double.
 template <class E>
-inline void accumulate(const E* base, const PointLookup& p, uint32_t first, uint32_t count,
-                       int sign, uint64_t* ip, double* fp) noexcept {
-  const double ab = p.a * p.b;
-  const bool frac = p.a != 0.0 || p.b != 0.0;
-  for (uint32_t k = 0; k < count; ++k) {
-    const uint64_t s00 = p.off[0] < 0 ? 0 : uint64_t(base[p.off[0] + first + k]);
-    if (sign > 0)
-      ip[k] += s00;
+inline double evaluate_column(const E* base, const PlanPoints& pp) noexcept {
+  uint64_t ip[4] = {0, 0, 0, 0};
+  double fp[4] = {0.0, 0.0, 0.0, 0.0};
+  for (int t = 0; t < pp.count; ++t) {
+    const PlanPoint& p = pp.p[t];
+    const uint64_t s00 = uint64_t(base[p.off[0]]) & p.mask[0];
+    ip[p.bracket] += p.negative ? uint64_t(0) - s00 : s00;
+    if (!p.frac) continue;
+    const uint64_t s10 = uint64_t(base[p.off[1]]) & p.mask[1];
+    const uint64_t s01 = uint64_t(base[p.off[2]]) & p.mask[2];
+    const uint64_t s11 = uint64_t(base[p.off[3]]) & p.mask[3];
+    const double f = p.a * double(int64_t(s10 - s00)) + p.b * double(int64_t(s01 - s00)) +
+                     p.ab * double(int64_t(s11 - s10 - s01 + s00));
+    fp[p.bracket] += p.negative ? -f : f;
+  }
+  double total = double(int64_t(ip[0])) + fp[0];
+  for (int k = 1; k < 4; ++k)
+    if (pp.coefficient[k] != 0.0) total += pp.coefficient[k] * (double(int64_t(ip[k])) + fp[k]);
+  return total;
+}
+
+// evaluate_column for `count` adjacent columns at once (base at column 0): the loops over
+// columns read contiguous values (one cache line holds every cluster of a corner) and vectorise.
+template <class E>
+inline void evaluate_columns(const E* base, const PlanPoints& pp, uint32_t count,
+                             double* result) noexcept {
+  uint64_t ip[4][kMaxRadianceClusters + 1];
+  double fp[4][kMaxRadianceClusters + 1];
+  for (int b = 0; b < 4; ++b)
+    for (uint32_t k = 0; k < count; ++k) {
+      ip[b][k] = 0;
+      fp[b][k] = 0.0;
+    }
+  for (int t = 0; t < pp.count; ++t) {
+    const PlanPoint& p = pp.p[t];
+    const E* c00 = base + p.off[0];
+    uint64_t* ipb = ip[p.bracket];
+    const uint64_t m00 = p.mask[0];
+    if (p.negative)
+      for (uint32_t k = 0; k < count; ++k)
+        ipb[k] -= uint64_t(c00[k]) & m00;
     else
-      ip[k] -= s00;
-    if (!frac) continue;
-    const uint64_t s10 = p.off[1] < 0 ? 0 : uint64_t(base[p.off[1] + first + k]);
-    const uint64_t s01 = p.off[2] < 0 ? 0 : uint64_t(base[p.off[2] + first + k]);
-    const uint64_t s11 = p.off[3] < 0 ? 0 : uint64_t(base[p.off[3] + first + k]);
-    const double d10 = double(int64_t(s10 - s00));
-    const double d01 = double(int64_t(s01 - s00));
-    const double d11 = double(int64_t(s11 - s10 - s01 + s00));
-    const double f = p.a * d10 + p.b * d01 + ab * d11;
-    fp[k] += sign > 0 ? f : -f;
+      for (uint32_t k = 0; k < count; ++k)
+        ipb[k] += uint64_t(c00[k]) & m00;
+    if (!p.frac) continue;
+    const E* c10 = base + p.off[1];
+    const E* c01 = base + p.off[2];
+    const E* c11 = base + p.off[3];
+    const uint64_t m10 = p.mask[1], m01 = p.mask[2], m11 = p.mask[3];
+    const double sa = p.negative ? -p.a : p.a, sb = p.negative ? -p.b : p.b,
+                 sab = p.negative ? -p.ab : p.ab;
+    double* fpb = fp[p.bracket];
+    for (uint32_t k = 0; k < count; ++k) {
+      const uint64_t s00 = uint64_t(c00[k]) & m00, s10 = uint64_t(c10[k]) & m10,
+                     s01 = uint64_t(c01[k]) & m01, s11 = uint64_t(c11[k]) & m11;
+      fpb[k] += sa * double(int64_t(s10 - s00)) + sb * double(int64_t(s01 - s00)) +
+                sab * double(int64_t(s11 - s10 - s01 + s00));
+    }
+  }
+  for (uint32_t k = 0; k < count; ++k) {
+    double total = double(int64_t(ip[0][k])) + fp[0][k];
+    for (int b = 1; b < 4; ++b)
+      if (pp.coefficient[b] != 0.0)
+        total += pp.coefficient[b] * (double(int64_t(ip[b][k])) + fp[b][k]);
+    result[k] = total;
   }
 }
 
@@ -222,118 +311,74 @@ Status RawRadianceTables::check_contents() const noexcept {
 }
 
 template <class E>
-Status RawRadianceTables::query_impl(const Footprint& rect, const double h[3], int column,
-                                     double* out) const noexcept {
-  if (!is_open())
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
+bool RawRadianceTables::query_impl(const Footprint& rect, const double h[3], int column,
+                                   double* out) const noexcept {
   FootprintPlan plan;
-  Status s = plan_footprint(rect, n_, &plan);
-  if (!s.ok()) return s;
   BinWeights bw;
-  s = radiance_bin_weights(bins_per_side_, h, &bw);
-  if (!s.ok()) return s;
-
-  const uint32_t first = column < 0 ? 0 : uint32_t(column);
-  const uint32_t count = column < 0 ? columns_ : 1;
-  const double size = double(n_);
-  const PointLookup p11 = lookup(plan.rx1, plan.ry1, n_, columns_);
-  const PointLookup p01 = lookup(plan.x0, plan.ry1, n_, columns_);
-  const PointLookup p10 = lookup(plan.rx1, plan.y0, n_, columns_);
-  const PointLookup p00 = lookup(plan.x0, plan.y0, n_, columns_);
-  const bool cross_x = plan.qx > 0, cross_y = plan.qy > 0;
-  PointLookup cx1{}, cx0{}, cy1{}, cy0{}, cxy{};
-  if (cross_x) {
-    cx1 = lookup(size, plan.ry1, n_, columns_);
-    cx0 = lookup(size, plan.y0, n_, columns_);
-  }
-  if (cross_y) {
-    cy1 = lookup(plan.rx1, size, n_, columns_);
-    cy0 = lookup(plan.x0, size, n_, columns_);
-  }
-  if (cross_x && cross_y) cxy = lookup(size, size, n_, columns_);
-
-  double acc[kMaxRadianceClusters + 1];
-  uint64_t ip[kMaxRadianceClusters + 1];
-  double fp[kMaxRadianceClusters + 1];
-  for (uint32_t k = 0; k < count; ++k)
-    acc[k] = 0.0;
+  if (!make_footprint_plan(rect, n_, &plan) || !make_bin_weights(bins_per_side_, h, &bw))
+    return false;
+  const PlanPoints points = plan_points(plan, n_, columns_);
   const uint64_t bin_stride = uint64_t(n_) * n_ * columns_;
-  auto bracket = [&](const E* base, const PointLookup* points, const int* signs, int m,
-                     double coefficient, double* total) {
-    for (uint32_t k = 0; k < count; ++k) {
-      ip[k] = 0;
-      fp[k] = 0.0;
-    }
-    for (int t = 0; t < m; ++t)
-      accumulate(base, points[t], first, count, signs[t], ip, fp);
-    for (uint32_t k = 0; k < count; ++k)
-      total[k] += coefficient * (double(int64_t(ip[k])) + fp[k]);
-  };
-  double bin_total[kMaxRadianceClusters + 1];
-  for (uint32_t w = 0; w < bw.count; ++w) {
-    const E* base = static_cast<const E*>(sat_) + uint64_t(bw.bin[w]) * bin_stride;
-    for (uint32_t k = 0; k < count; ++k)
-      bin_total[k] = 0.0;
-    const PointLookup inner[4] = {p11, p01, p10, p00};
-    const int inner_signs[4] = {+1, -1, -1, +1};
-    bracket(base, inner, inner_signs, 4, 1.0, bin_total);
-    const int pair_signs[2] = {+1, -1};
-    if (cross_x) {
-      const PointLookup pts[2] = {cx1, cx0};
-      bracket(base, pts, pair_signs, 2, plan.qx, bin_total);
-    }
-    if (cross_y) {
-      const PointLookup pts[2] = {cy1, cy0};
-      bracket(base, pts, pair_signs, 2, plan.qy, bin_total);
-    }
-    if (cross_x && cross_y) {
-      const int one[1] = {+1};
-      bracket(base, &cxy, one, 1, plan.qx * plan.qy, bin_total);
-    }
-    const double* unit_row = units_ + uint64_t(bw.bin[w]) * columns_ + first;
-    for (uint32_t k = 0; k < count; ++k)
-      acc[k] += bw.weight[w] * unit_row[k] * bin_total[k];
-  }
+  const E* sat = static_cast<const E*>(sat_);
   if (column >= 0) {
-    *out = acc[0];
-  } else {
-    for (uint32_t c = 0; c < cluster_count_; ++c)
-      out[c] = 0.0;
-    for (uint32_t k = 0; k < columns_; ++k)
-      out[cluster_ids_[k]] = acc[k];
+    double f = 0.0;
+    for (uint32_t w = 0; w < bw.count; ++w) {
+      const E* base = sat + uint64_t(bw.bin[w]) * bin_stride + uint32_t(column);
+      f += bw.weight[w] * units_[uint64_t(bw.bin[w]) * columns_ + uint32_t(column)] *
+           evaluate_column(base, points);
+    }
+    *out = f;
+    return true;
   }
-  return {};
+  double acc[kMaxRadianceClusters + 1], bin_value[kMaxRadianceClusters + 1];
+  for (uint32_t k = 0; k < columns_; ++k)
+    acc[k] = 0.0;
+  for (uint32_t w = 0; w < bw.count; ++w) {
+    evaluate_columns(sat + uint64_t(bw.bin[w]) * bin_stride, points, columns_, bin_value);
+    const double* unit_row = units_ + uint64_t(bw.bin[w]) * columns_;
+    for (uint32_t k = 0; k < columns_; ++k)
+      acc[k] += bw.weight[w] * unit_row[k] * bin_value[k];
+  }
+  for (uint32_t c = 0; c < cluster_count_; ++c)
+    out[c] = 0.0;
+  for (uint32_t k = 0; k < columns_; ++k)
+    out[cluster_ids_[k]] = acc[k];
+  return true;
 }
 
-Status RawRadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
-                                double* out) const noexcept {
-  if (out == nullptr)
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "query: null output");
-  if (!is_open())
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
-  if (cluster >= cluster_count_)
-    return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "query: cluster %u out of range (the asset has %u)", unsigned(cluster),
-                         unsigned(cluster_count_));
+bool RawRadianceTables::try_query(const Footprint& rect, const double h[3], uint32_t cluster,
+                                  double* out) const noexcept {
+  if (out == nullptr || !is_open() || cluster >= cluster_count_) return false;
   const int column = column_of_[cluster];
   if (column < 0) {  // no stored table: the cluster's values are all zero
     FootprintPlan plan;
-    Status s = plan_footprint(rect, n_, &plan);
     BinWeights bw;
-    if (s.ok()) s = radiance_bin_weights(bins_per_side_, h, &bw);
-    if (s.ok()) *out = 0.0;
-    return s;
+    if (!make_footprint_plan(rect, n_, &plan) || !make_bin_weights(bins_per_side_, h, &bw))
+      return false;
+    *out = 0.0;
+    return true;
   }
   return element_bits_ == 32 ? query_impl<uint32_t>(rect, h, column, out)
                              : query_impl<uint64_t>(rect, h, column, out);
 }
 
-Status RawRadianceTables::query_all(const Footprint& rect, const double h[3],
-                                    double* out) const noexcept {
-  if (out == nullptr)
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "query: null output");
+bool RawRadianceTables::try_query_all(const Footprint& rect, const double h[3],
+                                      double* out) const noexcept {
+  if (out == nullptr || !is_open()) return false;
   return element_bits_ == 32 ? query_impl<uint32_t>(rect, h, -1, out)
                              : query_impl<uint64_t>(rect, h, -1, out);
+}
+
+Status RawRadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
+                                double* out) const noexcept {
+  if (try_query(rect, h, cluster, out)) return {};
+  return diagnose(rect, h, &cluster, out);
+}
+
+Status RawRadianceTables::query_all(const Footprint& rect, const double h[3],
+                                    double* out) const noexcept {
+  if (try_query_all(rect, h, out)) return {};
+  return diagnose(rect, h, nullptr, out);
 }
 
 }  // namespace clothbake::reader

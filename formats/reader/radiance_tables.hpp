@@ -30,6 +30,9 @@ class RawRadianceTables final : public RadianceTables {
   uint32_t resolution() const noexcept override { return n_; }
   uint32_t bins_per_side() const noexcept override { return bins_per_side_; }
   uint32_t cluster_count() const noexcept override { return cluster_count_; }
+  bool try_query(const Footprint& rect, const double h[3], uint32_t cluster,
+                 double* out) const noexcept override;
+  bool try_query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
   Status query(const Footprint& rect, const double h[3], uint32_t cluster,
                double* out) const noexcept override;
   Status query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
@@ -59,8 +62,7 @@ class RawRadianceTables final : public RadianceTables {
 
  private:
   template <class E>
-  Status query_impl(const Footprint& rect, const double h[3], int column,
-                    double* out) const noexcept;
+  bool query_impl(const Footprint& rect, const double h[3], int column, double* out) const noexcept;
 
   const RadianceTableInfoRecord* info_ = nullptr;
   RadianceTableKind kind_ = RadianceTableKind::Specular;
