@@ -1,0 +1,440 @@
+// C-PCA compressed Integral-Radiance tables: validation, decoding into per-image SATs, footprint
+// queries (compressed_tables.hpp).
+#include "formats/reader/compressed_tables.hpp"
+
+#include <cinttypes>
+#include <cmath>
+#include <cstring>
+#include <new>
+#include <type_traits>
+
+namespace clothbake::reader {
+namespace {
+
+const char* kind_name(RadianceTableKind kind) noexcept {
+  const char* name = radiance_kind_name(kind);
+  return name ? name : "?";
+}
+
+Status layout_error(RadianceTableKind kind, const char* part, const char* detail) noexcept {
+  return Status::error(ErrorCode::WrongType, Check::SectionLayout, "compressed_tables %s (%s): %s",
+                       kind_name(kind), part, detail);
+}
+
+Status find_part(const Asset& asset, RadianceTableKind kind, CompressedPart part,
+                 SectionInfo* out) noexcept {
+  Status s =
+      asset.find(SectionType::RadianceCompressedTables, compressed_instance(kind, part), out);
+  if (s.code() == ErrorCode::NotFound)
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "compressed_tables: the %s tables are not in this asset (part %u missing)",
+                         kind_name(kind), unsigned(part));
+  if (!s.ok()) return s;
+  if (out->version != 1)
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "compressed_tables part %u: payload version %u is not 1", unsigned(part),
+                         unsigned(out->version));
+  return {};
+}
+
+bool half_is_finite(Half h) noexcept {
+  return (h.bits & 0x7c00u) != 0x7c00u;
+}
+
+template <class T>
+std::unique_ptr<T[]> allocate(uint64_t count) noexcept {
+  return std::unique_ptr<T[]>(new (std::nothrow) T[std::size_t(count)]);
+}
+
+// Builds the exclusive prefix sums S[j][i][k] (j, i in [0, N]) of the per-texel image weights.
+template <class E>
+void build_sats(uint32_t n, uint32_t images, const uint8_t* cell_map, const CompressedCell* cells,
+                const int16_t* coefficients, E* sat, int64_t* row) noexcept {
+  const uint64_t stride = uint64_t(n + 1) * images;
+  std::memset(sat, 0, sizeof(E) * stride);  // row j = 0
+  const int16_t* next = coefficients;
+  for (uint32_t y = 0; y < n; ++y) {
+    E* above = sat + uint64_t(y) * stride;
+    E* here = above + stride;
+    for (uint32_t k = 0; k < images; ++k)
+      row[k] = 0;
+    for (uint32_t k = 0; k < images; ++k)
+      here[k] = 0;  // column i = 0
+    for (uint32_t x = 0; x < n; ++x) {
+      const uint8_t g = cell_map[uint64_t(y) * n + x];
+      if (g != kNoCell) {
+        const CompressedCell& cell = cells[g];
+        row[cell.first_image] += 1;
+        for (uint32_t j = 0; j < cell.rank; ++j)
+          row[cell.first_image + 1 + j] += next[j];
+        next += cell.rank;
+      }
+      const E* up = above + uint64_t(x + 1) * images;
+      E* out = here + uint64_t(x + 1) * images;
+      for (uint32_t k = 0; k < images; ++k)
+        out[k] = E(up[k] + row[k]);
+    }
+  }
+}
+
+}  // namespace
+
+Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind) noexcept {
+  *this = CompressedRadianceTables();
+  kind_ = kind;
+  if (uint32_t(kind) >= kRadianceKindCount)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown radiance table kind %u",
+                         unsigned(kind));
+  SectionInfo parts[kCompressedPartCount];
+  for (uint32_t p = 0; p < kCompressedPartCount; ++p) {
+    Status s = find_part(asset, kind, CompressedPart(p), &parts[p]);
+    if (!s.ok()) return s;
+  }
+
+  // Info.
+  ArrayView<uint8_t> info_bytes;
+  Status s = asset.view_of(parts[0], &info_bytes);
+  if (!s.ok()) return s;
+  if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
+      info_bytes.dims[1] != sizeof(CompressedTableInfoRecord))
+    return layout_error(kind, "info", "must be u8 {1, 64}");
+  CompressedTableInfoRecord info;
+  std::memcpy(&info, info_bytes.data, sizeof info);
+  if (info.kind != uint32_t(kind)) return layout_error(kind, "info", "kind field does not match");
+  if (info.resolution == 0 || info.resolution > kMaxRadianceResolution)
+    return layout_error(kind, "info", "resolution out of range");
+  if (info.bins_per_side == 0 || info.bins_per_side > kMaxRadianceBinsPerSide)
+    return layout_error(kind, "info", "bins_per_side out of range");
+  if (kind == RadianceTableKind::Gap && info.bins_per_side != 1)
+    return layout_error(kind, "info", "the gap table has exactly one bin");
+  if (info.cluster_count == 0 || info.cluster_count > kMaxRadianceClusters)
+    return layout_error(kind, "info", "cluster_count out of range");
+  if (info.cell_count > kMaxCompressedCells)
+    return layout_error(kind, "info", "cell_count out of range");
+  if (info.image_count > kMaxCompressedImages)
+    return layout_error(kind, "info", "image_count out of range");
+  if (!std::isfinite(info.min_roughness) || !std::isfinite(info.bake_error))
+    return Status::error(ErrorCode::Malformed, Check::NonFinite,
+                         "compressed_tables %s (info): NaN or Inf field", kind_name(kind));
+  const uint32_t n = info.resolution, cells_n = info.cell_count, images = info.image_count;
+  const uint32_t bins = info.bins_per_side * info.bins_per_side;
+
+  // Cells.
+  ArrayView<uint32_t> cells_view;
+  s = asset.view_of(parts[1], &cells_view);
+  if (!s.ok()) return s;
+  if (cells_n == 0 ? !(cells_view.rank == 2 && cells_view.dims[0] == 0)
+                   : !(cells_view.rank == 2 && cells_view.dims[0] == cells_n &&
+                       cells_view.dims[1] == kCellFields))
+    return layout_error(kind, "cells", "must be u32 {cell_count, 4}");
+  auto cells = allocate<CompressedCell>(cells_n ? cells_n : 1);
+  if (!cells) return Status::error(ErrorCode::Unsupported, Check::None, "out of memory");
+  uint64_t image_total = 0, coefficient_total = 0;
+  for (uint32_t g = 0; g < cells_n; ++g) {
+    CompressedCell& c = cells[g];
+    std::memcpy(&c, cells_view.data + uint64_t(g) * kCellFields, sizeof c);
+    if (c.cluster >= info.cluster_count || (g > 0 && c.cluster < cells[g - 1].cluster) ||
+        c.rank > kMaxCompressedRank || c.first_image != image_total || c.texels > uint64_t(n) * n)
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "compressed_tables %s: cell %u (cluster %u, rank %u, first image %u) "
+                           "is out of range or out of order",
+                           kind_name(kind), unsigned(g), unsigned(c.cluster), unsigned(c.rank),
+                           unsigned(c.first_image));
+    image_total += 1 + uint64_t(c.rank);
+    coefficient_total += uint64_t(c.texels) * c.rank;
+  }
+  if (image_total != images || coefficient_total != info.coefficient_count)
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "compressed_tables %s: cells give %" PRIu64 " images and %" PRIu64
+                         " coefficients, the info record says %u and %u",
+                         kind_name(kind), image_total, coefficient_total, unsigned(images),
+                         unsigned(info.coefficient_count));
+
+  // Cell map.
+  ArrayView<uint8_t> map;
+  s = asset.view_of(parts[2], &map);
+  if (!s.ok()) return s;
+  if (map.rank != 2 || map.dims[0] != n || map.dims[1] != n)
+    return layout_error(kind, "cell_map", "must be u8 {N, N}");
+  {
+    uint64_t counts[kMaxCompressedCells] = {};
+    for (uint64_t t = 0; t < map.size; ++t) {
+      const uint8_t g = map[t];
+      if (g == kNoCell) continue;
+      if (g >= cells_n)
+        return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                             "compressed_tables %s: texel (%" PRIu64 ", %" PRIu64
+                             ") names cell %u of %u",
+                             kind_name(kind), t % n, t / n, unsigned(g), unsigned(cells_n));
+      ++counts[g];
+    }
+    for (uint32_t g = 0; g < cells_n; ++g)
+      if (counts[g] != cells[g].texels)
+        return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                             "compressed_tables %s: cell %u has %" PRIu64
+                             " texels in the map, %u in its record",
+                             kind_name(kind), unsigned(g), counts[g], unsigned(cells[g].texels));
+  }
+
+  // Scales and basis.
+  ArrayView<float> scales;
+  s = asset.view_of(parts[3], &scales);
+  if (!s.ok()) return s;
+  if (scales.rank != 1 || scales.dims[0] != images)
+    return layout_error(kind, "scales", "must be f32 {image_count}");
+  for (uint32_t i = 0; i < images; ++i)
+    if (!std::isfinite(scales[i]) || scales[i] < 0.0f)
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "compressed_tables %s: scale of image %u is not finite and >= 0",
+                           kind_name(kind), unsigned(i));
+  ArrayView<Half> basis;
+  s = asset.view_of(parts[4], &basis);
+  if (!s.ok()) return s;
+  if (basis.rank != 2 || basis.dims[0] != images || basis.dims[1] != bins)
+    return layout_error(kind, "basis", "must be f16 {image_count, bins}");
+  for (uint64_t t = 0; t < basis.size; ++t) {
+    if (!half_is_finite(basis[t]) || !(std::fabs(half_to_float(basis[t])) <= 1.0f))
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "compressed_tables %s: basis value of image %" PRIu64 " bin %" PRIu64
+                           " is not in [-1, 1]",
+                           kind_name(kind), t / bins, t % bins);
+  }
+
+  // Coefficients.
+  ArrayView<int16_t> coefficients;
+  s = asset.view_of(parts[5], &coefficients);
+  if (!s.ok()) return s;
+  if (info.coefficient_count == 0
+          ? !(coefficients.rank == 1 && coefficients.dims[0] == 0)
+          : !(coefficients.rank == 1 && coefficients.dims[0] == info.coefficient_count))
+    return layout_error(kind, "coefficients", "must be i16 {coefficient_count}");
+  for (uint64_t t = 0; t < coefficients.size; ++t)
+    if (coefficients[t] == INT16_MIN)
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "compressed_tables %s: coefficient %" PRIu64 " is -32768",
+                           kind_name(kind), t);
+
+  // Decode.
+  const bool wide = uint64_t(n) > 256;  // N^2 * 32767 must stay below 2^31 for int32 sums
+  const uint64_t sat_count = uint64_t(n + 1) * (n + 1) * (images ? images : 1);
+  std::unique_ptr<int32_t[]> sat32;
+  std::unique_ptr<int64_t[]> sat64;
+  if (wide)
+    sat64 = allocate<int64_t>(sat_count);
+  else
+    sat32 = allocate<int32_t>(sat_count);
+  auto row = allocate<int64_t>(images ? images : 1);
+  auto scaled = allocate<float>(uint64_t(bins) * (images ? images : 1));
+  auto map_copy = allocate<uint8_t>(uint64_t(n) * n);
+  auto cell_cluster = allocate<uint32_t>(cells_n ? cells_n : 1);
+  if ((wide ? !sat64 : !sat32) || !row || !scaled || !map_copy || !cell_cluster)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "compressed_tables %s: cannot allocate %" PRIu64
+                         " bytes for the decoded tables",
+                         kind_name(kind), sat_count * (wide ? 8 : 4));
+  if (images > 0) {
+    if (wide)
+      build_sats(n, images, map.data, cells.get(), coefficients.data, sat64.get(), row.get());
+    else
+      build_sats(n, images, map.data, cells.get(), coefficients.data, sat32.get(), row.get());
+  }
+  for (uint32_t i = 0; i < images; ++i)
+    for (uint32_t b = 0; b < bins; ++b)
+      scaled[uint64_t(b) * images + i] = scales[i] * half_to_float(basis[uint64_t(i) * bins + b]);
+  std::memcpy(map_copy.get(), map.data, uint64_t(n) * n);
+  for (uint32_t g = 0; g < cells_n; ++g)
+    cell_cluster[g] = cells[g].cluster;
+
+  info_ = info;
+  n_ = n;
+  bins_per_side_ = info.bins_per_side;
+  cluster_count_ = info.cluster_count;
+  images_ = images;
+  wide_ = wide;
+  sat32_ = std::move(sat32);
+  sat64_ = std::move(sat64);
+  basis_ = std::move(scaled);
+  cell_map_ = std::move(map_copy);
+  cell_cluster_ = std::move(cell_cluster);
+  // Cells are sorted by cluster: each cluster's images are one contiguous range.
+  uint32_t g = 0;
+  for (uint32_t c = 0; c <= cluster_count_; ++c) {
+    while (g < cells_n && cells[g].cluster < c)
+      ++g;
+    image_begin_[c] = g < cells_n ? cells[g].first_image : images;
+  }
+  return {};
+}
+
+uint64_t CompressedRadianceTables::decoded_bytes() const noexcept {
+  if (!is_open()) return 0;
+  const uint64_t bins = uint64_t(bins_per_side_) * bins_per_side_;
+  return uint64_t(n_ + 1) * (n_ + 1) * images_ * (wide_ ? 8 : 4) + bins * images_ * 4 +
+         uint64_t(n_) * n_;
+}
+
+int CompressedRadianceTables::cluster_of_texel(uint32_t x, uint32_t y) const noexcept {
+  if (!is_open() || x >= n_ || y >= n_) return -1;
+  const uint8_t g = cell_map_[uint64_t(y) * n_ + x];
+  return g == kNoCell ? -1 : int(cell_cluster_[g]);
+}
+
+int64_t CompressedRadianceTables::weight(uint32_t image, uint32_t x, uint32_t y) const noexcept {
+  const uint64_t stride = uint64_t(n_ + 1) * images_;
+  const uint64_t i00 = uint64_t(y) * stride + uint64_t(x) * images_ + image;
+  const uint64_t i10 = i00 + images_, i01 = i00 + stride, i11 = i01 + images_;
+  if (wide_) {
+    const int64_t* s = sat64_.get();
+    return s[i11] - s[i10] - s[i01] + s[i00];
+  }
+  const int32_t* s = sat32_.get();
+  return int64_t(s[i11]) - s[i10] - s[i01] + s[i00];
+}
+
+double CompressedRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
+  if (!is_open() || x >= n_ || y >= n_ || bin >= bins_per_side_ * bins_per_side_) return 0.0;
+  const int c = cluster_of_texel(x, y);
+  if (c < 0) return 0.0;
+  double v = 0.0;
+  const float* row = basis_.get() + uint64_t(bin) * images_;
+  for (uint32_t i = image_begin_[c]; i < image_begin_[c + 1]; ++i) {
+    const int64_t w = weight(i, x, y);
+    if (w != 0) v += double(w) * double(row[i]);
+  }
+  return v;
+}
+
+template <class E>
+Status CompressedRadianceTables::query_impl(const Footprint& rect, const double h[3], int cluster,
+                                            double* out) const noexcept {
+  FootprintPlan plan;
+  Status s = plan_footprint(rect, n_, &plan);
+  if (!s.ok()) return s;
+  BinWeights bw;
+  s = radiance_bin_weights(bins_per_side_, h, &bw);
+  if (!s.ok()) return s;
+
+  const uint32_t c_first = cluster < 0 ? 0 : uint32_t(cluster);
+  const uint32_t c_end = cluster < 0 ? cluster_count_ : uint32_t(cluster) + 1;
+  const uint32_t i0 = image_begin_[c_first], i1 = image_begin_[c_end];
+  const uint32_t count = i1 - i0;
+  double acc[kMaxCompressedImages];
+  for (uint32_t k = 0; k < count; ++k)
+    acc[k] = 0.0;
+
+  // SAT points (x, y) in [0, N]^2 with their coefficients (FootprintPlan formula).
+  const double size = double(n_);
+  struct Point {
+    double x, y, c;
+  } points[9];
+  int m = 0;
+  points[m++] = {plan.rx1, plan.ry1, 1.0};
+  points[m++] = {plan.x0, plan.ry1, -1.0};
+  points[m++] = {plan.rx1, plan.y0, -1.0};
+  points[m++] = {plan.x0, plan.y0, 1.0};
+  if (plan.qx > 0) {
+    points[m++] = {size, plan.ry1, plan.qx};
+    points[m++] = {size, plan.y0, -plan.qx};
+  }
+  if (plan.qy > 0) {
+    points[m++] = {plan.rx1, size, plan.qy};
+    points[m++] = {plan.x0, size, -plan.qy};
+  }
+  if (plan.qx > 0 && plan.qy > 0) points[m++] = {size, size, plan.qx * plan.qy};
+
+  const E* sat = static_cast<const E*>(wide_ ? static_cast<const void*>(sat64_.get())
+                                             : static_cast<const void*>(sat32_.get()));
+  const uint64_t stride = uint64_t(n_ + 1) * images_;
+  // The 4 inner points (coefficients +-1): their S(i, j) corners sum, in wrapping integer
+  // arithmetic, to the rectangle sum over integer corners, which fits in E: exact. The fractional
+  // parts a (S(i+1, j) - S(i, j)) + b (S(i, j+1) - S(i, j)) + ab (texel) use differences that are
+  // partial row/column sums (at most N * 32767 in magnitude: exact in float for N <= 256, the
+  // int32 case) and go to a float (int64 case: double) accumulator. Points of whole crossed tiles
+  // (coefficients qx, qy, qx qy) are rare and use double throughout.
+  using Wrap = std::conditional_t<sizeof(E) == 4, uint32_t, uint64_t>;
+  using Frac = std::conditional_t<sizeof(E) == 4, float, double>;
+  Wrap whole[kMaxCompressedImages];
+  Frac frac[kMaxCompressedImages];
+  for (uint32_t k = 0; k < count; ++k) {
+    whole[k] = 0;
+    frac[k] = 0;
+  }
+  for (int p = 0; p < m; ++p) {
+    const uint32_t i = points[p].x >= size ? n_ - 1 : uint32_t(points[p].x);
+    const uint32_t j = points[p].y >= size ? n_ - 1 : uint32_t(points[p].y);
+    const double a = points[p].x - double(i), b = points[p].y - double(j), c = points[p].c;
+    const E* __restrict s00 = sat + uint64_t(j) * stride + uint64_t(i) * images_ + i0;
+    const E* __restrict s10 = s00 + images_;
+    const E* __restrict s01 = s00 + stride;
+    const E* __restrict s11 = s01 + images_;
+    if (p < 4) {
+      const bool add = c > 0;
+      if (add)
+        for (uint32_t k = 0; k < count; ++k)
+          whole[k] += Wrap(s00[k]);
+      else
+        for (uint32_t k = 0; k < count; ++k)
+          whole[k] -= Wrap(s00[k]);
+      if (a == 0.0 && b == 0.0) continue;
+      const Frac fa = Frac(add ? a : -a), fb = Frac(add ? b : -b), fab = Frac(add ? a * b : -a * b);
+      for (uint32_t k = 0; k < count; ++k) {
+        const E d10 = E(s10[k] - s00[k]), d01 = E(s01[k] - s00[k]);
+        const E d11 = E(s11[k] - s01[k]) - d10;
+        frac[k] += fa * Frac(d10) + fb * Frac(d01) + fab * Frac(d11);
+      }
+      continue;
+    }
+    const double w00 = (1 - a) * (1 - b) * c, w10 = a * (1 - b) * c, w01 = (1 - a) * b * c,
+                 w11 = a * b * c;
+    for (uint32_t k = 0; k < count; ++k)
+      acc[k] +=
+          w00 * double(s00[k]) + w10 * double(s10[k]) + w01 * double(s01[k]) + w11 * double(s11[k]);
+  }
+  using Signed = std::conditional_t<sizeof(E) == 4, int32_t, int64_t>;
+  for (uint32_t k = 0; k < count; ++k)
+    acc[k] += double(Signed(whole[k])) + double(frac[k]);
+
+  // Directions: blend the (at most 4) bins' scaled basis rows first (elementwise, vectorisable),
+  // then one dot product per cluster.
+  double blend[kMaxCompressedImages];
+  for (uint32_t k = 0; k < count; ++k)
+    blend[k] = 0.0;
+  for (uint32_t w = 0; w < bw.count; ++w) {
+    const float* __restrict row = basis_.get() + uint64_t(bw.bin[w]) * images_ + i0;
+    const double weight = bw.weight[w];
+    for (uint32_t k = 0; k < count; ++k)
+      blend[k] += weight * double(row[k]);
+  }
+  for (uint32_t c = c_first; c < c_end; ++c) {
+    double total = 0.0;
+    for (uint32_t k = image_begin_[c] - i0; k < image_begin_[c + 1] - i0; ++k)
+      total += acc[k] * blend[k];
+    out[c - c_first] = total;
+  }
+  return {};
+}
+
+Status CompressedRadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
+                                       double* out) const noexcept {
+  if (out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "query: null output");
+  if (!is_open())
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
+  if (cluster >= cluster_count_)
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "query: cluster %u out of range (the asset has %u)", unsigned(cluster),
+                         unsigned(cluster_count_));
+  return wide_ ? query_impl<int64_t>(rect, h, int(cluster), out)
+               : query_impl<int32_t>(rect, h, int(cluster), out);
+}
+
+Status CompressedRadianceTables::query_all(const Footprint& rect, const double h[3],
+                                           double* out) const noexcept {
+  if (out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "query: null output");
+  if (!is_open())
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
+  return wide_ ? query_impl<int64_t>(rect, h, -1, out) : query_impl<int32_t>(rect, h, -1, out);
+}
+
+}  // namespace clothbake::reader

@@ -1,0 +1,84 @@
+// C-PCA compressed Integral-Radiance tables of an asset (layout: compressed_layout.hpp), with the
+// footprint queries of radiance_query.hpp: the same API as RawRadianceTables, so that a renderer
+// does not care which one it has.
+//
+// Decoding. open() validates every section, then builds one exact integer summed-area table per
+// image from the per-texel weights (the cell indicator and the quantised coefficients), laid out
+// image-interleaved per SAT point, and the bin-major scaled basis (float). A query then reads,
+// for each of the at most 9 SAT points of its footprint (4 when it does not cross a tile edge),
+// the 4 surrounding integer corners of only the images of the clusters it asks for, and combines
+// them with the at most 4 bilinear half-vector bins: nothing else is decompressed. Cost per query:
+// O(images of the clusters asked for), independent of the footprint size.
+//
+// Memory: (N + 1)^2 * images * 4 bytes (8 when N > 256, where 32-bit prefix sums could overflow)
+// plus bins * images * 4 bytes, allocated once by open(); queries do not allocate.
+//
+// C++17, standard library only, noexcept. Safe on untrusted assets that Asset::open accepted:
+// open() checks every shape, count, index and value range before anything is indexed. The Asset
+// must outlive this object only during open() (everything needed afterwards is copied/decoded).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "formats/reader/asset.hpp"
+#include "formats/reader/compressed_layout.hpp"
+#include "formats/reader/radiance_query.hpp"
+
+namespace clothbake::reader {
+
+class CompressedRadianceTables final : public RadianceTables {
+ public:
+  CompressedRadianceTables() noexcept = default;
+  CompressedRadianceTables(CompressedRadianceTables&&) noexcept = default;
+  CompressedRadianceTables& operator=(CompressedRadianceTables&&) noexcept = default;
+
+  // Opens kind's compressed tables. Errors: NotFound (CBK-E019: the kind has no compressed
+  // tables), WrongType / Unsupported / Malformed (CBK-E015: version, element type, shape or record
+  // field), Malformed (CBK-E021: a cluster id, rank, cell index, count, scale, basis value or
+  // coefficient out of range; CBK-E017: NaN/Inf), Unsupported (the decoded tables cannot be
+  // allocated).
+  Status open(const Asset& asset, RadianceTableKind kind) noexcept;
+  bool is_open() const noexcept { return n_ != 0; }
+
+  RadianceTableKind kind() const noexcept override { return kind_; }
+  uint32_t resolution() const noexcept override { return n_; }
+  uint32_t bins_per_side() const noexcept override { return bins_per_side_; }
+  uint32_t cluster_count() const noexcept override { return cluster_count_; }
+  Status query(const Footprint& rect, const double h[3], uint32_t cluster,
+               double* out) const noexcept override;
+  Status query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
+
+  const CompressedTableInfoRecord& info() const noexcept { return info_; }
+  uint32_t cell_count() const noexcept { return info_.cell_count; }
+  uint32_t image_count() const noexcept { return images_; }
+  // Bytes of the decoded SATs and basis held in memory.
+  uint64_t decoded_bytes() const noexcept;
+  // Visibility cluster of texel (x, y) (x, y < N), or -1 when the texel has no cell (its value is 0
+  // in every cluster).
+  int cluster_of_texel(uint32_t x, uint32_t y) const noexcept;
+  // Decompressed value of one texel in one bin (x, y < N, bin < bins): the table value T[c][bin]
+  // of the texel's cluster c (0 when it has none).
+  double texel_value(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
+
+ private:
+  template <class E>
+  Status query_impl(const Footprint& rect, const double h[3], int cluster,
+                    double* out) const noexcept;
+  // Weight of image i at texel (x, y), from the SAT (exact).
+  int64_t weight(uint32_t image, uint32_t x, uint32_t y) const noexcept;
+
+  CompressedTableInfoRecord info_{};
+  RadianceTableKind kind_ = RadianceTableKind::Specular;
+  uint32_t n_ = 0, bins_per_side_ = 0, cluster_count_ = 0, images_ = 0;
+  bool wide_ = false;                 // int64 SATs (N > 256)
+  std::unique_ptr<int32_t[]> sat32_;  // (N + 1)^2 x images, exclusive prefix sums
+  std::unique_ptr<int64_t[]> sat64_;
+  std::unique_ptr<float[]> basis_;            // bins x images: scale[i] * basis[i][b]
+  std::unique_ptr<uint8_t[]> cell_map_;       // N x N
+  std::unique_ptr<uint32_t[]> cell_cluster_;  // per cell
+  // Images of cluster c: [image_begin_[c], image_begin_[c + 1]) (cells sorted by cluster).
+  uint32_t image_begin_[kMaxRadianceClusters + 1] = {};
+};
+
+}  // namespace clothbake::reader
