@@ -17,6 +17,8 @@
 
 namespace clothbake {
 
+static_assert(kMaxResolution == inputs::kMaxMapSide, "one limit for maps and bakes");
+
 const char* fabric_source_name(FabricSource source) {
   switch (source) {
     case FabricSource::Images:

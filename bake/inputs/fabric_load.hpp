@@ -56,6 +56,6 @@ LoadedFabric fabric_from_wif(const std::string& wif_path, int resolution);
 
 // Valid range of map and bake resolutions.
 inline constexpr int kMinResolution = 4;
-inline constexpr int kMaxResolution = 8192;
+inline constexpr int kMaxResolution = 8192;  // == inputs::kMaxMapSide
 
 }  // namespace clothbake

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "common/error.hpp"
 
@@ -34,8 +35,11 @@ const ChannelRule& rule_for(const std::string& role) {
   throw_internal_error("read_map_image: unknown map role '" + role + "'");
 }
 
-// Pixel type of the file as stored (read_image converts to float and loses it).
+// Header facts read before the pixels: the stored pixel type (read_image converts to float and
+// loses it) and the size, checked before anything proportional to it is allocated.
 struct StoredType {
+  bool readable = false;  // false: leave the diagnosis to read_image
+  int width = 0, height = 0;
   bool unsigned_integer = false;
   bool signed_integer = false;
   int bits = 32;
@@ -43,8 +47,16 @@ struct StoredType {
 
 StoredType probe_stored_type(const std::string& path) {
   StoredType t;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return t;
   auto in = OIIO::ImageInput::open(path);
-  if (!in) return t;  // read_image succeeded, so this does not happen in practice
+  if (!in) {
+    OIIO::geterror();  // clear it; read_image reports the failure with its own message
+    return t;
+  }
+  t.readable = true;
+  t.width = in->spec().width;
+  t.height = in->spec().height;
   OIIO::TypeDesc format = in->spec().format;
   t.bits = int(format.size() * 8);
   if (!format.is_floating_point()) {
@@ -116,6 +128,11 @@ MapImage read_map_image(const std::string& path, const std::string& role,
   map.path = path;
   map.context = fmt::format("{}: {}", key_context, path);
   const std::string& context = map.context;
+  StoredType stored = probe_stored_type(path);
+  if (stored.readable && (stored.width > kMaxMapSide || stored.height > kMaxMapSide))
+    throw Error(ExitCode::Input,
+                fmt::format("{}: image is {}x{}; map resolution must be at most {}", context,
+                            stored.width, stored.height, kMaxMapSide));
   try {
     map.image = read_image(path);  // its messages start with the path
   } catch (const Error& e) {
@@ -133,7 +150,6 @@ MapImage read_map_image(const std::string& path, const std::string& role,
     throw Error(ExitCode::Input,
                 fmt::format("{}: image is {}x{}; feature maps must be square (one N x N tile)",
                             context, im.width, im.height));
-  StoredType stored = probe_stored_type(path);
   map.integer_encoded = stored.unsigned_integer;
   map.bits = stored.bits;
   return map;

@@ -28,6 +28,10 @@ namespace clothbake::inputs {
 // encoding of the zero vector decodes to length < 0.007; a quantised unit vector to ~1 +- 0.01).
 inline constexpr float kMinVectorLength = 0.01f;
 
+// Largest map side read_map_image accepts; checked from the file header before the pixels are
+// allocated, so a hostile header cannot ask for gigabytes (fabric_load's kMaxResolution).
+inline constexpr int kMaxMapSide = 8192;
+
 // One map image as read from disk.
 struct MapImage {
   std::string role;     // "height", "tangent", ... (the key in [maps])
@@ -40,8 +44,8 @@ struct MapImage {
 
 // Reads the image at `path` for map `role` and checks its channel count against the table above.
 // `key_context` (the TOML file, line and key) prefixes every message, followed by the image path.
-// Throws Error(Input) for a missing, unreadable or truncated
-// file, a wrong channel count, a zero-size or non-square image.
+// Throws Error(Input) for a missing, unreadable or truncated file, a wrong channel count, a
+// zero-size or non-square image, or one with a side above kMaxMapSide (checked from the header).
 MapImage read_map_image(const std::string& path, const std::string& role,
                         const std::string& key_context);
 

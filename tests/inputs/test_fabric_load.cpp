@@ -245,6 +245,16 @@ TEST_F(FabricLoad, NonSquareAndTooSmallMaps) {
   EXPECT_THAT(load_error(g.toml), HasSubstr("image is 2x2; map resolution must be in [4, 8192]"));
 }
 
+TEST_F(FabricLoad, OversizedImageIsRejectedFromItsHeader) {
+  // 8193 x 1 pixels: tiny on disk; the side limit is checked before the pixels are read.
+  ScratchDir dir;
+  auto f = write_image_fabric(dir, 8, "gap = \"wide.png\"\n");
+  write_image(dir / "wide.png", make_image(8193, 1, 1, [](int, int, int) { return 1.0; }),
+              PixelType::UInt8);
+  EXPECT_THAT(load_error(f.toml),
+              HasSubstr("image is 8193x1; map resolution must be at most 8192"));
+}
+
 TEST_F(FabricLoad, NanAndInfPixelsAreNamed) {
   ScratchDir dir;
   auto f = write_image_fabric(dir, 8);
