@@ -11,6 +11,8 @@ using model::kAsgMaxAmplitude;
 using model::kAsgMaxBandwidth;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
+using ArrayF = Eigen::ArrayXf;
+using MapF = Eigen::Map<const Eigen::ArrayXf>;
 
 // The lobe during the fit: frame columns x, y, z.
 struct Lobe {
@@ -18,61 +20,79 @@ struct Lobe {
   double lambda = 0, mu = 0, c = 0;
 };
 
-double objective(const FitDirections& d, const uint8_t* visible, const Lobe& lobe) {
-  const Eigen::Vector3d ax = lobe.frame.col(0), ay = lobe.frame.col(1), az = lobe.frame.col(2);
-  double sum = 0;
-  const std::size_t k_count = d.size();
-  for (std::size_t k = 0; k < k_count; ++k) {
-    double vz = az.x() * d.x[k] + az.y() * d.y[k] + az.z() * d.z[k];
-    double g = 0;
-    if (vz > 0) {
-      double vx = ax.x() * d.x[k] + ax.y() * d.y[k] + ax.z() * d.z[k];
-      double vy = ay.x() * d.x[k] + ay.y() * d.y[k] + ay.z() * d.z[k];
-      g = lobe.c * std::exp(-lobe.lambda * vx * vx - lobe.mu * vy * vy);
-    }
-    double r = g - double(visible[k]);
-    sum += r * r;
+// The samples of one fit as Eigen arrays, and the per-sample work arrays of the last lobe
+// evaluated (so that an accepted trial step's normal equations reuse its exponentials). Every
+// per-sample pass is an Eigen array expression: vectorised, including the exponential.
+class Problem {
+ public:
+  Problem(const FitDirections& d, const uint8_t* visible)
+      : x_(d.x.data(), Eigen::Index(d.size())),
+        y_(d.y.data(), Eigen::Index(d.size())),
+        z_(d.z.data(), Eigen::Index(d.size())),
+        v_(Eigen::Index(d.size())) {
+    for (std::size_t k = 0; k < d.size(); ++k)
+      v_[Eigen::Index(k)] = visible[k] ? 1.f : 0.f;
   }
-  return sum;
-}
+  Eigen::Index size() const { return v_.size(); }
+  const MapF& x() const { return x_; }
+  const MapF& y() const { return y_; }
+  const MapF& z() const { return z_; }
+  const ArrayF& v() const { return v_; }
 
-// Gauss-Newton normal equations at `lobe`. Parameters: rotation increment w (local frame, 3),
-// lambda, mu, c. A frame rotated by R(w) sees direction v at v_local - w x v_local, so d(v.x)/dw =
-// (0, -v.z, v.y) and d(v.y)/dw = (v.z, 0, -v.x).
-void normal_equations(const FitDirections& d, const uint8_t* visible, const Lobe& lobe,
-                      Matrix6& jtj, Vector6& jtr) {
-  const Eigen::Vector3d ax = lobe.frame.col(0), ay = lobe.frame.col(1), az = lobe.frame.col(2);
-  double a[21] = {};  // upper triangle, row-major
-  double b[6] = {};
-  const std::size_t k_count = d.size();
-  for (std::size_t k = 0; k < k_count; ++k) {
-    double vz = az.x() * d.x[k] + az.y() * d.y[k] + az.z() * d.z[k];
-    if (!(vz > 0)) continue;  // G = 0 and its derivatives vanish (almost everywhere)
-    double vx = ax.x() * d.x[k] + ax.y() * d.y[k] + ax.z() * d.z[k];
-    double vy = ay.x() * d.x[k] + ay.y() * d.y[k] + ay.z() * d.z[k];
-    double e = std::exp(-lobe.lambda * vx * vx - lobe.mu * vy * vy);
-    double g = lobe.c * e;
-    double r = g - double(visible[k]);
-    double j[6] = {-2 * g * lobe.mu * vy * vz,
-                   2 * g * lobe.lambda * vx * vz,
-                   -2 * g * (lobe.lambda - lobe.mu) * vx * vy,
-                   -g * vx * vx,
-                   -g * vy * vy,
-                   e};
-    int idx = 0;
-    for (int p = 0; p < 6; ++p) {
-      b[p] += j[p] * r;
-      for (int q = p; q < 6; ++q)
-        a[idx++] += j[p] * j[q];
-    }
+  // 1 where a >= 2^-100, 0 where a <= 0 (and a * 2^100 in between, which unit vectors never
+  // produce except exactly on a lobe's cut plane), written with min/max so that Eigen vectorises
+  // it: a comparison-select falls back to scalar code and drags the exponential with it.
+  template <class Expr>
+  static auto positive(const Expr& a) {
+    constexpr float kTiny = 0x1p-100f, kHuge = 0x1p100f;
+    return a.max(0.f).min(kTiny) * kHuge;
   }
-  int idx = 0;
-  for (int p = 0; p < 6; ++p) {
-    jtr(p) = b[p];
-    for (int q = p; q < 6; ++q)
-      jtj(p, q) = jtj(q, p) = a[idx++];
+
+  // Sum of squared residuals of `lobe`; leaves its per-sample arrays in the workspace.
+  double energy(const Lobe& lobe) {
+    project(lobe.frame.col(0), vx_);
+    project(lobe.frame.col(1), vy_);
+    project(lobe.frame.col(2), vz_);
+    const float lambda = float(lobe.lambda), mu = float(lobe.mu);
+    e_ = (-(lambda * vx_.square() + mu * vy_.square())).exp() * positive(vz_);
+    r_ = float(lobe.c) * e_ - v_;
+    return double(r_.matrix().squaredNorm());
   }
-}
+
+  // Gauss-Newton normal equations at the lobe of the last energy() call. Parameters: rotation
+  // increment w of the frame (local coordinates, 3), lambda, mu, c. A frame rotated by R(w) sees
+  // direction v at v_local - w x v_local, so d(v.x)/dw = (0, -v.z, v.y) and d(v.y)/dw = (v.z, 0,
+  // -v.x); samples behind the axis (G = 0) have zero rows.
+  void normal_equations(const Lobe& lobe, Matrix6& jtj, Vector6& jtr) {
+    const float lambda = float(lobe.lambda), mu = float(lobe.mu), c = float(lobe.c);
+    jac_.resize(size(), 6);
+    ArrayF g = c * e_;
+    jac_.col(0) = (-2.f * mu * g * vy_ * vz_).matrix();
+    jac_.col(1) = (2.f * lambda * g * vx_ * vz_).matrix();
+    jac_.col(2) = (-2.f * (lambda - mu) * g * vx_ * vy_).matrix();
+    jac_.col(3) = (-g * vx_.square()).matrix();
+    jac_.col(4) = (-g * vy_.square()).matrix();
+    jac_.col(5) = e_.matrix();
+    jtj = (jac_.transpose() * jac_).cast<double>();
+    jtr = (jac_.transpose() * r_.matrix()).cast<double>();
+  }
+
+  // Sums of e * V and e^2 for the last energy() call (the best amplitude is their ratio).
+  void amplitude_sums(double& ev, double& ee) const {
+    ev = double((e_ * v_).sum());
+    ee = double(e_.square().sum());
+  }
+
+ private:
+  void project(const Eigen::Vector3d& axis, ArrayF& out) const {
+    out = float(axis.x()) * x_ + float(axis.y()) * y_ + float(axis.z()) * z_;
+  }
+
+  MapF x_, y_, z_;
+  ArrayF v_;
+  ArrayF vx_, vy_, vz_, e_, r_;
+  Eigen::Matrix<float, Eigen::Dynamic, 6> jac_;
+};
 
 Eigen::Matrix3d rotation(const Eigen::Vector3d& w) {
   double theta = w.norm();
@@ -95,18 +115,10 @@ void project_frame(Eigen::Matrix3d& frame) {
 }
 
 // The amplitude minimising the objective for the lobe's shape (linear least squares), clamped.
-void set_best_amplitude(const FitDirections& d, const uint8_t* visible, Lobe& lobe) {
-  const Eigen::Vector3d ax = lobe.frame.col(0), ay = lobe.frame.col(1), az = lobe.frame.col(2);
-  double ev = 0, ee = 0;
-  for (std::size_t k = 0; k < d.size(); ++k) {
-    double vz = az.x() * d.x[k] + az.y() * d.y[k] + az.z() * d.z[k];
-    if (!(vz > 0)) continue;
-    double vx = ax.x() * d.x[k] + ax.y() * d.y[k] + ax.z() * d.z[k];
-    double vy = ay.x() * d.x[k] + ay.y() * d.y[k] + ay.z() * d.z[k];
-    double e = std::exp(-lobe.lambda * vx * vx - lobe.mu * vy * vy);
-    ev += e * double(visible[k]);
-    ee += e * e;
-  }
+void set_best_amplitude(Problem& problem, Lobe& lobe) {
+  problem.energy(lobe);
+  double ev, ee;
+  problem.amplitude_sums(ev, ee);
   lobe.c = ee > 0 ? std::clamp(ev / ee, 0.0, kAsgMaxAmplitude) : 0.0;
 }
 
@@ -124,32 +136,24 @@ model::AsgParams<double> to_params(const Lobe& lobe) {
 // Start from the moments of the visible directions: axis = their mean, the principal axes of their
 // spread about it give x (smaller spread: sharper) and y, and a bandwidth ~ 1 / (3 variance) - 1
 // (the Gaussian that best matches a band of that variance, zero for a full hemisphere).
-Lobe moment_start(const FitDirections& d, const uint8_t* visible) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  double count = 0;
-  for (std::size_t k = 0; k < d.size(); ++k)
-    if (visible[k]) {
-      mean += Eigen::Vector3d(d.x[k], d.y[k], d.z[k]);
-      count += 1;
-    }
+Lobe moment_start(Problem& problem) {
+  const ArrayF& v = problem.v();
+  const double count = double(v.sum());
+  Eigen::Vector3d mean(double((v * problem.x()).sum()), double((v * problem.y()).sum()),
+                       double((v * problem.z()).sum()));
   Lobe lobe;
   Eigen::Vector3d z =
       mean.norm() > 1e-9 ? Eigen::Vector3d(mean.normalized()) : Eigen::Vector3d::UnitZ();
   model::Vec3d s, t;
   model::orthonormal_basis(model::Vec3d{z.x(), z.y(), z.z()}, s, t);
   Eigen::Vector3d e1(s.x, s.y, s.z), e2(t.x, t.y, t.z);
-  double c11 = 0, c12 = 0, c22 = 0;
-  for (std::size_t k = 0; k < d.size(); ++k)
-    if (visible[k]) {
-      Eigen::Vector3d v(d.x[k], d.y[k], d.z[k]);
-      double p = v.dot(e1), q = v.dot(e2);
-      c11 += p * p;
-      c12 += p * q;
-      c22 += q * q;
-    }
-  c11 /= count;
-  c12 /= count;
-  c22 /= count;
+  const ArrayF p =
+      float(e1.x()) * problem.x() + float(e1.y()) * problem.y() + float(e1.z()) * problem.z();
+  const ArrayF q =
+      float(e2.x()) * problem.x() + float(e2.y()) * problem.y() + float(e2.z()) * problem.z();
+  const double c11 = double((v * p.square()).sum()) / count;
+  const double c12 = double((v * p * q).sum()) / count;
+  const double c22 = double((v * q.square()).sum()) / count;
   // Eigen-decomposition of the 2 x 2 covariance: angle of the larger-spread axis.
   double angle = 0.5 * std::atan2(2 * c12, c11 - c22);
   double mid = 0.5 * (c11 + c22), half = std::sqrt(0.25 * (c11 - c22) * (c11 - c22) + c12 * c12);
@@ -166,7 +170,7 @@ Lobe moment_start(const FitDirections& d, const uint8_t* visible) {
   lobe.lambda = bandwidth(var_narrow);
   lobe.mu = bandwidth(var_wide);
   project_frame(lobe.frame);
-  set_best_amplitude(d, visible, lobe);
+  set_best_amplitude(problem, lobe);
   return lobe;
 }
 
@@ -175,24 +179,17 @@ Lobe moment_start(const FitDirections& d, const uint8_t* visible) {
 // where samples cross it), so the tilt is searched directly: axes in the vertical plane through the
 // mean visible direction, tilted by beta in [0, pi/2] from the zenith, golden-section search on the
 // objective with the best amplitude (closed form: E = sum V - (sum_in V)^2 / count_in).
-Lobe half_space_start(const FitDirections& d, const uint8_t* visible, int* evaluations) {
-  Eigen::Vector2d azimuth = Eigen::Vector2d::Zero();
-  double total = 0;
-  for (std::size_t k = 0; k < d.size(); ++k)
-    if (visible[k]) {
-      azimuth += Eigen::Vector2d(d.x[k], d.y[k]);
-      total += 1;
-    }
+Lobe half_space_start(Problem& problem, int* evaluations) {
+  const ArrayF& v = problem.v();
+  const double total = double(v.sum());
+  Eigen::Vector2d azimuth(double((v * problem.x()).sum()), double((v * problem.y()).sum()));
   Eigen::Vector2d h =
       azimuth.norm() > 1e-9 ? Eigen::Vector2d(azimuth.normalized()) : Eigen::Vector2d(1, 0);
   auto energy = [&](double beta, double* amplitude) {
-    const double ax = std::sin(beta) * h.x(), ay = std::sin(beta) * h.y(), az = std::cos(beta);
-    double inside = 0, seen_inside = 0;
-    for (std::size_t k = 0; k < d.size(); ++k)
-      if (ax * d.x[k] + ay * d.y[k] + az * d.z[k] > 0) {
-        inside += 1;
-        seen_inside += visible[k];
-      }
+    const float ax = float(std::sin(beta) * h.x()), ay = float(std::sin(beta) * h.y()),
+                az = float(std::cos(beta));
+    const ArrayF in = Problem::positive(ax * problem.x() + ay * problem.y() + az * problem.z());
+    const double inside = double(in.sum()), seen_inside = double((in * v).sum());
     ++*evaluations;
     double c = inside > 0 ? std::min(seen_inside / inside, kAsgMaxAmplitude) : 0.0;
     if (amplitude) *amplitude = c;
@@ -202,7 +199,7 @@ Lobe half_space_start(const FitDirections& d, const uint8_t* visible, int* evalu
   double lo = 0, hi = 0.5 * model::kPi<double>;
   double b1 = hi - golden * (hi - lo), b2 = lo + golden * (hi - lo);
   double e1 = energy(b1, nullptr), e2 = energy(b2, nullptr);
-  for (int it = 0; it < 10; ++it) {
+  for (int it = 0; it < 10; ++it) {  // bracket (pi/2) 0.618^10 = 0.013 rad
     if (e1 <= e2) {
       hi = b2, b2 = b1, e2 = e1;
       b1 = hi - golden * (hi - lo);
@@ -236,7 +233,8 @@ double asg_rms_error(const FitDirections& directions, const uint8_t* visible,
   lobe.lambda = g.lambda;
   lobe.mu = g.mu;
   lobe.c = g.amplitude;
-  return std::sqrt(objective(directions, visible, lobe) / double(directions.size()));
+  Problem problem(directions, visible);
+  return std::sqrt(problem.energy(lobe) / double(directions.size()));
 }
 
 AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible) {
@@ -254,15 +252,18 @@ AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible) {
 
   // Starts: the moments of the visible directions, and the best half-space (which includes the
   // flat lobe about +z, beta = 0); the better one is refined.
+  Problem problem(d, visible);
   int evaluations = 0;
-  Lobe lobe = moment_start(d, visible);
-  double energy = objective(d, visible, lobe);
-  Lobe half = half_space_start(d, visible, &evaluations);
-  double half_energy = objective(d, visible, half);
+  Lobe lobe = moment_start(problem);
+  double energy = problem.energy(lobe);
+  Lobe half = half_space_start(problem, &evaluations);
+  double half_energy = problem.energy(half);
   evaluations += 2;
   if (half_energy < energy) {
     lobe = half;
     energy = half_energy;
+  } else {
+    problem.energy(lobe);  // the workspace must hold the start's arrays
   }
 
   double damping = 1e-3;
@@ -272,7 +273,7 @@ AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible) {
   const int budget = evaluations + kAsgFitMaxRefinements;
   while (evaluations < budget) {
     if (!fresh) {
-      normal_equations(d, visible, lobe, jtj, jtr);
+      problem.normal_equations(lobe, jtj, jtr);  // the workspace holds `lobe` (see below)
       fresh = true;
     }
     Matrix6 a = jtj;
@@ -286,16 +287,18 @@ AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible) {
     trial.lambda = std::clamp(lobe.lambda + step(3), 0.0, kAsgMaxBandwidth);
     trial.mu = std::clamp(lobe.mu + step(4), 0.0, kAsgMaxBandwidth);
     trial.c = std::clamp(lobe.c + step(5), 0.0, kAsgMaxAmplitude);
-    double trial_energy = objective(d, visible, trial);
+    double trial_energy = problem.energy(trial);
     ++evaluations;
-    if (trial_energy < energy) {
+    if (trial_energy < energy) {  // accepted: the workspace now holds `lobe`
       double gain = energy - trial_energy;
       lobe = trial;
       energy = trial_energy;
       fresh = false;
       damping = std::max(damping / 3, 1e-9);
-      if (gain < 1e-9 * double(k_count)) break;  // converged: RMS changes below ~3e-5
+      if (gain < 1e-4 * energy) break;  // converged: the RMS error changes by < 0.005 %
     } else {
+      // Rejected: the workspace holds the trial; the next normal equations (only after an
+      // acceptance) recompute nothing stale because `fresh` stays true until then.
       damping *= 4;
       if (damping > 1e8) break;
     }

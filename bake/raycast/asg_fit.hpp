@@ -24,10 +24,17 @@
 
 namespace clothbake::raycast {
 
-// The sample directions of a fit, as structure of arrays (unit vectors, z >= 0).
+// The sample directions of a fit, as structure of arrays (unit vectors, z >= 0). Single
+// precision: the per-sample passes are vectorised in float (Eigen arrays); sums, the normal
+// equations and the parameters are double.
 struct FitDirections {
-  std::vector<double> x, y, z;
+  std::vector<float> x, y, z;
   std::size_t size() const { return x.size(); }
+  void push_back(double dx, double dy, double dz) {
+    x.push_back(float(dx));
+    y.push_back(float(dy));
+    z.push_back(float(dz));
+  }
 };
 
 struct AsgFitResult {
@@ -37,8 +44,10 @@ struct AsgFitResult {
 };
 
 // Objective evaluations: 14 for the half-space search, 2 to score the starts, then at most
-// kAsgFitMaxRefinements Levenberg-Marquardt trial steps.
-inline constexpr int kAsgFitMaxRefinements = 24;
+// kAsgFitMaxRefinements Levenberg-Marquardt trial steps (it stops earlier once a step improves the
+// objective by less than 1e-4 of its value). Measured on a woven tile: 8 steps reach a mean RMS
+// error within 0.2 % of 24 steps (docs/raycast.md).
+inline constexpr int kAsgFitMaxRefinements = 8;
 inline constexpr int kAsgFitMaxEvaluations = 14 + 2 + kAsgFitMaxRefinements;
 
 // visible[k] in {0, 1} for direction k. Safe for any input of matching sizes (K >= 1); the result

@@ -55,6 +55,14 @@ struct RayCounters {
   std::atomic<uint64_t> packets{0};   // 16-wide Embree calls
 };
 
+// The neighbourhood both stages use unless told otherwise. A ray descending at the parallax cut
+// (cos 0.6) through the whole height range moves range * 4/3 sideways; while that is at most half
+// a tile, the tile mesh alone (no instancing, which costs ~15 % of the throughput) is fastest and
+// only the few rays that cross its border need a second segment; beyond, ceil(travel) rings up to
+// 4 (81 instances), and segments for the rest. Results never depend on this choice, only speed
+// does.
+int automatic_rings(double height_range);
+
 class PeriodicHeightField {
  public:
   // heights: resolution^2 finite values, row-major (tile-side units). rings >= 0: neighbour tiles

@@ -41,13 +41,6 @@ void validate_parallax_settings(const ParallaxSettings& settings) {
                       " is out of range: expected -1 (automatic) or 0 to 64");
 }
 
-int parallax_rings_for(double height_range, double min_cos_of_directions) {
-  double c = std::clamp(min_cos_of_directions, 1e-6, 1.0);
-  double travel = height_range * std::sqrt(std::max(0.0, 1.0 - c * c)) / c;
-  if (!std::isfinite(travel)) return 4;
-  return int(std::clamp(std::ceil(travel), 1.0, 4.0));
-}
-
 ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& settings) {
   validate_parallax_settings(settings);
   const int n = maps.resolution;
@@ -80,13 +73,11 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
 
   model::DirectionGrid<double> grid{settings.dirs, settings.min_cos};
   std::vector<model::Vec3d> view(static_cast<std::size_t>(dir_count));
-  double lowest = 1.0;
   for (int j = 0; j < settings.dirs; ++j)
     for (int i = 0; i < settings.dirs; ++i) {
       view[std::size_t(grid.bin_index(i, j))] = grid.bin_center(i, j);
-      lowest = std::min(lowest, grid.bin_center(i, j).z);
     }
-  const int rings = settings.rings >= 0 ? settings.rings : parallax_rings_for(range, lowest);
+  const int rings = settings.rings >= 0 ? settings.rings : automatic_rings(range);
   PeriodicHeightField field(maps.height, n, rings);
   table.stats.rings = rings;
 

@@ -73,9 +73,4 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
 // most 65537 texels (formats/reader/parallax_query.hpp splits larger ones).
 std::vector<uint32_t> parallax_sat(const ParallaxTable& table);
 
-// Neighbour rings that keep every parallax ray of this height range and cap in one Embree cast
-// (its sideways travel is at most range * tan(theta_max)), clamped to [1, 4]: beyond that, rays
-// are cut into segments (heightfield_scene.hpp) instead of replicating more tiles.
-int parallax_rings_for(double height_range, double min_cos_of_directions);
-
 }  // namespace clothbake::raycast

@@ -13,7 +13,6 @@
 
 #include "bake/raycast/asg_fit.hpp"
 #include "bake/raycast/heightfield_scene.hpp"
-#include "bake/raycast/parallax.hpp"
 #include "bake/raycast/texel_blocks.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -83,13 +82,11 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
 
   model::DirectionGrid<double> grid{settings.dirs, 0.0};
   std::vector<model::Vec3d> light(static_cast<std::size_t>(dir_count));
-  double lowest = 1.0;
   for (int j = 0; j < settings.dirs; ++j)
     for (int i = 0; i < settings.dirs; ++i) {
       light[std::size_t(grid.bin_index(i, j))] = grid.bin_center(i, j);
-      lowest = std::min(lowest, grid.bin_center(i, j).z);
     }
-  const int rings = settings.rings >= 0 ? settings.rings : parallax_rings_for(range, lowest);
+  const int rings = settings.rings >= 0 ? settings.rings : automatic_rings(range);
   PeriodicHeightField field(maps.height, n, rings);
   samples.rings = rings;
 
@@ -150,17 +147,11 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples,
   out.fit_error.resize(texels);
   const int dir_count = samples.dirs * samples.dirs;
   model::DirectionGrid<double> grid{samples.dirs, 0.0};
-  FitDirections directions;
-  directions.x.resize(std::size_t(dir_count));
-  directions.y.resize(std::size_t(dir_count));
-  directions.z.resize(std::size_t(dir_count));
+  FitDirections directions;  // in bin order: bin_index(i, j) = j * dirs + i
   for (int j = 0; j < samples.dirs; ++j)
     for (int i = 0; i < samples.dirs; ++i) {
       model::Vec3d d = grid.bin_center(i, j);
-      std::size_t k = std::size_t(grid.bin_index(i, j));
-      directions.x[k] = d.x;
-      directions.y[k] = d.y;
-      directions.z[k] = d.z;
+      directions.push_back(d.x, d.y, d.z);
     }
 
   struct Summary {

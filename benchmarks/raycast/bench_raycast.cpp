@@ -1,16 +1,27 @@
-// Ray throughput of the ray-casting stages on a woven tile (docs/raycast.md, "Performance").
-//   build-*/bin/bench_raycast --benchmark_filter=Parallax
-// Counters: rays/s over all threads (wall clock), segments per ray.
+// Throughput of the ray-casting stages on a woven tile (docs/raycast.md, "Performance").
+//   build-*/bin/bench_raycast                                   (everything, ~1 min on 2 cores)
+//   build-*/bin/bench_raycast --benchmark_filter='Stages/256'   (the 256^2 x 32^2 target)
+// Counters: rays/s over all threads (wall clock), segments per ray; fits/s for the ASG fit.
 #include <benchmark/benchmark.h>
-
 #include <tbb/global_control.h>
+#include <map>
 
 #include "bake/raycast/parallax.hpp"
+#include "bake/raycast/visibility.hpp"
+#include "common/diagnostics.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
 
 namespace {
 
 using namespace clothbake;
+
+// The plain weave of the tests, 4 threads per tile, 0.12 tile sides tall.
+const FabricMaps& weave(int n) {
+  static std::map<int, FabricMaps> cache;
+  auto it = cache.find(n);
+  if (it == cache.end()) it = cache.emplace(n, raycast::rctest::plain_weave_maps(n)).first;
+  return it->second;
+}
 
 // Args: resolution, directions per side, rings (-1 automatic), threads.
 void BM_Parallax(benchmark::State& state) {
@@ -20,7 +31,7 @@ void BM_Parallax(benchmark::State& state) {
   settings.rings = int(state.range(2));
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                               std::size_t(state.range(3)));
-  FabricMaps maps = raycast::rctest::plain_weave_maps(n);
+  const FabricMaps& maps = weave(n);
   uint64_t rays = 0, segments = 0;
   for (auto _ : state) {
     raycast::ParallaxTable table = raycast::bake_parallax(maps, settings);
@@ -32,13 +43,95 @@ void BM_Parallax(benchmark::State& state) {
   state.counters["segments/ray"] = double(segments) / double(rays);
 }
 BENCHMARK(BM_Parallax)
-    ->Args({128, 32, 0, 2})
-    ->Args({128, 32, 1, 2})
-    ->Args({128, 32, 2, 2})
+    ->Args({128, 32, 0, 1})
+    ->Args({128, 32, 1, 1})
+    ->Args({128, 32, 3, 1})
     ->Args({128, 32, -1, 1})
-    ->Args({256, 32, -1, 2})
+    ->Args({128, 32, -1, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// Args: resolution, directions per side, rings, threads.
+void BM_Visibility(benchmark::State& state) {
+  const int n = int(state.range(0));
+  raycast::VisibilitySettings settings;
+  settings.dirs = int(state.range(1));
+  settings.rings = int(state.range(2));
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              std::size_t(state.range(3)));
+  const FabricMaps& maps = weave(n);
+  uint64_t rays = 0, segments = 0;
+  for (auto _ : state) {
+    raycast::VisibilitySamples v = raycast::sample_visibility(maps, settings);
+    rays += v.rays;
+    segments += v.segments;
+    benchmark::DoNotOptimize(v.bits.data());
+  }
+  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  state.counters["segments/ray"] = double(segments) / double(rays);
+}
+BENCHMARK(BM_Visibility)
+    ->Args({128, 32, 0, 1})
+    ->Args({128, 32, 1, 1})
+    ->Args({128, 32, 3, 1})
+    ->Args({128, 32, -1, 1})
+    ->Args({128, 32, -1, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Args: resolution, directions per side, threads.
+void BM_AsgFit(benchmark::State& state) {
+  const int n = int(state.range(0));
+  raycast::VisibilitySettings settings;
+  settings.dirs = int(state.range(1));
+  settings.fit_warn_rms = 10;  // quiet
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              std::size_t(state.range(2)));
+  raycast::VisibilitySamples v = raycast::sample_visibility(weave(n), settings);
+  uint64_t fits = 0, evaluations = 0;
+  double mean_error = 0;
+  for (auto _ : state) {
+    raycast::VisibilityAsgs a = raycast::fit_visibility(v, settings);
+    fits += a.records.size();
+    evaluations += a.fit_evaluations;
+    mean_error = a.mean_fit_error;
+    benchmark::DoNotOptimize(a.records.data());
+  }
+  state.counters["fits/s"] = benchmark::Counter(double(fits), benchmark::Counter::kIsRate);
+  state.counters["evals/fit"] = double(evaluations) / double(fits);
+  state.counters["mean_rms"] = mean_error;
+}
+BENCHMARK(BM_AsgFit)
+    ->Args({128, 32, 1})
+    ->Args({128, 32, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Both stages as a bake runs them: parallax table + SAT, visibility + ASG fit. Args: resolution,
+// directions per side (both stages), threads. The target: 256, 32, 2 in <= 15 s.
+void BM_Stages(benchmark::State& state) {
+  const int n = int(state.range(0));
+  raycast::ParallaxSettings parallax;
+  parallax.dirs = int(state.range(1));
+  raycast::VisibilitySettings visibility;
+  visibility.dirs = int(state.range(1));
+  visibility.fit_warn_rms = 10;
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              std::size_t(state.range(2)));
+  const FabricMaps& maps = weave(n);
+  uint64_t rays = 0;
+  for (auto _ : state) {
+    raycast::ParallaxTable table = raycast::bake_parallax(maps, parallax);
+    std::vector<uint32_t> sat = raycast::parallax_sat(table);
+    raycast::VisibilitySamples v = raycast::sample_visibility(maps, visibility);
+    raycast::VisibilityAsgs a = raycast::fit_visibility(v, visibility);
+    rays += table.stats.rays + v.rays;
+    benchmark::DoNotOptimize(sat.data());
+    benchmark::DoNotOptimize(a.records.data());
+  }
+  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Stages)->Args({256, 32, 2})->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 }  // namespace
 

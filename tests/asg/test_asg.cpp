@@ -227,9 +227,7 @@ raycast::FitDirections hemisphere_directions(int n) {
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       Vec3d v = grid.bin_center(i, j);
-      d.x.push_back(v.x);
-      d.y.push_back(v.y);
-      d.z.push_back(v.z);
+      d.push_back(v.x, v.y, v.z);
     }
   return d;
 }
