@@ -305,14 +305,12 @@ double CompressedRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t 
 }
 
 template <class E>
-Status CompressedRadianceTables::query_impl(const Footprint& rect, const double h[3], int cluster,
-                                            double* out) const noexcept {
+bool CompressedRadianceTables::query_impl(const Footprint& rect, const double h[3], int cluster,
+                                          double* out) const noexcept {
   FootprintPlan plan;
-  Status s = plan_footprint(rect, n_, &plan);
-  if (!s.ok()) return s;
   BinWeights bw;
-  s = radiance_bin_weights(bins_per_side_, h, &bw);
-  if (!s.ok()) return s;
+  if (!make_footprint_plan(rect, n_, &plan) || !make_bin_weights(bins_per_side_, h, &bw))
+    return false;
 
   const uint32_t c_first = cluster < 0 ? 0 : uint32_t(cluster);
   const uint32_t c_end = cluster < 0 ? cluster_count_ : uint32_t(cluster) + 1;
@@ -411,30 +409,32 @@ Status CompressedRadianceTables::query_impl(const Footprint& rect, const double 
       total += acc[k] * blend[k];
     out[c - c_first] = total;
   }
-  return {};
+  return true;
 }
 
-Status CompressedRadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
-                                       double* out) const noexcept {
-  if (out == nullptr)
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "query: null output");
-  if (!is_open())
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
-  if (cluster >= cluster_count_)
-    return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "query: cluster %u out of range (the asset has %u)", unsigned(cluster),
-                         unsigned(cluster_count_));
+bool CompressedRadianceTables::try_query(const Footprint& rect, const double h[3], uint32_t cluster,
+                                         double* out) const noexcept {
+  if (out == nullptr || !is_open() || cluster >= cluster_count_) return false;
   return wide_ ? query_impl<int64_t>(rect, h, int(cluster), out)
                : query_impl<int32_t>(rect, h, int(cluster), out);
 }
 
+bool CompressedRadianceTables::try_query_all(const Footprint& rect, const double h[3],
+                                             double* out) const noexcept {
+  if (out == nullptr || !is_open()) return false;
+  return wide_ ? query_impl<int64_t>(rect, h, -1, out) : query_impl<int32_t>(rect, h, -1, out);
+}
+
+Status CompressedRadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
+                                       double* out) const noexcept {
+  if (try_query(rect, h, cluster, out)) return {};
+  return diagnose(rect, h, &cluster, out);
+}
+
 Status CompressedRadianceTables::query_all(const Footprint& rect, const double h[3],
                                            double* out) const noexcept {
-  if (out == nullptr)
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "query: null output");
-  if (!is_open())
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
-  return wide_ ? query_impl<int64_t>(rect, h, -1, out) : query_impl<int32_t>(rect, h, -1, out);
+  if (try_query_all(rect, h, out)) return {};
+  return diagnose(rect, h, nullptr, out);
 }
 
 }  // namespace clothbake::reader

@@ -48,6 +48,9 @@ class CompressedRadianceTables final : public RadianceTables {
   Status query(const Footprint& rect, const double h[3], uint32_t cluster,
                double* out) const noexcept override;
   Status query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
+  bool try_query(const Footprint& rect, const double h[3], uint32_t cluster,
+                 double* out) const noexcept override;
+  bool try_query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
 
   const CompressedTableInfoRecord& info() const noexcept { return info_; }
   uint32_t cell_count() const noexcept { return info_.cell_count; }
@@ -63,8 +66,8 @@ class CompressedRadianceTables final : public RadianceTables {
 
  private:
   template <class E>
-  Status query_impl(const Footprint& rect, const double h[3], int cluster,
-                    double* out) const noexcept;
+  bool query_impl(const Footprint& rect, const double h[3], int cluster,
+                  double* out) const noexcept;
   // Weight of image i at texel (x, y), from the SAT (exact).
   int64_t weight(uint32_t image, uint32_t x, uint32_t y) const noexcept;
 

@@ -11,8 +11,14 @@ const char* check_id(Check check) noexcept {
   static char ids[2][100][9];
   static const bool filled = [] {
     for (int kind = 0; kind < 2; ++kind)
-      for (int n = 0; n < 100; ++n)
-        std::snprintf(ids[kind][n], sizeof ids[kind][n], "CBK-%c%03d", kind ? 'W' : 'E', n);
+      for (int n = 0; n < 100; ++n) {
+        char* id = ids[kind][n];
+        std::memcpy(id, kind ? "CBK-W" : "CBK-E", 5);
+        id[5] = '0';
+        id[6] = char('0' + n / 10);
+        id[7] = char('0' + n % 10);
+        id[8] = '\0';
+      }
     return true;
   }();
   (void)filled;

@@ -12,6 +12,13 @@
 
 using namespace clothbake::reader;
 
+// Touches a float without converting it (a float-to-integer conversion of garbage is UB).
+static uint64_t bits(float value) {
+  uint32_t b;
+  std::memcpy(&b, &value, 4);
+  return b;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // An exact-size copy (so AddressSanitizer sees any read past `size`); operator new[] returns
   // memory aligned for any fundamental type, which satisfies the reader's 8-byte requirement.
@@ -32,14 +39,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       (void)asset.verify_section(info);
       ArrayView<float> floats;
       if (asset.view_of(info, &floats).ok() && floats.size)
-        sink = sink + uint64_t(floats[floats.size - 1]);
+        sink = sink + bits(floats[floats.size - 1]);
     }
     FeatureMapsView maps;
     if (read_feature_maps(asset, &maps).ok()) {
       const uint64_t texels = uint64_t(maps.resolution) * maps.resolution;
       if (texels) {
-        sink = sink + uint64_t(maps.height[texels - 1]) + maps.yarn_id[texels - 1] +
-               uint64_t(maps.albedo[3 * texels - 1]) + uint64_t(maps.normal[3 * texels - 1]);
+        sink = sink + bits(maps.height[texels - 1]) + maps.yarn_id[texels - 1] +
+               bits(maps.albedo[3 * texels - 1]) + bits(maps.normal[3 * texels - 1]);
       }
     }
     const FabricInfoRecord* info;

@@ -1,0 +1,176 @@
+// clothbake export ASSET --section S [--instance I] [--index i,j,...] -o FILE.exr [--force]:
+// writes one section of an asset as an image for looking at it (common/image_io.hpp; the format
+// follows the extension, EXR keeps float values). --index fixes the leading dimensions until an
+// image is left: {H, W} (one channel), {H, W, C} with C <= 4, or {W} (one row). Integer elements
+// are converted to float unchanged (not normalised). The section's checksum is verified first.
+// Exit 3 for a corrupt asset, 2 for a bad section name, index or output path.
+#include <filesystem>
+#include <memory>
+
+#include "bake/cli/command.hpp"
+#include "common/diagnostics.hpp"
+#include "common/image_io.hpp"
+#include "formats/reader/asset.hpp"
+#include "formats/writer/atomic_file.hpp"
+#include "formats/writer/open_asset.hpp"
+
+namespace clothbake::cli {
+namespace {
+
+using namespace clothbake::reader;
+
+struct ExportOptions {
+  std::string asset;
+  std::string section;
+  uint32_t instance = 0;
+  std::vector<uint32_t> index;
+  std::string output;
+  bool force = false;
+};
+
+SectionType parse_section(const std::string& text) {
+  SectionType type;
+  if (section_type_from_name(text.c_str(), &type)) return type;
+  try {
+    std::size_t used = 0;
+    const unsigned long value = std::stoul(text, &used, 0);  // decimal or 0x...
+    if (used == text.size() && value <= 0xffffffffu) return SectionType(uint32_t(value));
+  } catch (const std::exception&) {
+  }
+  throw_input_error("unknown section '" + text +
+                    "': give a section name (height, normal, parallax, ...) or a numeric type id");
+}
+
+float element_as_float(const unsigned char* p, ElementType type) {
+  auto load = [p](auto v) {
+    std::memcpy(&v, p, sizeof v);
+    return v;
+  };
+  switch (type) {
+    case ElementType::U8:
+      return float(load(uint8_t{}));
+    case ElementType::I8:
+      return float(load(int8_t{}));
+    case ElementType::U16:
+      return float(load(uint16_t{}));
+    case ElementType::I16:
+      return float(load(int16_t{}));
+    case ElementType::U32:
+      return float(load(uint32_t{}));
+    case ElementType::I32:
+      return float(load(int32_t{}));
+    case ElementType::U64:
+      return float(load(uint64_t{}));
+    case ElementType::I64:
+      return float(load(int64_t{}));
+    case ElementType::F16:
+      return half_to_float(Half{load(uint16_t{})});
+    case ElementType::F32:
+      return load(float{});
+    case ElementType::F64:
+      return float(load(double{}));
+    case ElementType::Opaque:
+      break;
+  }
+  return 0.f;
+}
+
+std::string shape_text(const SectionInfo& s) {
+  std::string text = "{";
+  for (uint32_t d = 0; d < s.rank; ++d)
+    text += (d ? ", " : "") + std::to_string(s.dims[d]);
+  return text + "}";
+}
+
+Image section_image(const SectionInfo& s, const std::vector<uint32_t>& index,
+                    const std::string& label) {
+  if (s.codec != Codec::Raw || s.element_type == ElementType::Opaque ||
+      element_size(s.element_type) == 0)
+    throw_input_error("section " + label + " is not a typed array that can be shown as an image");
+  if (index.size() > s.rank)
+    throw_input_error("section " + label + " has shape " + shape_text(s) + ": --index has " +
+                      std::to_string(index.size()) + " values, at most " + std::to_string(s.rank) +
+                      " are possible");
+  uint64_t offset = 0;  // in elements
+  uint64_t stride = 1;
+  for (uint32_t d = s.rank; d-- > 0;) {
+    if (d < index.size()) {
+      if (index[d] >= s.dims[d])
+        throw_input_error("section " + label + " has shape " + shape_text(s) + ": --index value " +
+                          std::to_string(index[d]) + " is out of range for dimension " +
+                          std::to_string(d) + " (size " + std::to_string(s.dims[d]) + ")");
+      offset += index[d] * stride;
+    }
+    stride *= s.dims[d];
+  }
+  std::vector<uint32_t> rest(s.dims + index.size(), s.dims + s.rank);
+  int width, height, channels;
+  if (rest.size() == 1) {
+    height = 1, width = int(rest[0]), channels = 1;
+  } else if (rest.size() == 2) {
+    height = int(rest[0]), width = int(rest[1]), channels = 1;
+  } else if (rest.size() == 3 && rest[2] <= 4) {
+    height = int(rest[0]), width = int(rest[1]), channels = int(rest[2]);
+  } else {
+    const std::size_t needed = s.rank - (s.dims[s.rank - 1] <= 4 ? 3 : 2);
+    throw_input_error("section " + label + " has shape " + shape_text(s) + ": give --index with " +
+                      std::to_string(needed) + " value(s) to select an image");
+  }
+  if (width <= 0 || height <= 0 || channels <= 0)
+    throw_input_error("section " + label + " is empty: nothing to export");
+  Image image(width, height, channels);
+  const uint32_t size = element_size(s.element_type);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    image.pixels[i] = element_as_float(s.data + (offset + i) * size, s.element_type);
+  return image;
+}
+
+Action setup_export(CLI::App& app) {
+  auto o = std::make_shared<ExportOptions>();
+  app.add_option("ASSET", o->asset, "asset file (.cbk)")->required();
+  app.add_option("--section", o->section, "section name (see `clothbake info`) or type id")
+      ->required();
+  app.add_option("--instance", o->instance, "instance of the section (default 0)");
+  app.add_option("--index", o->index, "fix the leading dimensions, e.g. --index 3 or 3,0")
+      ->delimiter(',');
+  app.add_option("-o,--output", o->output, "image to write (.exr keeps floats; .png, .tif)")
+      ->required();
+  app.add_flag("--force", o->force, "replace an existing clothbake asset at the output path");
+  return [o] {
+    const Asset asset = formats::open_asset(o->asset, Verify::Structure);
+    const SectionType type = parse_section(o->section);
+    SectionInfo section;
+    Status status = asset.find(type, o->instance, &section);
+    if (!status.ok()) throw_input_error(o->asset + ": " + status.message());
+    status = asset.verify_section(section);
+    if (!status.ok())
+      throw Error(ExitCode::InvalidAsset, o->asset + ": " + formats::describe(status));
+    const std::string label = o->section + " (instance " + std::to_string(o->instance) + ")";
+    const Image image = section_image(section, o->index, label);
+
+    namespace fs = std::filesystem;
+    const fs::path output = o->output;
+    std::error_code ec;
+    if (fs::exists(output) && fs::equivalent(output, o->asset, ec))
+      throw_input_error("the output " + o->output + " is the asset being read");
+    formats::OutputOptions options;
+    options.require_asset_to_replace = false;
+    formats::check_output_path(output, options);
+    if (fs::exists(output) && formats::looks_like_asset(output) && !o->force)
+      throw_input_error(o->output +
+                        " is a clothbake asset; refusing to overwrite it with an image (pass "
+                        "--force to replace it)");
+    formats::TempFile temp(output, output.extension().string());
+    write_image(temp.path().string(), image, PixelType::Float32);
+    temp.commit();
+    info("wrote " + o->output + " (" + std::to_string(image.width) + " x " +
+         std::to_string(image.height) + ", " + std::to_string(image.channels) + " channels)");
+    return 0;
+  };
+}
+
+const bool registered = register_command(
+    {"export", "Write one section of an asset as an image (EXR) for inspection", setup_export});
+
+}  // namespace
+}  // namespace clothbake::cli

@@ -1,0 +1,159 @@
+// clothbake info ASSET [--json]: what an asset holds: format version, size, content hash, every
+// section (type, instance, version, element type, shape, bytes), the fabric records and the
+// metadata (tool, bake parameters, inputs with their hashes, stages). Checks the structure and
+// the header checksum only (`clothbake validate` checks everything). Exit 3 if the asset does not
+// open, 2 if the file cannot be read.
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "bake/cli/command.hpp"
+#include "formats/reader/fabric_sections.hpp"
+#include "formats/writer/open_asset.hpp"
+
+namespace clothbake::cli {
+namespace {
+
+using namespace clothbake::reader;
+
+std::string hex(uint64_t value, int digits) {
+  std::ostringstream out;
+  out << std::hex << std::setw(digits) << std::setfill('0') << value;
+  return out.str();
+}
+
+std::string section_name(const SectionInfo& s) {
+  const char* name = section_type_name(s.type);
+  return name ? name : "0x" + hex(uint32_t(s.type), 4);
+}
+
+nlohmann::json info_json(const std::string& path, const Asset& asset) {
+  nlohmann::json doc;
+  doc["path"] = path;
+  doc["format"] = {{"major", asset.version_major()}, {"minor", asset.version_minor()}};
+  doc["size_bytes"] = asset.file_size();
+  doc["content_hash"] = hex(asset.content_hash(), 16);
+  nlohmann::json sections = nlohmann::json::array();
+  for (uint32_t i = 0; i < asset.section_count(); ++i) {
+    SectionInfo s;
+    (void)asset.section(i, &s);
+    const char* element = element_type_name(s.element_type);
+    const char* codec = codec_name(s.codec);
+    sections.push_back({{"index", i},
+                        {"name", section_name(s)},
+                        {"type", uint32_t(s.type)},
+                        {"instance", s.instance},
+                        {"version", s.version},
+                        {"codec", codec ? codec : "unknown"},
+                        {"element", element ? element : "unknown"},
+                        {"dims", std::vector<uint32_t>(s.dims, s.dims + s.rank)},
+                        {"offset", s.offset},
+                        {"bytes", s.stored_size},
+                        {"xxh64", hex(s.checksum, 16)}});
+  }
+  doc["sections"] = sections;
+  const FabricInfoRecord* fabric = nullptr;
+  if (read_fabric_info(asset, &fabric).ok())
+    doc["fabric_info"] = {{"resolution", fabric->resolution},
+                          {"yarn_count", fabric->yarn_count},
+                          {"tile_size_mm", fabric->tile_size_mm},
+                          {"sheen_color", fabric->sheen_color},
+                          {"sheen_roughness", fabric->sheen_roughness}};
+  ArrayView<YarnMaterialRecord> yarns;
+  if (read_yarn_materials(asset, &yarns).ok()) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& y : yarns)
+      list.push_back({{"name", std::string(y.name, strnlen(y.name, sizeof y.name))},
+                      {"roughness", y.roughness},
+                      {"optical_thickness", y.optical_thickness},
+                      {"specular_albedo", y.specular_albedo},
+                      {"diffuse_reflectance", y.diffuse_reflectance},
+                      {"diffuse_transmittance", y.diffuse_transmittance},
+                      {"color", y.color}});
+    doc["yarns"] = list;
+  }
+  std::string_view text;
+  if (asset.metadata_json(&text).ok()) {
+    nlohmann::json metadata = nlohmann::json::parse(text, nullptr, false);
+    doc["metadata"] = metadata.is_discarded() ? nlohmann::json("(not valid JSON)") : metadata;
+  }
+  return doc;
+}
+
+void print_text(const nlohmann::json& doc) {
+  std::ostream& out = std::cout;
+  out << "asset:    " << doc["path"].get<std::string>() << '\n';
+  out << "format:   " << doc["format"]["major"] << '.' << doc["format"]["minor"] << '\n';
+  out << "size:     " << doc["size_bytes"] << " bytes\n";
+  out << "content:  xxh64 " << doc["content_hash"].get<std::string>() << '\n';
+  if (doc.contains("metadata") && doc["metadata"].is_object()) {
+    const auto& m = doc["metadata"];
+    if (m.contains("tool"))
+      out << "tool:     " << m["tool"].value("name", "?") << ' ' << m["tool"].value("version", "?")
+          << '\n';
+    if (m.contains("stages")) {
+      out << "stages:  ";
+      for (const auto& s : m["stages"])
+        out << ' ' << s.get<std::string>();
+      out << '\n';
+    }
+    if (m.contains("fabric") && m["fabric"].contains("inputs")) {
+      out << "inputs:\n";
+      for (const auto& in : m["fabric"]["inputs"])
+        out << "  " << std::left << std::setw(10) << in.value("role", "") << ' '
+            << in.value("xxh64", "") << "  " << in.value("path", "") << '\n';
+    }
+    if (m.contains("fabric") && m["fabric"].contains("bake"))
+      out << "bake:     " << m["fabric"]["bake"].dump() << '\n';
+  }
+  if (doc.contains("fabric_info")) {
+    const auto& f = doc["fabric_info"];
+    out << "fabric:   " << f["resolution"] << " x " << f["resolution"] << " texels, "
+        << f["yarn_count"] << " yarns, tile " << f["tile_size_mm"] << " mm\n";
+  }
+  if (doc.contains("yarns"))
+    for (const auto& y : doc["yarns"])
+      out << "  yarn " << std::left << std::setw(12) << y["name"].get<std::string>()
+          << " roughness " << y["roughness"] << ", optical thickness " << y["optical_thickness"]
+          << '\n';
+  out << "sections: " << doc["sections"].size() << '\n';
+  out << "  " << std::left << std::setw(4) << "#" << std::setw(26) << "name" << std::setw(6)
+      << "inst" << std::setw(5) << "ver" << std::setw(6) << "type" << std::setw(18) << "shape"
+      << std::right << std::setw(12) << "bytes" << '\n';
+  for (const auto& s : doc["sections"]) {
+    std::string shape;
+    for (const auto& d : s["dims"]) {
+      if (!shape.empty()) shape += 'x';
+      shape += std::to_string(d.get<uint32_t>());
+    }
+    out << "  " << std::left << std::setw(4) << s["index"].get<uint32_t>() << std::setw(26)
+        << s["name"].get<std::string>() << std::setw(6) << s["instance"].get<uint32_t>()
+        << std::setw(5) << s["version"].get<int>() << std::setw(6)
+        << s["element"].get<std::string>() << std::setw(18) << (shape.empty() ? "-" : shape)
+        << std::right << std::setw(12) << s["bytes"].get<uint64_t>() << '\n';
+  }
+  out.flush();
+}
+
+Action setup_info(CLI::App& app) {
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  app.add_option("ASSET", *path, "asset file (.cbk)")->required();
+  app.add_flag("--json", *json, "print one JSON document on stdout");
+  return [path, json] {
+    const Asset asset = formats::open_asset(*path, Verify::Structure);
+    const nlohmann::json doc = info_json(*path, asset);
+    if (*json)
+      print_json(doc);
+    else
+      print_text(doc);
+    return 0;
+  };
+}
+
+const bool registered = register_command(
+    {"info", "Describe an asset: sections, sizes, parameters and provenance", setup_info});
+
+}  // namespace
+}  // namespace clothbake::cli

@@ -1,0 +1,67 @@
+// One bake: fabric description in, one asset out (atomically), plus a JSON report. The stages
+// of this issue are load_fabric -> fabric_records, feature_maps -> write (core_stages.cpp); other
+// folders register more (stage.hpp).
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bake/inputs/fabric.hpp"
+#include "bake/pipeline/driver.hpp"
+
+namespace clothbake::pipeline {
+
+// Artifact "output": where the write stage puts the asset.
+struct OutputRequest {
+  std::string path;
+  bool force = false;  // replace an existing file that is not an asset
+};
+
+// Artifact "asset": what the write stage wrote.
+struct SectionSummary {
+  std::string name;  // section type name, or "0x...." if unknown
+  uint32_t type = 0;
+  uint32_t instance = 0;
+  std::string element;
+  std::vector<uint32_t> dims;
+  uint64_t offset = 0;
+  uint64_t bytes = 0;
+  std::string checksum;  // 16 hex digits
+};
+struct AssetSummary {
+  std::string path;
+  uint64_t size_bytes = 0;
+  std::string content_hash;  // header checksum, 16 hex digits
+  std::vector<SectionSummary> sections;
+};
+
+struct BakeRequest {
+  std::string fabric_path;       // read by the load_fabric stage...
+  std::optional<Fabric> fabric;  // ...unless the fabric is given (tests, library use)
+  std::string output_path;
+  bool force = false;
+  std::vector<std::string> stages;  // --stages (empty: all)
+  RunOptions run;
+};
+
+struct BakeResult {
+  RunResult run;
+  AssetSummary asset;
+};
+
+// Checks the output path first (so a bad path fails before any work), then runs the pipeline.
+// Throws clothbake::Error: Input for bad inputs and unwritable outputs, Usage for unknown stage
+// names, Internal for pipeline bugs. On any error nothing is written at the output path.
+BakeResult bake(const BakeRequest& request);
+
+// The --report / --json document: per-stage wall time, CPU time and peak memory, totals,
+// thread count, and the asset's size, hash and section list.
+nlohmann::json bake_report_json(const BakeRequest& request, const BakeResult& result);
+
+// Hex formatting shared by the report and `clothbake info`.
+std::string hex64(uint64_t value);
+
+}  // namespace clothbake::pipeline

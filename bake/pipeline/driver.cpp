@@ -1,0 +1,69 @@
+#include "bake/pipeline/driver.hpp"
+
+#include <tbb/global_control.h>
+
+#include <memory>
+#include <set>
+
+#include "bake/pipeline/plan.hpp"
+#include "bake/pipeline/progress.hpp"
+#include "bake/pipeline/resource_usage.hpp"
+
+namespace clothbake::pipeline {
+
+RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
+                       const RunOptions& options, const std::vector<Stage>* stages) {
+  const std::vector<Stage> registry = stages ? std::vector<Stage>{} : registered_stages();
+  const std::vector<Stage>& all = stages ? *stages : registry;
+  const auto seeded_names = seeded.names();
+  const std::vector<const Stage*> plan =
+      plan_stages(all, picked, std::set<std::string>(seeded_names.begin(), seeded_names.end()));
+
+  std::unique_ptr<tbb::global_control> thread_limit;
+  if (options.threads > 0)
+    thread_limit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
+
+  RunResult result;
+  result.threads =
+      int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  result.artifacts = std::move(seeded);
+  std::vector<std::string> order;
+  for (const Stage* s : plan)
+    order.push_back(s->name);
+
+  ProgressBar bar(options.show_progress);
+  const double run_wall = wall_seconds();
+  const double run_cpu = process_cpu_seconds();
+  for (std::size_t i = 0; i < plan.size(); ++i) {
+    const Stage& stage = *plan[i];
+    bar.begin_stage(int(i), int(plan.size()), stage.name);
+    Artifacts produced;
+    StageContext context(stage, result.artifacts, produced, options, order, result.stages,
+                         [&bar](double f) { bar.update(f); });
+    StageReport report;
+    report.name = stage.name;
+    report.peak_scope = reset_peak_rss() ? "stage" : "process";
+    const double wall0 = wall_seconds();
+    const double cpu0 = process_cpu_seconds();
+    stage.run(context);
+    report.wall_seconds = wall_seconds() - wall0;
+    report.cpu_seconds = process_cpu_seconds() - cpu0;
+    report.peak_rss_bytes = peak_rss_bytes();
+    for (const auto& out : stage.outputs) {
+      if (!produced.contains(out))
+        throw_internal_error("stage '" + stage.name + "' did not produce its output '" + out + "'");
+      result.artifacts.take(produced, out);
+    }
+    result.stages.push_back(report);
+  }
+  bar.finish();
+  result.wall_seconds = wall_seconds() - run_wall;
+  result.cpu_seconds = process_cpu_seconds() - run_cpu;
+  result.peak_rss_bytes = 0;
+  for (const auto& s : result.stages)
+    result.peak_rss_bytes = std::max(result.peak_rss_bytes, s.peak_rss_bytes);
+  return result;
+}
+
+}  // namespace clothbake::pipeline

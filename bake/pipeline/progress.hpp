@@ -1,0 +1,35 @@
+// A one-line progress bar on stderr: "[2/4] feature_maps [#######.....]  58%". Redrawn at most
+// ten times a second with a carriage return; cleared when done. Disabled objects print nothing.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <string>
+
+namespace clothbake::pipeline {
+
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled) : enabled_(enabled) {}
+  ~ProgressBar() { finish(); }
+
+  // True when stderr is a terminal (the default for the bar: off in logs and pipes).
+  static bool stderr_is_terminal();
+
+  void begin_stage(int index, int count, const std::string& name);
+  // Thread-safe; cheap when called often.
+  void update(double fraction);
+  void finish();
+
+ private:
+  void draw(double fraction);
+
+  bool enabled_;
+  std::mutex mutex_;
+  std::string label_;
+  std::chrono::steady_clock::time_point last_draw_{};
+  bool drawn_ = false;
+};
+
+}  // namespace clothbake::pipeline

@@ -1,0 +1,138 @@
+// Pipeline stages: pure functions from named input artifacts to named output artifacts, and the
+// self-registering registry that the bake driver reads (docs/pipeline.md).
+//
+// Adding a stage from another folder (no edit of bake/pipeline needed):
+//   // bake/raycast/parallax_stage.cpp
+//   #include "bake/pipeline/stage.hpp"
+//   CLOTHBAKE_REGISTER_STAGE(parallax) {
+//     clothbake::pipeline::Stage s;
+//     s.description = "parallax offsets per view direction";
+//     s.inputs = {"fabric"};
+//     s.outputs = {"section/parallax", "metadata/parallax"};
+//     s.run = [](clothbake::pipeline::StageContext& ctx) { ... ctx.output(...); };
+//     return s;
+//   }
+// and attach that .cpp to your library as an INTERFACE source so that it is compiled into every
+// executable that links the library (a static library would otherwise drop the unreferenced
+// registering object):
+//   target_sources(clothbake_raycast INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/parallax_stage.cpp)
+//
+// Conventions: artifacts named "section/<stage>" hold std::vector<formats::Section> and end up in
+// the asset; "metadata/<stage>" hold nlohmann::json stored under "parameters"."<stage>" in the
+// asset's metadata. Every stage must be deterministic: same inputs, same outputs, whatever the
+// thread count (use TBB with a fixed partition of the work and an ordered reduction).
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bake/pipeline/artifacts.hpp"
+
+namespace clothbake::pipeline {
+
+class StageContext;
+
+struct Stage {
+  std::string name;  // [a-z0-9_]+, unique
+  std::string description;
+  std::vector<std::string> inputs;   // artifacts it needs (their producers run first)
+  std::vector<std::string> outputs;  // artifacts it must produce
+  // Optional inputs: every artifact whose name starts with one of these prefixes and that a
+  // selected stage produces. Their producers run first but are not pulled in by this stage.
+  std::vector<std::string> collects;
+  // Runs whether or not it is picked with --stages (the asset writer).
+  bool always = false;
+  std::function<void(StageContext&)> run;
+};
+
+// Adds a stage; returns true so that it can initialise a namespace-scope constant.
+bool register_stage(Stage stage);
+// Every registered stage, sorted by name.
+std::vector<Stage> registered_stages();
+
+// Registers a stage at static initialisation; the body builds and returns the Stage (its name
+// is filled in from the macro argument):
+//   CLOTHBAKE_REGISTER_STAGE(parallax) {
+//     clothbake::pipeline::Stage s;
+//     s.description = "...";
+//     s.inputs = {"fabric"};
+//     s.outputs = {"section/parallax"};
+//     s.run = run_parallax;
+//     return s;
+//   }
+#define CLOTHBAKE_REGISTER_STAGE(stage_name)                                    \
+  static ::clothbake::pipeline::Stage clothbake_define_stage_##stage_name();    \
+  namespace {                                                                   \
+  const bool clothbake_stage_registered_##stage_name = [] {                     \
+    ::clothbake::pipeline::Stage stage = clothbake_define_stage_##stage_name(); \
+    stage.name = #stage_name;                                                   \
+    return ::clothbake::pipeline::register_stage(std::move(stage));             \
+  }();                                                                          \
+  }                                                                             \
+  static ::clothbake::pipeline::Stage clothbake_define_stage_##stage_name()
+
+// Measurements of one finished stage.
+struct StageReport {
+  std::string name;
+  double wall_seconds = 0;
+  double cpu_seconds = 0;       // process CPU time (all threads) spent during the stage
+  uint64_t peak_rss_bytes = 0;  // peak resident memory during the stage (see peak_scope)
+  std::string peak_scope;       // "stage" (peak reset before the stage) or "process"
+};
+
+struct RunOptions {
+  int threads = 0;              // 0: TBB's default (all cores)
+  bool show_progress = false;   // progress bar on stderr
+  bool record_timings = false;  // stages may store the timings in their outputs (write stage)
+};
+
+// What a running stage sees. Reading an undeclared input or producing an undeclared output is an
+// internal error: the declarations are the stage's contract.
+class StageContext {
+ public:
+  StageContext(const Stage& stage, const Artifacts& available, Artifacts& produced,
+               const RunOptions& options, const std::vector<std::string>& order,
+               const std::vector<StageReport>& completed, std::function<void(double)> progress);
+
+  template <class T>
+  const T& input(const std::string& name) const {
+    check_readable(name);
+    return available_.get<T>(name);
+  }
+  bool has_input(const std::string& name) const;
+  // Collected artifacts with this prefix (one of Stage::collects), sorted by name.
+  std::vector<std::string> collected(const std::string& prefix) const;
+
+  template <class T>
+  void output(const std::string& name, T value) {
+    check_writable(name);
+    produced_.put(name, std::move(value));
+  }
+
+  // Fraction of this stage done, in [0, 1]. Thread-safe, cheap (call it often).
+  void progress(double fraction) const {
+    if (progress_) progress_(fraction);
+  }
+
+  const Stage& stage() const { return stage_; }
+  const RunOptions& options() const { return options_; }
+  // Names of the stages of this run in execution order, and the reports of the finished ones.
+  const std::vector<std::string>& stage_order() const { return order_; }
+  const std::vector<StageReport>& completed() const { return completed_; }
+
+ private:
+  void check_readable(const std::string& name) const;
+  void check_writable(const std::string& name) const;
+
+  const Stage& stage_;
+  const Artifacts& available_;
+  Artifacts& produced_;
+  const RunOptions& options_;
+  const std::vector<std::string>& order_;
+  const std::vector<StageReport>& completed_;
+  std::function<void(double)> progress_;
+};
+
+}  // namespace clothbake::pipeline

@@ -1,0 +1,30 @@
+#include "formats/writer/open_asset.hpp"
+
+namespace clothbake::formats {
+
+ExitCode exit_code_of(const reader::Status& status) {
+  switch (status.code()) {
+    case reader::ErrorCode::Ok:
+      return ExitCode::Ok;
+    case reader::ErrorCode::Io:
+      return ExitCode::Input;
+    case reader::ErrorCode::InvalidArgument:
+      return ExitCode::Internal;
+    default:
+      return ExitCode::InvalidAsset;
+  }
+}
+
+std::string describe(const reader::Status& status) {
+  const std::string id = status.check_id();
+  return id.empty() ? status.message() : id + ": " + status.message();
+}
+
+reader::Asset open_asset(const std::string& path, reader::Verify verify) {
+  reader::Asset asset;
+  const reader::Status status = asset.open_file(path.c_str(), {verify});
+  if (!status.ok()) throw Error(exit_code_of(status), describe(status));
+  return asset;
+}
+
+}  // namespace clothbake::formats

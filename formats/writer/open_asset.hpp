@@ -1,0 +1,22 @@
+// Bridges the exception-free reader to clothbake's error type for the C++20 tools.
+#pragma once
+
+#include <string>
+
+#include "common/error.hpp"
+#include "formats/reader/asset.hpp"
+
+namespace clothbake::formats {
+
+// The process exit code for a reader failure: Io -> Input (2), InvalidArgument -> Internal (4),
+// everything about the bytes (not an asset, truncated, corrupt, wrong version...) -> InvalidAsset
+// (3).
+ExitCode exit_code_of(const reader::Status& status);
+
+// "CBK-E012: MESSAGE" (or MESSAGE when there is no check ID).
+std::string describe(const reader::Status& status);
+
+// Opens an asset or throws clothbake::Error with exit_code_of() and describe().
+reader::Asset open_asset(const std::string& path, reader::Verify verify);
+
+}  // namespace clothbake::formats

@@ -1,0 +1,304 @@
+// The clothbake executable end to end: bake, info, validate, export; determinism across thread
+// counts and runs; the documented exit codes and messages for bad inputs; a SIGKILL mid-write and
+// a file-size limit (disk full) leave the previous asset intact.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "common/image_io.hpp"
+#include "formats/reader/layout.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kClothbake = CLOTHBAKE_BINARY_DIR "/bin/clothbake";
+
+struct Outcome {
+  int code = -1;
+  std::string out, err;
+};
+
+struct SpawnOptions {
+  std::vector<std::string> env;  // NAME=VALUE added to the environment
+  long file_size_limit = -1;     // RLIMIT_FSIZE in bytes (SIGXFSZ ignored)
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+pid_t spawn(const fs::path& dir, const std::vector<std::string>& args,
+            const SpawnOptions& options) {
+  const pid_t pid = ::fork();
+  if (pid != 0) return pid;
+  const int out = ::open((dir / "stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  const int err = ::open((dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  ::dup2(out, 1);
+  ::dup2(err, 2);
+  ::chdir(dir.c_str());
+  for (const auto& e : options.env)
+    ::putenv(const_cast<char*>(e.c_str()));
+  if (options.file_size_limit >= 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    struct rlimit limit {
+      rlim_t(options.file_size_limit), rlim_t(options.file_size_limit)
+    };
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+  }
+  std::vector<char*> argv{const_cast<char*>(kClothbake.c_str())};
+  for (const auto& a : args)
+    argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  ::execv(kClothbake.c_str(), argv.data());
+  ::_exit(127);
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("clothbake-cli-test-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "io");
+    std::ofstream(dir_ / "fabric.toml") << "name = \"cli test\"\n"
+                                           "[weave]\nname = \"twill2/1\"\n"
+                                           "[[yarn]]\nname = \"warp\"\n"
+                                           "[[yarn]]\nname = \"weft\"\n"
+                                           "[bake]\nresolution = 64\n";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Outcome run(const std::vector<std::string>& args, const SpawnOptions& options = {}) {
+    const pid_t pid = spawn(dir_ / "io", prefix(args), options);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    Outcome r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = slurp(dir_ / "io" / "stdout.txt");
+    r.err = slurp(dir_ / "io" / "stderr.txt");
+    return r;
+  }
+  // Relative names resolve against the test directory.
+  std::vector<std::string> prefix(const std::vector<std::string>& args) const {
+    std::vector<std::string> out;
+    for (const auto& a : args)
+      out.push_back(a.rfind("@", 0) == 0 ? (dir_ / a.substr(1)).string() : a);
+    return out;
+  }
+  std::string file(const std::string& name) const { return slurp(dir_ / name); }
+  std::vector<std::string> others(const std::string& keep) const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir_)) {
+      const std::string n = e.path().filename().string();
+      if (n != keep && n != "io" && e.path().extension() != ".toml") names.push_back(n);
+    }
+    return names;
+  }
+  fs::path dir_;
+};
+
+#define EXPECT_IN(needle, haystack) \
+  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
+
+TEST_F(Cli, BakeInfoValidateExport) {
+  Outcome r = run({"bake", "@fabric.toml", "-o", "@a.cbk", "--report", "@report.json", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << r.err;  // --quiet
+  const auto report = nlohmann::json::parse(file("report.json"));
+  EXPECT_EQ(report["stages"].size(), 4u);
+  EXPECT_EQ(report["asset"]["size_bytes"], fs::file_size(dir_ / "a.cbk"));
+  for (const auto& s : report["stages"]) {
+    EXPECT_TRUE(s.contains("wall_seconds") && s.contains("cpu_seconds") &&
+                s.contains("peak_rss_bytes"));
+  }
+
+  r = run({"info", "@a.cbk", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto info = nlohmann::json::parse(r.out);
+  EXPECT_EQ(info["fabric_info"]["resolution"], 64);
+  EXPECT_EQ(info["metadata"]["fabric"]["name"], "cli test");
+  EXPECT_EQ(info["sections"].size(), 9u);
+  EXPECT_EQ(info["content_hash"], report["asset"]["content_hash"]);
+  r = run({"info", "@a.cbk"});
+  EXPECT_EQ(r.code, 0);
+  EXPECT_IN("yarn_id", r.out);
+
+  r = run({"validate", "@a.cbk", "--json"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["valid"], true);
+
+  r = run({"export", "@a.cbk", "--section", "normal", "-o", "@normal.exr"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const clothbake::Image normal = clothbake::read_image((dir_ / "normal.exr").string());
+  EXPECT_EQ(normal.width, 64);
+  EXPECT_EQ(normal.channels, 3);
+  for (int y = 0; y < 64; y += 9)
+    for (int x = 0; x < 64; x += 7) {
+      const double len = std::hypot(normal.at(x, y, 0), normal.at(x, y, 1), normal.at(x, y, 2));
+      EXPECT_NEAR(len, 1.0, 1e-5);
+    }
+  r = run({"export", "@a.cbk", "--section", "0x0104", "-o", "@ids.exr"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = run({"export", "@a.cbk", "--section", "parallax", "-o", "@p.exr"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_IN("no parallax section", r.err);
+  r = run({"export", "@a.cbk", "--section", "height", "--index", "70", "-o", "@h.exr"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_IN("out of range", r.err);
+  r = run({"export", "@a.cbk", "--section", "height", "-o", "@a.cbk"});
+  EXPECT_EQ(r.code, 2);
+}
+
+TEST_F(Cli, BytesIdenticalForThreads1And2AndRunToRun) {
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@t1.cbk", "--threads", "1"}).code, 0);
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@t2.cbk", "--threads", "2"}).code, 0);
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@t2b.cbk", "--threads", "2"}).code, 0);
+  EXPECT_EQ(file("t1.cbk"), file("t2.cbk"));
+  EXPECT_EQ(file("t2.cbk"), file("t2b.cbk"));
+  EXPECT_GT(file("t1.cbk").size(), 64u * 64u * 4u);
+}
+
+TEST_F(Cli, StageSelectionAndListing) {
+  Outcome r = run({"bake", "@fabric.toml", "-o", "@r.cbk", "--stages", "fabric_records", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["asset"]["sections"].size(), 3u);
+  r = run({"bake", "@fabric.toml", "-o", "@x.cbk", "--stages", "feature_maps,bogus"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_IN("unknown stage 'bogus'", r.err);
+  EXPECT_FALSE(fs::exists(dir_ / "x.cbk"));
+  r = run({"bake", "--list-stages", "--json"});
+  ASSERT_EQ(r.code, 0);
+  EXPECT_GE(nlohmann::json::parse(r.out)["stages"].size(), 4u);
+}
+
+TEST_F(Cli, BadOutputs) {
+  // A directory.
+  Outcome r = run({"bake", "@fabric.toml", "-o", "@io"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_IN("is a directory", r.err);
+  // A missing directory.
+  r = run({"bake", "@fabric.toml", "-o", "@missing/a.cbk"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_IN("does not exist", r.err);
+  // An unwritable place.
+  r = run({"bake", "@fabric.toml", "-o", "/proc/clothbake.cbk"});
+  EXPECT_EQ(r.code, 2);
+  // An existing file that is not an asset: refused, kept; replaced with --force.
+  std::ofstream(dir_ / "notes.cbk") << "my notes";
+  r = run({"bake", "@fabric.toml", "-o", "@notes.cbk"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_IN("not a clothbake asset", r.err);
+  EXPECT_IN("--force", r.err);
+  EXPECT_EQ(file("notes.cbk"), "my notes");
+  r = run({"bake", "@fabric.toml", "-o", "@notes.cbk", "--force"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  // A bad report path fails before the bake.
+  r = run({"bake", "@fabric.toml", "-o", "@b.cbk", "--report", "@missing/r.json"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(fs::exists(dir_ / "b.cbk"));
+  // A missing fabric.
+  r = run({"bake", "@nope.toml", "-o", "@b.cbk"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(fs::exists(dir_ / "b.cbk"));
+}
+
+TEST_F(Cli, DiskFullKeepsThePreviousAsset) {
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk"}).code, 0);
+  const std::string good = file("a.cbk");
+  std::ofstream(dir_ / "big.toml") << "name = \"big\"\n[weave]\nname = \"plain\"\n"
+                                      "[[yarn]]\nname = \"warp\"\n[[yarn]]\nname = \"weft\"\n"
+                                      "[bake]\nresolution = 128\n";
+  SpawnOptions limited;
+  limited.file_size_limit = 100000;  // the 128^2 asset needs ~750 kB
+  const Outcome r = run({"bake", "@big.toml", "-o", "@a.cbk"}, limited);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_IN("File too large", r.err);
+  EXPECT_EQ(file("a.cbk"), good);
+  EXPECT_TRUE(others("a.cbk").empty());
+}
+
+TEST_F(Cli, SigkillMidWriteLeavesThePreviousAsset) {
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk"}).code, 0);
+  const std::string good = file("a.cbk");
+  std::ofstream(dir_ / "big.toml") << "name = \"big\"\n[weave]\nname = \"plain\"\n"
+                                      "[[yarn]]\nname = \"warp\"\n[[yarn]]\nname = \"weft\"\n"
+                                      "[bake]\nresolution = 128\n";
+  SpawnOptions pause;
+  pause.env = {"CLOTHBAKE_TEST_PAUSE_AFTER_BYTES=50000"};
+  const pid_t pid = spawn(dir_ / "io", prefix({"bake", "@big.toml", "-o", "@a.cbk"}), pause);
+  bool partial = false;
+  for (int i = 0; i < 1000 && !partial; ++i) {
+    for (const auto& name : others("a.cbk"))
+      if (fs::file_size(dir_ / name) >= 50000) partial = true;
+    if (!partial) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(partial) << "the bake never paused mid-write";
+  EXPECT_TRUE(WIFSIGNALED(status));
+  EXPECT_EQ(file("a.cbk"), good);
+  const Outcome v = run({"validate", "@a.cbk"});
+  EXPECT_EQ(v.code, 0) << v.out;
+}
+
+TEST_F(Cli, DamagedAndForeignAssets) {
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk"}).code, 0);
+  std::string bytes = file("a.cbk");
+  // A flipped payload byte: validate names the section with CBK-E012, exit 3.
+  std::string damaged = bytes;
+  damaged[damaged.size() - 100] ^= 0x40;
+  std::ofstream(dir_ / "damaged.cbk", std::ios::binary) << damaged;
+  Outcome r = run({"validate", "@damaged.cbk", "--json"});
+  EXPECT_EQ(r.code, 3);
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["valid"], false);
+  EXPECT_EQ(doc["findings"][0]["id"], "CBK-E012");
+  EXPECT_IN("albedo", doc["findings"][0]["message"].get<std::string>());
+  r = run({"export", "@damaged.cbk", "--section", "albedo", "-o", "@x.exr"});
+  EXPECT_EQ(r.code, 3);
+  EXPECT_IN("CBK-E012", r.err);
+  // Truncated.
+  std::ofstream(dir_ / "short.cbk", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  r = run({"validate", "@short.cbk"});
+  EXPECT_EQ(r.code, 3);
+  EXPECT_IN("CBK-E002", r.out);
+  r = run({"info", "@short.cbk"});
+  EXPECT_EQ(r.code, 3);
+  EXPECT_IN("truncated", r.err);
+  // A newer major version: the message says which side to rebuild.
+  std::string newer = bytes;
+  newer[8] = 2;
+  std::ofstream(dir_ / "newer.cbk", std::ios::binary) << newer;
+  r = run({"info", "@newer.cbk"});
+  EXPECT_EQ(r.code, 3);
+  EXPECT_IN("CBK-E003", r.err);
+  EXPECT_IN("rebuild the reader", r.err);
+  r = run({"validate", "@newer.cbk"});
+  EXPECT_EQ(r.code, 3);
+  // Not an asset at all.
+  std::ofstream(dir_ / "text.cbk") << std::string(200, 'x');
+  r = run({"validate", "@text.cbk"});
+  EXPECT_EQ(r.code, 3);
+  EXPECT_IN("CBK-E001", r.out);
+  // Missing file: an I/O error.
+  r = run({"validate", "@missing.cbk"});
+  EXPECT_EQ(r.code, 2);
+  r = run({"info", "@missing.cbk"});
+  EXPECT_EQ(r.code, 2);
+}
+
+}  // namespace
