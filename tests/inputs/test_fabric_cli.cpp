@@ -41,9 +41,15 @@ std::string quote(const std::string& s) {
 
 ProcessResult run_cli(const ScratchDir& dir, const std::vector<std::string>& args) {
   std::string command = quote(kBinary);
-  for (const auto& a : args)
-    command += " " + quote(a);
-  command += " > " + quote(dir / "stdout.txt") + " 2> " + quote(dir / "stderr.txt");
+  // Appends only (no "literal" + string temporaries: GCC 12 -Wrestrict false positive).
+  for (const auto& a : args) {
+    command += ' ';
+    command += quote(a);
+  }
+  command += " > ";
+  command += quote(dir / "stdout.txt");
+  command += " 2> ";
+  command += quote(dir / "stderr.txt");
   int status = std::system(command.c_str());
   ProcessResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
