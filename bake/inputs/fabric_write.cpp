@@ -207,8 +207,10 @@ std::string fabric_toml_text(const Fabric& f, const std::string& comment) {
 
 std::vector<WrittenFile> write_fabric_directory(const Fabric& fabric, const std::string& dir,
                                                 const std::string& comment) {
-  const fs::path target = fs::path(dir).lexically_normal();
-  if (target.empty() || target.filename().empty())
+  fs::path target = fs::path(dir).lexically_normal();
+  if (!target.empty() && target.filename().empty()) target = target.parent_path();  // "out/"
+  if (target.empty() || target.filename().empty() || target.filename() == "." ||
+      target.filename() == "..")
     throw_input_error(fmt::format("{}: not a valid output directory name", dir));
   std::error_code ec;
   bool target_exists = fs::exists(target, ec);

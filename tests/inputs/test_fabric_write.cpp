@@ -143,6 +143,18 @@ TEST_F(FabricWrite, ExistingDirectoryKeepsUnrelatedFilesAndReplacesOutputs) {
     EXPECT_EQ(entry.path().filename(), "out") << entry.path();
 }
 
+TEST_F(FabricWrite, TrailingSlashAndNestedNewDirectories) {
+  ScratchDir dir;
+  LoadedFabric loaded = fabric_from_named_weave("plain", 8);
+  auto files = write_fabric_directory(loaded.fabric, dir / "x/y/out/", "");
+  EXPECT_TRUE(fs::exists(dir / "x/y/out/fabric.toml"));
+  EXPECT_EQ(files.back().path, dir / "x/y/out/fabric.toml");
+  for (const char* bad : {"", ".", "./", "x/.."})
+    EXPECT_THAT(error_message([&] { write_fabric_directory(loaded.fabric, bad, ""); }),
+                HasSubstr("not a valid output directory name"))
+        << bad;
+}
+
 TEST_F(FabricWrite, NothingIsWrittenOnFailure) {
   ScratchDir dir;
   LoadedFabric loaded = fabric_from_named_weave("plain", 8);
