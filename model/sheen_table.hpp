@@ -20,6 +20,7 @@ inline constexpr unsigned long long kPathsPerNode = 500000ull;
 inline constexpr unsigned long long kSeed = 1ull;
 // cos theta_o = 0 was simulated at this cosine.
 inline constexpr double kMinSimulatedCos = 0.001;
+// clang-format off
 inline constexpr float kTable[kRoughnessCount][kCosCount][3] = {
     // roughness 0
     {
@@ -1142,5 +1143,6 @@ inline constexpr float kTable[kRoughnessCount][kCosCount][3] = {
         {0.875641644f, 0.0f, 0.34177199f},
     },
 };
+// clang-format on
 
 }  // namespace clothbake::model::sheen_table

@@ -77,6 +77,8 @@ std::string format_sheen_table_header(const SheenTableFit& fit) {
   out += fmt::format("// cos theta_o = 0 was simulated at this cosine.\n");
   out += fmt::format("inline constexpr double kMinSimulatedCos = {};\n",
                      fmt::format("{:.17g}", s.min_simulated_cos));
+  // One node per line, as written (clang-format would pack the rows).
+  out += "// clang-format off\n";
   out += "inline constexpr float kTable[kRoughnessCount][kCosCount][3] = {\n";
   for (int j = 0; j < s.roughness_count; ++j) {
     out += fmt::format("    // roughness {:.6g}\n    {{\n", double(j) / (s.roughness_count - 1));
@@ -87,7 +89,7 @@ std::string format_sheen_table_header(const SheenTableFit& fit) {
     }
     out += "    },\n";
   }
-  out += "};\n\n}  // namespace clothbake::model::sheen_table\n";
+  out += "};\n// clang-format on\n\n}  // namespace clothbake::model::sheen_table\n";
   return out;
 }
 
