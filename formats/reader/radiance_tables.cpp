@@ -283,6 +283,23 @@ double RawRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t y,
   return double(int64_t(q)) * unit(bin, column);
 }
 
+Status RawRadianceTables::texel_image(uint32_t bin, uint32_t cluster, float* out) const noexcept {
+  if (!is_open() || out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
+  if (bin >= bins_per_side_ * bins_per_side_ || cluster >= cluster_count_)
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "radiance_tables %s: bin %u / cluster %u out of range (%u bins, %u "
+                         "clusters)",
+                         radiance_kind_name(kind_), unsigned(bin), unsigned(cluster),
+                         unsigned(bins_per_side_ * bins_per_side_), unsigned(cluster_count_));
+  const int column = column_of_[cluster];
+  for (uint32_t y = 0; y < n_; ++y)
+    for (uint32_t x = 0; x < n_; ++x)
+      out[uint64_t(y) * n_ + x] =
+          column < 0 ? 0.0f : float(texel_value(bin, x, y, uint32_t(column)));
+  return {};
+}
+
 Status RawRadianceTables::check_contents() const noexcept {
   if (!is_open())
     return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");

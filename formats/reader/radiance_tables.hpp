@@ -55,6 +55,11 @@ class RawRadianceTables final : public RadianceTables {
   // unit (what the SAT sums).
   double texel_value(uint32_t bin, uint32_t x, uint32_t y, uint32_t column) const noexcept;
 
+  // The table of one (bin, cluster) as an image: N * N floats, texel (x, y) at y * N + x, the
+  // per-texel values T[cluster][bin] (not the SAT), for looking at a table (`clothbake export`).
+  // Clusters without a stored table give zeros. InvalidArgument for a bad bin or cluster.
+  Status texel_image(uint32_t bin, uint32_t cluster, float* out) const noexcept;
+
   // O(size) scan: every texel's integer (recovered from the SAT by the 2 x 2 difference) must be
   // non-negative, i.e. the SAT is non-decreasing in x and y. ValueRange (CBK-E021) naming the
   // first offending bin, texel and cluster otherwise.

@@ -418,3 +418,28 @@ TEST(RadianceQuery, HostileSectionsAreRejectedAtOpen) {
   ASSERT_TRUE(t.open(good->asset, RadianceTableKind::Specular).ok());
   EXPECT_TRUE(t.check_contents().ok());
 }
+
+TEST(RadianceQuery, TexelImageHoldsTheTableValues) {
+  auto f = synthetic_fabric(8, 3);
+  f.labels.assign(f.labels.size(), 0);
+  for (std::size_t t = 0; t < f.labels.size(); t += 2)
+    f.labels[t] = 2;  // cluster 1 unused
+  RadianceOptions o;
+  o.bins_per_side = 4;
+  o.warn_unresolved = false;
+  RadianceTableSet set = build_specular_tables(f.inputs(), o);
+  const RadianceTableSet copy = set;
+  auto a = write_asset({std::move(set)});
+  RawRadianceTables t;
+  ASSERT_TRUE(t.open(a->asset, RadianceTableKind::Specular).ok());
+  std::vector<float> image(64);
+  ASSERT_TRUE(t.texel_image(5, 2, image.data()).ok());
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x)
+      EXPECT_FLOAT_EQ(image[std::size_t(y * 8 + x)], float(copy.texel_value(5, x, y, 1)));
+  ASSERT_TRUE(t.texel_image(5, 1, image.data()).ok());
+  for (float v : image)
+    EXPECT_EQ(v, 0.0f);
+  EXPECT_FALSE(t.texel_image(16, 0, image.data()).ok());
+  EXPECT_FALSE(t.texel_image(0, 3, image.data()).ok());
+}
