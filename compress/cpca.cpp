@@ -166,8 +166,9 @@ CpcaResult clustered_pca(const float* data, std::size_t rows, std::size_t dim,
       std::vector<double> res;
       for (int g = 0; g < cells_now; ++g) {
         if (cell_rows[std::size_t(g)].empty()) continue;
+        const int fit_rank = options.target_error > 0.0 ? std::min(options.rank, 16) : options.rank;
         const Fit fit =
-            fit_cell(data, rows, dim, cell_rows[std::size_t(g)], options.rank, options,
+            fit_cell(data, rows, dim, cell_rows[std::size_t(g)], fit_rank, options,
                      previous[std::size_t(g)].size() ? &previous[std::size_t(g)] : nullptr,
                      stratum_seed + uint64_t(g) * 7919);
         previous[std::size_t(g)] = fit.basis;
@@ -187,7 +188,7 @@ CpcaResult clustered_pca(const float* data, std::size_t rows, std::size_t dim,
       if (moved == 0) break;
     }
 
-    // Final fit of the non-empty cells, in cell order.
+    // The non-empty cells, in order of their first row (fitted below).
     std::vector<std::vector<uint32_t>> cell_rows(static_cast<std::size_t>(cells_now));
     for (std::size_t i = 0; i < members.size(); ++i)
       cell_rows[std::size_t(labels[i])].push_back(members[i]);
@@ -197,15 +198,7 @@ CpcaResult clustered_pca(const float* data, std::size_t rows, std::size_t dim,
       CpcaCell cell;
       cell.stratum = s;
       cell.rows = std::move(cell_rows[std::size_t(g)]);
-      const Fit fit =
-          fit_cell(data, rows, dim, cell.rows, options.rank, options,
-                   previous[std::size_t(g)].size() ? &previous[std::size_t(g)] : nullptr,
-                   stratum_seed + uint64_t(g) * 7919);
-      cell.mean = fit.mean;
-      cell.basis = fit.basis;
-      cell.centred_energy = fit.centred_energy;
-      RowSubsetMatrix a{data, rows, dim, cell.rows, cell.mean};
-      project_rows(a, cell.basis, &cell.coefficients);
+      if (previous[std::size_t(g)].size()) cell.basis = previous[std::size_t(g)];
       stratum_cells.push_back(std::move(cell));
     }
     std::sort(stratum_cells.begin(), stratum_cells.end(),
@@ -214,29 +207,44 @@ CpcaResult clustered_pca(const float* data, std::size_t rows, std::size_t dim,
       result.cells.push_back(std::move(c));
   }
 
-  // Ranks: per component the energy it removes (sum of squared coefficients).
+  // Fit every cell at a rank cap and measure per component the energy it removes (the sum of its
+  // squared coefficients). Fixed ranks: one fit at options.rank. Target error: caps 16, 32, 64,
+  // ... up to options.rank, refitting only while the greedy allocation below saturates some cell
+  // at the cap without reaching the target (most tables need far less than the cap).
   const std::size_t cell_count = result.cells.size();
   std::vector<std::vector<double>> gains(cell_count);
   std::vector<int> keep(cell_count, 0);
-  for (std::size_t g = 0; g < cell_count; ++g) {
-    const auto& c = result.cells[g];
-    gains[g].resize(std::size_t(c.rank()));
-    for (int j = 0; j < c.rank(); ++j)
-      gains[g][std::size_t(j)] = double(c.coefficients.col(j).cast<double>().squaredNorm());
-    // Numerical rank: stop at the first component that removes (almost) nothing.
-    int useful = 0;
-    while (useful < c.rank() &&
-           gains[g][std::size_t(useful)] > kNegligibleGain * std::max(c.centred_energy, 1e-300))
-      ++useful;
-    keep[g] = useful;
-  }
-  if (options.target_error > 0.0) {
+  const bool target = options.target_error > 0.0;
+  const double goal = options.target_error * options.target_error * result.total_energy;
+  int cap = target ? std::min(options.rank, 16) : options.rank;
+  for (;;) {
+    for (std::size_t g = 0; g < cell_count; ++g) {
+      auto& c = result.cells[g];
+      const Eigen::MatrixXd warm = c.basis;
+      const Fit fit = fit_cell(
+          data, rows, dim, c.rows, cap, options, warm.size() ? &warm : nullptr,
+          options.seed * 0x9e3779b97f4a7c15ull + uint64_t(c.stratum) + 1 + uint64_t(g) * 7919);
+      c.mean = fit.mean;
+      c.basis = fit.basis;
+      c.centred_energy = fit.centred_energy;
+      RowSubsetMatrix a{data, rows, dim, c.rows, c.mean};
+      project_rows(a, c.basis, &c.coefficients);
+      gains[g].assign(std::size_t(c.rank()), 0.0);
+      for (int j = 0; j < c.rank(); ++j)
+        gains[g][std::size_t(j)] = double(c.coefficients.col(j).cast<double>().squaredNorm());
+      // Numerical rank: stop at the first component that removes (almost) nothing.
+      int useful = 0;
+      while (useful < c.rank() &&
+             gains[g][std::size_t(useful)] > kNegligibleGain * std::max(c.centred_energy, 1e-300))
+        ++useful;
+      keep[g] = useful;
+    }
+    if (!target) break;
     double residual = 0.0;
     for (const auto& c : result.cells)
       residual += c.centred_energy;
-    const double goal = options.target_error * options.target_error * result.total_energy;
     std::vector<int> take(cell_count, 0);
-    using Candidate = std::pair<double, std::size_t>;  // (gain, -cell) ordering below
+    using Candidate = std::pair<double, std::size_t>;  // (gain, cell)
     auto worse = [](const Candidate& a, const Candidate& b) {
       return a.first < b.first || (a.first == b.first && a.second > b.second);
     };
@@ -250,7 +258,14 @@ CpcaResult clustered_pca(const float* data, std::size_t rows, std::size_t dim,
       ++take[g];
       if (take[g] < keep[g]) queue.push({gains[g][std::size_t(take[g])], g});
     }
-    keep = take;
+    bool saturated = false;
+    for (std::size_t g = 0; g < cell_count; ++g)
+      saturated = saturated || (take[g] == cap && keep[g] == cap);
+    if (residual <= goal || cap >= options.rank || !saturated) {
+      keep = take;
+      break;
+    }
+    cap = std::min(options.rank, cap * 2);
   }
   result.residual_energy = 0.0;
   for (std::size_t g = 0; g < cell_count; ++g) {

@@ -1,0 +1,103 @@
+// The `compress` pipeline stage (paper Sec. 4.4): the raw Integral-Radiance table sections of the
+// `tables` stage and the label map of the `cluster` stage in, C-PCA compressed sections out
+// (compress/compressed_set.hpp), one kind after the other, with the settings seeded by the bake
+// command (artifact kCompressSettingsArtifact) or the fabric's [bake] defaults.
+//
+// Whether the raw sections are also written is the write stage's business: with keep_raw false it
+// must drop "section/tables" when "section/compress" holds compressed tables (docs/compression.md,
+// "Bake").
+//
+// Attached as an INTERFACE source of clothbake_compress (see CMakeLists.txt) so that the
+// registration is compiled into every executable that links the library.
+#include <chrono>
+#include <nlohmann/json.hpp>
+
+#include "bake/inputs/fabric.hpp"
+#include "bake/pipeline/stage.hpp"
+#include "bake/tables/radiance_sections.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "compress/compress_settings.hpp"
+#include "compress/compressed_set.hpp"
+#include "compress/directional_texels.hpp"
+#include "formats/writer/asset_writer.hpp"
+
+namespace clothbake::compress {
+namespace {
+
+// The label map inside the cluster stage's sections.
+std::span<const uint8_t> find_labels(std::span<const formats::Section> sections) {
+  for (const auto& s : sections)
+    if (s.type == reader::SectionType::ClusterLabels && s.instance == 0)
+      return {reinterpret_cast<const uint8_t*>(s.payload.data()), s.payload.size()};
+  throw_internal_error("compress: the cluster stage produced no label map");
+}
+
+void run_compress(pipeline::StageContext& ctx) {
+  const Fabric& fabric = ctx.input<Fabric>("fabric");
+  CompressSettings settings = settings_from_bake(fabric.bake);
+  if (ctx.has_input(kCompressSettingsArtifact))
+    settings = ctx.input<CompressSettings>(kCompressSettingsArtifact);
+  nlohmann::json meta;
+  meta["enabled"] = settings.enabled;
+  meta["keep_raw"] = settings.keep_raw || !settings.enabled;
+  meta["settings"] = settings.describe();
+  std::vector<formats::Section> out;
+  if (!settings.enabled) {
+    ctx.output("section/compress", std::move(out));
+    ctx.output("metadata/compress", meta);
+    return;
+  }
+  const auto& raw = ctx.input<std::vector<formats::Section>>("section/tables");
+  const auto labels = find_labels(ctx.input<std::vector<formats::Section>>("section/cluster"));
+  nlohmann::json kinds = nlohmann::json::array();
+  const reader::RadianceTableKind order[] = {reader::RadianceTableKind::Specular,
+                                             reader::RadianceTableKind::Gap};
+  for (int i = 0; i < 2; ++i) {
+    const auto view = tables::find_radiance_sections(raw, order[i]);
+    if (!view.present()) continue;
+    const auto start = std::chrono::steady_clock::now();
+    const DirectionalTexels data = directional_texels(view, labels);
+    ctx.progress(0.5 * i + 0.1);
+    CompressionStats stats;
+    const CompressedTableSet set = compress_tables(data, settings.cpca(), &stats);
+    for (auto& s : compressed_sections(set))
+      out.push_back(std::move(s));
+    ctx.progress(0.5 * (i + 1));
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!settings.fixed && stats.error > settings.max_error * 1.0001)
+      warn("compress: the " + std::string(reader::radiance_kind_name(order[i])) +
+           " tables reach a relative RMS error of " + std::to_string(stats.error) +
+           " at the rank cap " + std::to_string(settings.rank) + ", above the target " +
+           std::to_string(settings.max_error));
+    kinds.push_back({{"kind", reader::radiance_kind_name(order[i])},
+                     {"cells", stats.cells},
+                     {"images", stats.images},
+                     {"min_rank", stats.min_rank},
+                     {"max_rank", stats.max_rank},
+                     {"relative_rms_error", stats.error},
+                     {"cpca_relative_rms_error", stats.cpca_error},
+                     {"max_abs_error", stats.max_abs_error},
+                     {"raw_float_bytes", stats.raw_float_bytes},
+                     {"compressed_bytes", stats.compressed_bytes},
+                     {"ratio", stats.ratio()},
+                     {"seconds", ctx.options().record_timings ? seconds : 0.0}});
+  }
+  meta["kinds"] = kinds;
+  ctx.output("section/compress", std::move(out));
+  ctx.output("metadata/compress", meta);
+}
+
+}  // namespace
+}  // namespace clothbake::compress
+
+CLOTHBAKE_REGISTER_STAGE(compress) {
+  clothbake::pipeline::Stage s;
+  s.description = "C-PCA compression of the Integral-Radiance tables (paper Sec. 4.4)";
+  s.inputs = {"fabric", "section/tables", "section/cluster"};
+  s.outputs = {"section/compress", "metadata/compress"};
+  s.collects = {clothbake::compress::kCompressSettingsArtifact};
+  s.run = clothbake::compress::run_compress;
+  return s;
+}

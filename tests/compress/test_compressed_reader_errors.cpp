@@ -1,0 +1,143 @@
+// The reader refuses damaged compressed tables with the documented error classes instead of
+// indexing out of bounds: every count, index and value range is checked at open().
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "compress_test_util.hpp"
+
+namespace clothbake::compress {
+namespace {
+
+using reader::CompressedPart;
+using reader::ErrorCode;
+
+std::vector<formats::Section> good_sections() {
+  CpcaOptions o;
+  o.clusters_per_stratum = 2;
+  o.rank = 2;
+  return compressed_sections(compress_tables(test::synthetic_texels(12, 2, 3, 4), o));
+}
+
+formats::Section& part(std::vector<formats::Section>& s, CompressedPart p) {
+  for (auto& x : s)
+    if (x.instance == reader::compressed_instance(reader::RadianceTableKind::Specular, p)) return x;
+  throw std::runtime_error("missing part");
+}
+
+reader::Status open(const std::vector<formats::Section>& sections) {
+  const auto asset = test::memory_asset(sections);
+  reader::CompressedRadianceTables t;
+  const reader::Status s = t.open(asset->asset, reader::RadianceTableKind::Specular);
+  if (s.ok()) {
+    EXPECT_TRUE(t.is_open());
+  }
+  return s;
+}
+
+TEST(CompressedReaderErrors, GoodTablesOpen) {
+  EXPECT_TRUE(open(good_sections()).ok());
+}
+
+TEST(CompressedReaderErrors, MissingKindOrPart) {
+  auto s = good_sections();
+  const auto asset = test::memory_asset(s);
+  reader::CompressedRadianceTables t;
+  EXPECT_EQ(t.open(asset->asset, reader::RadianceTableKind::Gap).code(), ErrorCode::NotFound);
+  EXPECT_FALSE(t.is_open());
+  s.erase(s.begin() + 3);
+  EXPECT_EQ(open(s).code(), ErrorCode::NotFound);
+}
+
+TEST(CompressedReaderErrors, DamagedFields) {
+  using Mutation = void (*)(std::vector<formats::Section>&);
+  const std::vector<std::pair<const char*, Mutation>> cases = {
+      {"cell map names a cell that does not exist",
+       [](auto& s) { part(s, CompressedPart::CellMap).payload[7] = std::byte{200}; }},
+      {"cell texel count disagrees with the map",
+       [](auto& s) {
+         auto& p = part(s, CompressedPart::CellMap).payload;
+         for (auto& b : p)
+           if (b != std::byte{255}) {
+             b = std::byte{255};
+             break;
+           }
+       }},
+      {"cell rank changed (image count mismatch)",
+       [](auto& s) {
+         reinterpret_cast<uint32_t*>(part(s, CompressedPart::Cells).payload.data())[1] += 1;
+       }},
+      {"clusters out of order",
+       [](auto& s) {
+         auto* c = reinterpret_cast<uint32_t*>(part(s, CompressedPart::Cells).payload.data());
+         c[0] = 2;
+       }},
+      {"negative scale",
+       [](auto& s) {
+         reinterpret_cast<float*>(part(s, CompressedPart::Scales).payload.data())[0] = -1.0f;
+       }},
+      {"basis value outside [-1, 1]",
+       [](auto& s) {
+         reinterpret_cast<uint16_t*>(part(s, CompressedPart::Basis).payload.data())[3] = 0x4000;
+       }},
+      {"basis NaN",
+       [](auto& s) {
+         reinterpret_cast<uint16_t*>(part(s, CompressedPart::Basis).payload.data())[3] = 0x7e00;
+       }},
+      {"coefficient -32768",
+       [](auto& s) {
+         reinterpret_cast<int16_t*>(part(s, CompressedPart::Coefficients).payload.data())[0] =
+             INT16_MIN;
+       }},
+      {"info kind field",
+       [](auto& s) {
+         reinterpret_cast<reader::CompressedTableInfoRecord*>(
+             part(s, CompressedPart::Info).payload.data())
+             ->kind = 1;
+       }},
+      {"info image count",
+       [](auto& s) {
+         reinterpret_cast<reader::CompressedTableInfoRecord*>(
+             part(s, CompressedPart::Info).payload.data())
+             ->image_count = 5000;
+       }},
+      {"info NaN error",
+       [](auto& s) {
+         reinterpret_cast<reader::CompressedTableInfoRecord*>(
+             part(s, CompressedPart::Info).payload.data())
+             ->bake_error = NAN;
+       }},
+      {"basis shape",
+       [](auto& s) {
+         part(s, CompressedPart::Basis).dims = {
+             2, uint32_t(part(s, CompressedPart::Basis).payload.size() / 4)};
+       }},
+  };
+  for (const auto& [what, mutate] : cases) {
+    auto s = good_sections();
+    mutate(s);
+    const reader::Status status = open(s);
+    EXPECT_FALSE(status.ok()) << what;
+    EXPECT_TRUE(status.code() == ErrorCode::Malformed || status.code() == ErrorCode::WrongType)
+        << what << ": " << status.message();
+  }
+}
+
+TEST(CompressedReaderErrors, BadQueryArguments) {
+  const auto asset = test::memory_asset(good_sections());
+  reader::CompressedRadianceTables t;
+  ASSERT_TRUE(t.open(asset->asset, reader::RadianceTableKind::Specular).ok());
+  const double h[3] = {0, 0, 1}, zero[3] = {0, 0, 0};
+  double out[3];
+  EXPECT_EQ(t.query({0, 0, 1, 1}, h, 3, out).code(), ErrorCode::InvalidArgument);
+  EXPECT_EQ(t.query_all({0, 0, NAN, 1}, h, out).code(), ErrorCode::InvalidArgument);
+  EXPECT_EQ(t.query_all({2, 0, 1, 1}, h, out).code(), ErrorCode::InvalidArgument);
+  EXPECT_EQ(t.query_all({0, 0, 1, 1}, zero, out).code(), ErrorCode::InvalidArgument);
+  EXPECT_EQ(t.query_all({0, 0, 1, 1}, h, nullptr).code(), ErrorCode::InvalidArgument);
+  EXPECT_FALSE(t.try_query_all({0, 0, 1, 1}, zero, out));
+  reader::CompressedRadianceTables closed;
+  EXPECT_EQ(closed.query_all({0, 0, 1, 1}, h, out).code(), ErrorCode::InvalidArgument);
+}
+
+}  // namespace
+}  // namespace clothbake::compress
