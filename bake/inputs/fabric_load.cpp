@@ -168,11 +168,8 @@ void build_weave_maps(LoadedFabric& out, weave::WeaveSpec spec, const std::strin
     spec.end_colors.assign(std::size_t(spec.matrix.ends), f.yarns[0].color);
   if (spec.pick_colors.empty())
     spec.pick_colors.assign(std::size_t(spec.matrix.picks), f.yarns[1].color);
-  with_context(where, [&] {
-    weave::validate_weave_spec(spec, "weave");
-    return 0;
-  });
-  f.maps = with_context(where, [&] { return weave::generate_weave_maps(spec, f.bake.resolution); });
+  weave::validate_weave_spec(spec, where);
+  f.maps = weave::generate_weave_maps(spec, f.bake.resolution, where);
   f.tile_size_mm = weave::weave_tile_size(spec).width_mm;
   for (std::size_t i = 2; i < f.yarns.size(); ++i)
     warn(
