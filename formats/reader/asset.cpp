@@ -249,52 +249,55 @@ Status Asset::open_memory(const void* data, std::size_t size, const OpenOptions&
   const bool newer_minor = header.version_minor > kFormatMinor;
   uint64_t previous_end = data_start;
   uint64_t previous_key = 0;
-  char what[96];
+  char what_buffer[96];
   for (uint32_t i = 0; i < header.section_count; ++i) {
     SectionEntry e;
     std::memcpy(&e, bytes + sizeof(FileHeader) + uint64_t(i) * header.section_entry_size, sizeof e);
-    describe(what, sizeof what, i, e.type, e.instance);
+    // Formatted only on the error paths: open() must stay O(1) per entry and cheap.
+    auto what = [&] { return describe(what_buffer, sizeof what_buffer, i, e.type, e.instance); };
     if (e.offset % kSectionAlignment != 0)
       return Status::error(ErrorCode::Malformed, Check::SectionAlignment,
-                           "%s: offset %" PRIu64 " is not a multiple of 64", what, e.offset);
+                           "%s: offset %" PRIu64 " is not a multiple of 64", what(), e.offset);
     if (e.offset < data_start || e.stored_size > header.file_size ||
         e.offset > header.file_size - e.stored_size)
       return Status::error(ErrorCode::Malformed, Check::SectionBounds,
                            "%s: bytes [%" PRIu64 ", +%" PRIu64
                            ") are outside the payload area [%" PRIu64 ", %" PRIu64 ")",
-                           what, e.offset, e.stored_size, data_start, header.file_size);
+                           what(), e.offset, e.stored_size, data_start, header.file_size);
     if (e.offset < previous_end)
       return Status::error(ErrorCode::Malformed, Check::SectionOverlap,
                            "%s: starts at %" PRIu64 ", before the previous section ends (%" PRIu64
                            ")",
-                           what, e.offset, previous_end);
+                           what(), e.offset, previous_end);
     previous_end = e.offset + e.stored_size;
     const uint64_t key = (uint64_t(e.type) << 32) | e.instance;
     if (i > 0 && key <= previous_key)
       return Status::error(ErrorCode::Malformed, Check::SectionOrder,
-                           "%s: (type, instance) is not strictly after the previous entry's", what);
+                           "%s: (type, instance) is not strictly after the previous entry's",
+                           what());
     previous_key = key;
 
     // Shape.
     if (e.rank > kMaxRank)
       return Status::error(ErrorCode::Malformed, Check::SectionShape, "%s: rank %u exceeds %u",
-                           what, unsigned(e.rank), unsigned(kMaxRank));
+                           what(), unsigned(e.rank), unsigned(kMaxRank));
     for (uint32_t d = e.rank; d < kMaxRank; ++d)
       if (e.dims[d] != 0)
         return Status::error(ErrorCode::Malformed, Check::SectionShape,
-                             "%s: dims[%u] = %u is beyond rank %u (must be 0)", what, unsigned(d),
+                             "%s: dims[%u] = %u is beyond rank %u (must be 0)", what(), unsigned(d),
                              unsigned(e.dims[d]), unsigned(e.rank));
     if (known_element_type(e.element_type)) {
       const auto element = ElementType(e.element_type);
       if (element == ElementType::Opaque) {
         if (e.rank != 0)
           return Status::error(ErrorCode::Malformed, Check::SectionShape,
-                               "%s: an opaque payload must have rank 0, not %u", what,
+                               "%s: an opaque payload must have rank 0, not %u", what(),
                                unsigned(e.rank));
       } else {
         if (e.rank == 0)
           return Status::error(ErrorCode::Malformed, Check::SectionShape,
-                               "%s: a %s array needs rank >= 1", what, element_type_name(element));
+                               "%s: a %s array needs rank >= 1", what(),
+                               element_type_name(element));
         uint64_t expected = element_size(element);
         bool overflow = false;
         for (uint32_t d = 0; d < e.rank && !overflow; ++d)
@@ -302,20 +305,20 @@ Status Asset::open_memory(const void* data, std::size_t size, const OpenOptions&
         if (overflow || expected != e.raw_size)
           return Status::error(ErrorCode::Malformed, Check::SectionShape,
                                "%s: raw_size %" PRIu64 " does not match its shape and %s elements",
-                               what, e.raw_size, element_type_name(element));
+                               what(), e.raw_size, element_type_name(element));
       }
     } else if (!newer_minor) {
       return Status::error(ErrorCode::Malformed, Check::SectionShape, "%s: unknown element type %u",
-                           what, unsigned(e.element_type));
+                           what(), unsigned(e.element_type));
     }
     if (e.codec == uint16_t(Codec::Raw)) {
       if (e.raw_size != e.stored_size)
         return Status::error(ErrorCode::Malformed, Check::SectionShape,
-                             "%s: raw codec but raw_size %" PRIu64 " != stored_size %" PRIu64, what,
-                             e.raw_size, e.stored_size);
+                             "%s: raw codec but raw_size %" PRIu64 " != stored_size %" PRIu64,
+                             what(), e.raw_size, e.stored_size);
     } else if (!newer_minor) {
       return Status::error(ErrorCode::Malformed, Check::UnsupportedCodec,
-                           "%s: codec %u is not defined in format %u.%u", what, unsigned(e.codec),
+                           "%s: codec %u is not defined in format %u.%u", what(), unsigned(e.codec),
                            unsigned(header.version_major), unsigned(header.version_minor));
     }
   }
@@ -330,7 +333,8 @@ Status Asset::open_memory(const void* data, std::size_t size, const OpenOptions&
         return Status::error(ErrorCode::Corrupt, Check::SectionChecksum,
                              "%s: checksum mismatch (stored %016" PRIx64 ", computed %016" PRIx64
                              "): its payload is corrupt",
-                             describe(what, sizeof what, i, e.type, e.instance), e.checksum, sum);
+                             describe(what_buffer, sizeof what_buffer, i, e.type, e.instance),
+                             e.checksum, sum);
     }
   }
 
@@ -421,14 +425,15 @@ Status Asset::typed_section(SectionType type, uint32_t instance, ElementType ele
 
 Status Asset::check_view(const SectionInfo& info, ElementType element) const noexcept {
   char what[96];
-  describe(what, sizeof what, info.index, uint32_t(info.type), info.instance);
   if (info.codec != Codec::Raw) {
+    describe(what, sizeof what, info.index, uint32_t(info.type), info.instance);
     const char* codec = codec_name(info.codec);
     return Status::error(ErrorCode::Unsupported, Check::UnsupportedCodec,
                          "%s: codec %s (%u) is not supported by this reader", what,
                          codec ? codec : "unknown", unsigned(info.codec));
   }
   if (info.element_type != element) {
+    describe(what, sizeof what, info.index, uint32_t(info.type), info.instance);
     const char* have = element_type_name(info.element_type);
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
                          "%s: holds %s elements, %s were requested", what, have ? have : "unknown",

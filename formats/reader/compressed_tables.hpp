@@ -63,6 +63,9 @@ class CompressedRadianceTables final : public RadianceTables {
   // Decompressed value of one texel in one bin (x, y < N, bin < bins): the table value T[c][bin]
   // of the texel's cluster c (0 when it has none).
   double texel_value(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
+  // Every bin of one texel at once (out: bins floats, zeros for a texel without a cell); returns
+  // the texel's cluster or -1. O(bins x (1 + rank)): for full decompression (verify, export).
+  int decode_texel(uint32_t x, uint32_t y, float* out) const noexcept;
 
  private:
   template <class E>

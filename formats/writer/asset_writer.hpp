@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "formats/reader/asset.hpp"  // reader::Half, ElementTypeOf
 #include "formats/reader/layout.hpp"
 #include "formats/writer/sink.hpp"
 

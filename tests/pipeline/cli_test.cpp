@@ -114,7 +114,9 @@ class Cli : public ::testing::Test {
   EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 TEST_F(Cli, BakeInfoValidateExport) {
-  Outcome r = run({"bake", "@fabric.toml", "-o", "@a.cbk", "--report", "@report.json", "--quiet"});
+  // Only this stages: later stages (parallax, ...) have their own tests.
+  Outcome r = run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps", "--report",
+                   "@report.json", "--quiet"});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(r.err.empty()) << r.err;  // --quiet
   const auto report = nlohmann::json::parse(file("report.json"));
@@ -163,12 +165,17 @@ TEST_F(Cli, BakeInfoValidateExport) {
 }
 
 TEST_F(Cli, BytesIdenticalForThreads1And2AndRunToRun) {
-  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@t1.cbk", "--threads", "1"}).code, 0);
-  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@t2.cbk", "--threads", "2"}).code, 0);
-  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@t2b.cbk", "--threads", "2"}).code, 0);
+  // Every registered stage (the default), on a small tile: the promise covers the whole bake.
+  std::ofstream(dir_ / "small.toml") << "name = \"small\"\n[weave]\nname = \"twill2/1\"\n"
+                                        "[[yarn]]\nname = \"warp\"\n[[yarn]]\nname = \"weft\"\n"
+                                        "[bake]\nresolution = 16\n";
+  Outcome r = run({"bake", "@small.toml", "-o", "@t1.cbk", "--threads", "1"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(run({"bake", "@small.toml", "-o", "@t2.cbk", "--threads", "2"}).code, 0);
+  ASSERT_EQ(run({"bake", "@small.toml", "-o", "@t2b.cbk", "--threads", "2"}).code, 0);
   EXPECT_EQ(file("t1.cbk"), file("t2.cbk"));
   EXPECT_EQ(file("t2.cbk"), file("t2b.cbk"));
-  EXPECT_GT(file("t1.cbk").size(), 64u * 64u * 4u);
+  EXPECT_GT(file("t1.cbk").size(), 16u * 16u * 4u * 6u);
 }
 
 TEST_F(Cli, StageSelectionAndListing) {
@@ -203,7 +210,7 @@ TEST_F(Cli, BadOutputs) {
   EXPECT_IN("not a clothbake asset", r.err);
   EXPECT_IN("--force", r.err);
   EXPECT_EQ(file("notes.cbk"), "my notes");
-  r = run({"bake", "@fabric.toml", "-o", "@notes.cbk", "--force"});
+  r = run({"bake", "@fabric.toml", "-o", "@notes.cbk", "--force", "--stages", "feature_maps"});
   EXPECT_EQ(r.code, 0) << r.err;
   // A bad report path fails before the bake.
   r = run({"bake", "@fabric.toml", "-o", "@b.cbk", "--report", "@missing/r.json"});
@@ -216,14 +223,14 @@ TEST_F(Cli, BadOutputs) {
 }
 
 TEST_F(Cli, DiskFullKeepsThePreviousAsset) {
-  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk"}).code, 0);
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps"}).code, 0);
   const std::string good = file("a.cbk");
   std::ofstream(dir_ / "big.toml") << "name = \"big\"\n[weave]\nname = \"plain\"\n"
                                       "[[yarn]]\nname = \"warp\"\n[[yarn]]\nname = \"weft\"\n"
                                       "[bake]\nresolution = 128\n";
   SpawnOptions limited;
   limited.file_size_limit = 100000;  // the 128^2 asset needs ~750 kB
-  const Outcome r = run({"bake", "@big.toml", "-o", "@a.cbk"}, limited);
+  const Outcome r = run({"bake", "@big.toml", "-o", "@a.cbk", "--stages", "feature_maps"}, limited);
   EXPECT_EQ(r.code, 2);
   EXPECT_IN("File too large", r.err);
   EXPECT_EQ(file("a.cbk"), good);
@@ -231,14 +238,16 @@ TEST_F(Cli, DiskFullKeepsThePreviousAsset) {
 }
 
 TEST_F(Cli, SigkillMidWriteLeavesThePreviousAsset) {
-  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk"}).code, 0);
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps"}).code, 0);
   const std::string good = file("a.cbk");
   std::ofstream(dir_ / "big.toml") << "name = \"big\"\n[weave]\nname = \"plain\"\n"
                                       "[[yarn]]\nname = \"warp\"\n[[yarn]]\nname = \"weft\"\n"
                                       "[bake]\nresolution = 128\n";
   SpawnOptions pause;
   pause.env = {"CLOTHBAKE_TEST_PAUSE_AFTER_BYTES=50000"};
-  const pid_t pid = spawn(dir_ / "io", prefix({"bake", "@big.toml", "-o", "@a.cbk"}), pause);
+  const pid_t pid =
+      spawn(dir_ / "io", prefix({"bake", "@big.toml", "-o", "@a.cbk", "--stages", "feature_maps"}),
+            pause);
   bool partial = false;
   for (int i = 0; i < 1000 && !partial; ++i) {
     for (const auto& name : others("a.cbk"))
@@ -256,7 +265,7 @@ TEST_F(Cli, SigkillMidWriteLeavesThePreviousAsset) {
 }
 
 TEST_F(Cli, DamagedAndForeignAssets) {
-  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk"}).code, 0);
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps"}).code, 0);
   std::string bytes = file("a.cbk");
   // A flipped payload byte: validate names the section with CBK-E012, exit 3.
   std::string damaged = bytes;

@@ -1,0 +1,218 @@
+// Parallax sections: layout checks and queries (parallax_sections.hpp).
+#include "formats/reader/parallax_sections.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "model/directions.hpp"
+
+namespace clothbake::reader {
+namespace {
+
+constexpr uint64_t kTwo32 = uint64_t(1) << 32;
+
+int64_t wrap(int64_t i, int64_t n) noexcept {
+  int64_t r = i % n;
+  return r < 0 ? r + n : r;
+}
+
+}  // namespace
+
+Status ParallaxView::open(const Asset& asset) noexcept {
+  *this = ParallaxView();
+  SectionInfo info_s, codes_s;
+  Status s = asset.find(SectionType::ParallaxTable, kParallaxInfoInstance, &info_s);
+  if (s.ok()) s = asset.find(SectionType::ParallaxTable, kParallaxCodesInstance, &codes_s);
+  if (s.code() == ErrorCode::NotFound)
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no parallax table (parallax instances 0 and 1)");
+  if (!s.ok()) return s;
+  if (info_s.version != 1 || codes_s.version != 1)
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "parallax: payload version must be 1 (this reader knows version 1)");
+  ArrayView<uint8_t> info_bytes;
+  ArrayView<uint16_t> codes;
+  s = asset.view_of(info_s, &info_bytes);
+  if (s.ok()) s = asset.view_of(codes_s, &codes);
+  if (!s.ok()) return s;
+  if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
+      info_bytes.dims[1] != sizeof(ParallaxInfoRecord))
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax instance 0 must be u8 {1, 64} (one ParallaxInfoRecord)");
+  ParallaxInfoRecord info;
+  std::memcpy(&info, info_bytes.data, sizeof info);
+  if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
+      info.dirs > kMaxParallaxDirs)
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "parallax: resolution %u or directions %u out of range (1..%u, 1..%u)",
+                         unsigned(info.resolution), unsigned(info.dirs),
+                         unsigned(kMaxParallaxResolution), unsigned(kMaxParallaxDirs));
+  if (!(info.min_cos >= 0.0 && info.min_cos < 1.0) || !std::isfinite(info.reference_height) ||
+      !(info.depth_scale >= 0.0 && std::isfinite(info.depth_scale)) ||
+      !(info.max_quantization_error >= 0.0 && std::isfinite(info.max_quantization_error)) ||
+      !(info.max_offset >= 0.0 && std::isfinite(info.max_offset)))
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "parallax: min_cos, reference height, depth scale or error out of range");
+  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
+  if (codes.rank != 3 || codes.dims[0] != d || codes.dims[1] != n || codes.dims[2] != n)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax instance 1 must be u16 {%llu, %llu, %llu} (directions, N, N)",
+                         static_cast<unsigned long long>(d), static_cast<unsigned long long>(n),
+                         static_cast<unsigned long long>(n));
+  SectionInfo sat_s;
+  s = asset.find(SectionType::ParallaxSat, 0, &sat_s);
+  const uint32_t* sat = nullptr;
+  if (s.ok()) {
+    if (sat_s.version != 1)
+      return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                           "parallax_sat: payload version must be 1");
+    ArrayView<uint32_t> sat_view;
+    s = asset.view_of(sat_s, &sat_view);
+    if (!s.ok()) return s;
+    if (sat_view.rank != 3 || sat_view.dims[0] != d || sat_view.dims[1] != n ||
+        sat_view.dims[2] != n)
+      return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                           "parallax_sat must be u32 with the parallax table's shape {%llu, %llu, "
+                           "%llu}",
+                           static_cast<unsigned long long>(d), static_cast<unsigned long long>(n),
+                           static_cast<unsigned long long>(n));
+    sat = sat_view.data;
+  } else if (s.code() != ErrorCode::NotFound) {
+    return s;
+  }
+  info_ = info;
+  codes_ = codes.data;
+  sat_ = sat;
+  return {};
+}
+
+double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept {
+  const int64_t n = info_.resolution;
+  const uint64_t index =
+      (uint64_t(bin) * uint64_t(n) + uint64_t(wrap(y, n))) * uint64_t(n) + uint64_t(wrap(x, n));
+  return -double(codes_[index]) * info_.depth_scale;
+}
+
+Status ParallaxView::direction(const double view[3], double o[3]) const noexcept {
+  if (view == nullptr || !std::isfinite(view[0]) || !std::isfinite(view[1]) ||
+      !std::isfinite(view[2]))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "view direction must have finite components");
+  const double len = std::sqrt(view[0] * view[0] + view[1] * view[1] + view[2] * view[2]);
+  if (!(len > 0.0) || !std::isfinite(len))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "view direction must be non-zero");
+  o[0] = view[0] / len;
+  o[1] = view[1] / len;
+  o[2] = view[2] / len;
+  if (o[2] < info_.min_cos) {  // onto the rim of the cap, same azimuth
+    double planar = std::sqrt(o[0] * o[0] + o[1] * o[1]);
+    double ax = planar > 0.0 ? o[0] / planar : 1.0, ay = planar > 0.0 ? o[1] / planar : 0.0;
+    double s = std::sqrt(1.0 - info_.min_cos * info_.min_cos);
+    o[0] = ax * s;
+    o[1] = ay * s;
+    o[2] = info_.min_cos;
+  }
+  return {};
+}
+
+Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
+                           ParallaxSample* out) const noexcept {
+  if (!is_open() || out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "parallax view is not open");
+  double o[3];
+  Status s = direction(view, o);
+  if (!s.ok()) return s;
+  const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
+  const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  double r = 0.0;
+  for (int k = 0; k < 4; ++k)
+    if (w.weight[k] > 0.0) r += w.weight[k] * bin_depth(uint32_t(w.index[k]), x, y);
+  out->r = r;
+  out->offset[0] = r / o[2] * o[0];
+  out->offset[1] = r / o[2] * o[1];
+  for (int i = 0; i < 3; ++i)
+    out->direction[i] = o[i];
+  return {};
+}
+
+uint64_t ParallaxView::code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
+  if (x == 0 || y == 0) return 0;
+  const uint64_t n = info_.resolution;
+  const uint32_t* table = sat_ + uint64_t(bin) * n * n;
+  auto s = [&](uint64_t i, uint64_t j) -> uint32_t {  // exclusive prefix, modulo 2^32
+    return (i == 0 || j == 0) ? 0u : table[(j - 1) * n + (i - 1)];
+  };
+  // A rectangle of x * rows texels sums to at most 65535 * x * rows: below 2^32 it is exact.
+  const uint64_t rows = (kTwo32 - 1) / (65535u * uint64_t(x));
+  if (rows >= y) return s(x, y);
+  uint64_t sum = 0;
+  for (uint64_t j0 = 0; j0 < y; j0 += rows) {
+    const uint64_t j1 = j0 + rows < y ? j0 + rows : y;
+    sum += uint32_t(s(x, j1) - s(x, j0));  // unsigned wrap-around gives the exact band sum
+  }
+  return sum;
+}
+
+// Integral of the (piecewise-constant) codes over [0, x) x [0, y), real 0 <= x, y <= N: bilinear
+// between the exact integer prefix sums at the surrounding texel corners.
+double ParallaxView::prefix_integral(uint32_t bin, double x, double y) const noexcept {
+  const uint32_t n = info_.resolution;
+  uint32_t i = uint32_t(x), j = uint32_t(y);
+  if (i > n) i = n;
+  if (j > n) j = n;
+  const double fx = i < n ? x - double(i) : 0.0, fy = j < n ? y - double(j) : 0.0;
+  const uint32_t i1 = i < n ? i + 1 : n, j1 = j < n ? j + 1 : n;
+  const uint64_t e00 = code_prefix_sum(bin, i, j);
+  double value = double(e00);
+  if (fx > 0.0) value += fx * double(code_prefix_sum(bin, i1, j) - e00);
+  if (fy > 0.0) value += fy * double(code_prefix_sum(bin, i, j1) - e00);
+  if (fx > 0.0 && fy > 0.0) {
+    // The texel (i, j) itself: its code times the covered fraction fx * fy.
+    const uint64_t texel = (uint64_t(bin) * n + j) * n + i;
+    value += fx * fy * double(codes_[texel]);
+  }
+  return value;
+}
+
+double ParallaxView::footprint_code_sum(uint32_t bin, const FootprintPlan& p) const noexcept {
+  const double n = double(info_.resolution);
+  auto in = [&](double x, double y) { return prefix_integral(bin, x, y); };
+  double f = in(p.rx1, p.ry1) - in(p.x0, p.ry1) - in(p.rx1, p.y0) + in(p.x0, p.y0);
+  if (p.qx > 0) f += p.qx * (in(n, p.ry1) - in(n, p.y0));
+  if (p.qy > 0) f += p.qy * (in(p.rx1, n) - in(p.x0, n));
+  if (p.qx > 0 && p.qy > 0) f += p.qx * p.qy * in(n, n);
+  return f;
+}
+
+Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3],
+                                     ParallaxSample* out) const noexcept {
+  if (!is_open() || out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "parallax view is not open");
+  if (!has_sat())
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no parallax_sat section (footprint queries need it)");
+  FootprintPlan plan;
+  Status s = plan_footprint(rect, info_.resolution, &plan);
+  if (!s.ok()) return s;
+  const double area = (rect.x1 - rect.x0) * (rect.y1 - rect.y0);
+  if (!(area > 0.0))
+    return depth(int64_t(std::floor(rect.x0)), int64_t(std::floor(rect.y0)), view, out);
+  double o[3];
+  s = direction(view, o);
+  if (!s.ok()) return s;
+  const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
+  const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  double sum = 0.0;
+  for (int k = 0; k < 4; ++k)
+    if (w.weight[k] > 0.0) sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan);
+  const double r = -sum * info_.depth_scale / area;
+  out->r = r;
+  out->offset[0] = r / o[2] * o[0];
+  out->offset[1] = r / o[2] * o[1];
+  for (int i = 0; i < 3; ++i)
+    out->direction[i] = o[i];
+  return {};
+}
+
+}  // namespace clothbake::reader

@@ -1,0 +1,114 @@
+// Parallax tables of an asset (paper Sec. 3.2, Eq. 2) and their summed-area tables for the parallax
+// transition (Sec. 5.2): reader-side layout and queries (docs/raycast.md has the derivations).
+//
+// Definition. The reference plane is z_ref = the largest height of the tile. For texel (x, y) and
+// view direction o (unit, towards the viewer, o.z >= min_cos) a ray enters at the texel centre on
+// the reference plane and travels along -o; r(x, y, o) = z_hit - z_ref <= 0 (tile-side units) is
+// the height of its first hit relative to the plane, so that Eq. 2 holds as printed:
+//   u_new = u + (r / o.z) (o.x, o.y)      (u in tile units, [0, 1) over one tile)
+// is the first visible point (model/parallax.hpp applies it).
+//
+// Sections (all version 1):
+//   ParallaxTable instance 0: u8 {1, 64}   one ParallaxInfoRecord
+//   ParallaxTable instance 1: u16 {D, N, N} depth codes: r = -code * depth_scale, D = n^2 view
+//                                          directions (bin (i, j) of DirectionGrid{n, min_cos} at
+//                                          index j * n + i), texel (x, y) at [d][y][x]
+//   ParallaxSat   instance 0: u32 {D, N, N} inclusive SATs of the codes, modulo 2^32:
+//                                          sat[d][y][x] = sum of code[d][y'][x'], y' <= y, x' <= x
+// With 16-bit codes a sum over any rectangle of at most 65537 texels is below 2^32, so modular
+// differences of four SAT values are exact; larger rectangles are summed in bands (exact too).
+//
+// Queries take the view direction as any finite non-zero vector; it is normalised and, below the
+// cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
+// direction is used both for the table lookup (bilinear between the 4 nearest bin centres) and in
+// Eq. 2, so offsets stay bounded by range * tan(theta_cut).
+//
+// C++17, standard library only, noexcept, no allocation; safe on untrusted assets that
+// Asset::open accepted (shapes and parameter ranges are checked by ParallaxView::open).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "formats/reader/asset.hpp"
+#include "formats/reader/radiance_query.hpp"  // Footprint, plan_footprint
+
+namespace clothbake::reader {
+
+inline constexpr uint32_t kParallaxInfoInstance = 0;
+inline constexpr uint32_t kParallaxCodesInstance = 1;
+inline constexpr uint32_t kMaxParallaxDirs = 256;
+inline constexpr uint32_t kMaxParallaxResolution = 16384;
+
+// Info v1: one record, shape {1, 64}.
+struct ParallaxInfoRecord {
+  uint32_t resolution;            // N
+  uint32_t dirs;                  // n: n x n view directions
+  double min_cos;                 // the cap, [0, 1)
+  double reference_height;        // z_ref, tile-side units (finite)
+  double depth_scale;             // tile-side units per code, finite, >= 0 (0: flat map)
+  double max_quantization_error;  // max |r - decoded r| over the table (<= depth_scale / 2)
+  double max_offset;              // max |Eq. 2 offset| over the table's bin centres, tile units
+  unsigned char reserved[16];     // zero
+};
+static_assert(sizeof(ParallaxInfoRecord) == 64);
+static_assert(alignof(ParallaxInfoRecord) == 8);
+static_assert(offsetof(ParallaxInfoRecord, resolution) == 0);
+static_assert(offsetof(ParallaxInfoRecord, dirs) == 4);
+static_assert(offsetof(ParallaxInfoRecord, min_cos) == 8);
+static_assert(offsetof(ParallaxInfoRecord, reference_height) == 16);
+static_assert(offsetof(ParallaxInfoRecord, depth_scale) == 24);
+static_assert(offsetof(ParallaxInfoRecord, max_quantization_error) == 32);
+static_assert(offsetof(ParallaxInfoRecord, max_offset) == 40);
+static_assert(offsetof(ParallaxInfoRecord, reserved) == 48);
+
+// The answer of a query.
+struct ParallaxSample {
+  double r = 0;               // ray depth (<= 0), tile-side units; the footprint mean for areas
+  double offset[2] = {0, 0};  // Eq. 2: (r / o.z) (o.x, o.y), tile units (times N for texels)
+  double direction[3] = {0, 0, 1};  // o as used: normalised, clamped into the cap
+};
+
+class ParallaxView {
+ public:
+  // Errors: NotFound (CBK-E019: no parallax table), WrongType/Unsupported (CBK-E015: version,
+  // element type, shape, SAT shape differing from the table's), Malformed (CBK-E021: a parameter
+  // out of range). The SAT is optional (has_sat()).
+  Status open(const Asset& asset) noexcept;
+  bool is_open() const noexcept { return codes_ != nullptr; }
+  bool has_sat() const noexcept { return sat_ != nullptr; }
+
+  const ParallaxInfoRecord& info() const noexcept { return info_; }
+  uint32_t resolution() const noexcept { return info_.resolution; }
+  uint32_t dirs() const noexcept { return info_.dirs; }
+
+  // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2.
+  double bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept;
+
+  // r at texel (x, y) for view direction `view` (bilinear between bins), with its Eq. 2 offset.
+  // InvalidArgument for a zero or non-finite view.
+  Status depth(int64_t x, int64_t y, const double view[3], ParallaxSample* out) const noexcept;
+
+  // The mean of r over a footprint rectangle (texel units, any size and position; the tile wraps;
+  // partially covered texels count with their covered area), from the SATs in O(1) for N <= 256
+  // (4 to 9 lookups per bin, at most 4 bins), and the Eq. 2 offset of that mean. A zero-area
+  // rectangle gives the texel that contains (x0, y0). Errors: NotFound (no SAT), InvalidArgument
+  // (rectangle as for plan_footprint, view).
+  Status footprint_depth(const Footprint& rect, const double view[3],
+                         ParallaxSample* out) const noexcept;
+
+  // The exact sum of the codes of `bin` over texels [0, x) x [0, y), 0 <= x, y <= N (from the
+  // SAT; exact for any N). Precondition: has_sat(), bin < dirs^2.
+  uint64_t code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
+
+ private:
+  Status direction(const double view[3], double o[3]) const noexcept;
+  double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
+  double prefix_integral(uint32_t bin, double x, double y) const noexcept;
+
+  ParallaxInfoRecord info_{};
+  const uint16_t* codes_ = nullptr;
+  const uint32_t* sat_ = nullptr;
+};
+
+}  // namespace clothbake::reader
