@@ -2,10 +2,12 @@
 // single-scattering results, the exact R = 0 at roughness 0, and its bookkeeping.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
 #include "bake/sheen/sheen_layer.hpp"
+#include "model/spongecake.hpp"
 #include "sheen_test_util.hpp"
 
 using namespace clothbake::sheen;
@@ -61,6 +63,47 @@ TEST(SheenLayer, SingleScatteringOfAFibreLayerMatchesQuadrature) {
     s.max_order = 1;
     const LayerSimulation sim = simulate_sheen_layer(mu0, roughness, s);
     EXPECT_NEAR(sim.albedo(), expected, 4.5 * sim.albedo_standard_error() + 2e-4) << "mu0 " << mu0;
+  }
+}
+
+// The model's closed-form SpongeCake lobes (model/spongecake.hpp) against this independent random
+// walk truncated at one scattering: the layer is a SpongeCake slab of optical thickness T = 1,
+// tangent +z, SGGX roughness sigma = r^2 and albedo 1. Single-scattered light leaves through the
+// top with probability int f_r |i_z| di and through the bottom with probability int f_t |i_z| di
+// (the bottom count also holds the unscattered e^{-T Lambda(o)}). This checks f_r and f_t, their
+// factor 4, Lambda and the half vector h = normalize(i + o) used for transmission, against
+// transport that shares no formula with them (a flipped-o half vector moves the transmitted
+// fraction by far more than the tolerance).
+TEST(SheenLayer, SpongeCakeLobesMatchSimulatedSingleScattering) {
+  for (auto [mu0, roughness] : {std::array<double, 2>{0.25, 0.8}, {0.7, 0.6}}) {
+    const double sigma = roughness * roughness;
+    const auto slab = clothbake::model::FibreSggx<double>::make({0, 0, 1}, sigma);
+    const Vec3d wo{std::sqrt(1 - mu0 * mu0), 0.0, mu0};
+    const double reflected = clothbake::sheen_test::integrate_zphi(
+        [&](const Vec3d& wi) {
+          return clothbake::model::spongecake_reflection(slab, 1.0, wi, wo) * std::abs(wi.z);
+        },
+        0.0, 1.0, 1000, 256);
+    const double transmitted = clothbake::sheen_test::integrate_zphi(
+        [&](const Vec3d& wi) {
+          return clothbake::model::spongecake_transmission(slab, 1.0, wi, wo) * std::abs(wi.z);
+        },
+        -1.0, 0.0, 1000, 256);
+    const double unscattered =
+        clothbake::model::spongecake_unscattered_transmittance(slab, 1.0, wo);
+    LayerSimulationSettings s;
+    s.paths = 400000;
+    s.seed = 13;
+    s.max_order = 1;
+    s.histogram = false;
+    const LayerSimulation sim = simulate_sheen_layer(mu0, roughness, s);
+    const double n = double(sim.paths);
+    const double sim_t = double(sim.transmitted) / n;
+    const double se_t = std::sqrt(sim_t * (1 - sim_t) / n);
+    EXPECT_NEAR(sim.albedo(), reflected, 4.5 * sim.albedo_standard_error() + 2e-4)
+        << "mu0 " << mu0 << " roughness " << roughness;
+    EXPECT_NEAR(sim_t, transmitted + unscattered, 4.5 * se_t + 2e-4)
+        << "mu0 " << mu0 << " roughness " << roughness;
   }
 }
 
