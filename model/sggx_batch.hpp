@@ -3,7 +3,10 @@
 // half vector, and D over many half vectors for one texel.
 //
 // The loops are branch-free straight-line arithmetic over restrict-qualified arrays, written so
-// that GCC and Clang auto-vectorise them at -O2/-O3 (check with -fopt-info-vec): per element
+// that GCC auto-vectorises them at -O3, the project's Release level (check with -fopt-info-vec;
+// GCC 12 at plain -O2 does not: its "very cheap" cost model refuses loops of unknown trip count,
+// so a renderer including this header at -O2 needs -ftree-vectorize -fvect-cost-model=dynamic or
+// -O3 for these loops). Per element
 //   c = t.h,  q = sigma^2 + (1 - sigma^2) c^2,  D = (sigma^3 / pi) / q^2
 // for unit h. Results equal FibreSggx::D_unit element by element (same operations, same order,
 // apart from the fused multiply-adds the compiler may contract on targets that have them).
