@@ -80,6 +80,27 @@ TEST(SheenLtc, SamplesFollowThePdf) {
   }
 }
 
+// The harness above must be able to reject: samples of one LTC lobe checked against the density of
+// a lobe 5% wider (a), or with the skew b moved by 0.05, fail.
+TEST(SheenLtc, ChiSquareRejectsAWrongDensity) {
+  const Vec3d wo = direction(0.4, 0.7);
+  const SheenLtc<double> drawn{0.5, -0.1, 1.0};
+  for (const SheenLtc<double>& claimed :
+       {SheenLtc<double>{0.525, -0.1, 1.0}, SheenLtc<double>{0.5, -0.05, 1.0}}) {
+    Rng rng(34, 0);
+    const auto result = clothbake::sheen_test::chi_square_hemisphere(
+        [&] { return model::sheen_ltc_sample(drawn, wo, rng.uniform(), rng.uniform()); },
+        [&](const Vec3d& wi) { return model::sheen_ltc_density(claimed, wi, wo); }, 300000);
+    EXPECT_FALSE(result.passed) << result.message;
+  }
+  // And the same samples against their own density pass (the control).
+  Rng rng(34, 0);
+  const auto control = clothbake::sheen_test::chi_square_hemisphere(
+      [&] { return model::sheen_ltc_sample(drawn, wo, rng.uniform(), rng.uniform()); },
+      [&](const Vec3d& wi) { return model::sheen_ltc_density(drawn, wi, wo); }, 300000);
+  EXPECT_TRUE(control.passed) << control.message;
+}
+
 // f cos / pdf = R exactly for every sample: the estimator of sheen_sample has zero variance.
 TEST(SheenLtc, SampleWeightIsTheAlbedo) {
   Rng rng(32, 0);
