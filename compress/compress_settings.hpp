@@ -18,7 +18,7 @@ namespace clothbake::compress {
 
 // Default target: relative RMS error of the stored texel values (1-texel footprints). Footprints
 // of 4^2 texels and larger then measure below 1 % on the example fabrics (docs/compression.md).
-inline constexpr double kDefaultMaxError = 0.02;
+inline constexpr double kDefaultMaxError = 0.008;
 // Rank cap per C-PCA cluster in target mode.
 inline constexpr int kDefaultRankCap = 64;
 

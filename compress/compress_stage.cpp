@@ -1,7 +1,8 @@
 // The `compress` pipeline stage (paper Sec. 4.4): the raw Integral-Radiance table sections of the
-// `tables` stage and the label map of the `cluster` stage in, C-PCA compressed sections out
-// (compress/compressed_set.hpp), one kind after the other, with the settings seeded by the bake
-// command (artifact kCompressSettingsArtifact) or the fabric's [bake] defaults.
+// `tables` stage and the label map of the `cluster` stage (artifact "clusters") in, C-PCA
+// compressed sections out (compress/compressed_set.hpp), one kind after the other, with the
+// settings seeded by the bake command (artifact kCompressSettingsArtifact) or the fabric's [bake]
+// defaults.
 //
 // Whether the raw sections are also written is the write stage's business: with keep_raw false it
 // must drop "section/tables" when "section/compress" holds compressed tables (docs/compression.md,
@@ -15,6 +16,7 @@
 #include "bake/inputs/fabric.hpp"
 #include "bake/pipeline/stage.hpp"
 #include "bake/tables/radiance_sections.hpp"
+#include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "compress/compress_settings.hpp"
@@ -24,14 +26,6 @@
 
 namespace clothbake::compress {
 namespace {
-
-// The label map inside the cluster stage's sections.
-std::span<const uint8_t> find_labels(std::span<const formats::Section> sections) {
-  for (const auto& s : sections)
-    if (s.type == reader::SectionType::ClusterLabels && s.instance == 0)
-      return {reinterpret_cast<const uint8_t*>(s.payload.data()), s.payload.size()};
-  throw_internal_error("compress: the cluster stage produced no label map");
-}
 
 void run_compress(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
@@ -49,7 +43,7 @@ void run_compress(pipeline::StageContext& ctx) {
     return;
   }
   const auto& raw = ctx.input<std::vector<formats::Section>>("section/tables");
-  const auto labels = find_labels(ctx.input<std::vector<formats::Section>>("section/cluster"));
+  const auto& labels = ctx.input<cluster::VisibilityClusters>("clusters").labels;
   nlohmann::json kinds = nlohmann::json::array();
   const reader::RadianceTableKind order[] = {reader::RadianceTableKind::Specular,
                                              reader::RadianceTableKind::Gap};
@@ -95,7 +89,7 @@ void run_compress(pipeline::StageContext& ctx) {
 CLOTHBAKE_REGISTER_STAGE(compress) {
   clothbake::pipeline::Stage s;
   s.description = "C-PCA compression of the Integral-Radiance tables (paper Sec. 4.4)";
-  s.inputs = {"fabric", "section/tables", "section/cluster"};
+  s.inputs = {"fabric", "section/tables", "clusters"};
   s.outputs = {"section/compress", "metadata/compress"};
   s.collects = {clothbake::compress::kCompressSettingsArtifact};
   s.run = clothbake::compress::run_compress;

@@ -125,7 +125,8 @@ void footprint_errors(const reader::CompressedRadianceTables& tables,
     if (raw.cluster[t] != compress::kNoStratum)
       for (std::size_t b = 0; b < bins; ++b)
         level[std::size_t(raw.cluster[t]) * bins + b] += double(raw.row(t)[b]);
-  for (double& l : level) l /= double(raw.texels());
+  for (double& l : level)
+    l /= double(raw.texels());
 
   const auto classes = size_classes(n);
   const auto footprints = sample_footprints(n, options.samples, options.seed);
@@ -151,7 +152,8 @@ void footprint_errors(const reader::CompressedRadianceTables& tables,
         const std::size_t t = std::size_t(y) * std::size_t(n) + std::size_t(x);
         if (raw.cluster[t] == compress::kNoStratum) continue;
         double v = 0.0;
-        for (uint32_t w = 0; w < bw.count; ++w) v += bw.weight[w] * double(raw.row(t)[bw.bin[w]]);
+        for (uint32_t w = 0; w < bw.count; ++w)
+          v += bw.weight[w] * double(raw.row(t)[bw.bin[w]]);
         want[raw.cluster[t]] += cx[std::size_t(x)] * cy[std::size_t(y)] * v;
       }
     }
@@ -166,7 +168,8 @@ void footprint_errors(const reader::CompressedRadianceTables& tables,
       gs += got[c];
       ws += want[c];
       double lvl = 0.0;
-      for (uint32_t w = 0; w < bw.count; ++w) lvl += bw.weight[w] * level[c * bins + bw.bin[w]];
+      for (uint32_t w = 0; w < bw.count; ++w)
+        lvl += bw.weight[w] * level[c * bins + bw.bin[w]];
       const double guard = std::max(std::fabs(want[c]), area * lvl);
       if (guard > 0.0) a.max_rel = std::max(a.max_rel, std::fabs(d) / guard);
     }
@@ -243,10 +246,13 @@ void throughput(const reader::Asset& asset, const reader::CompressedRadianceTabl
       std::vector<formats::Section> sections = tables::radiance_sections(std::move(set));
       bytes = formats::serialize_asset(sections);
     }
-    const reader::Status s = built.open_memory(bytes.data(), bytes.size(), {reader::Verify::Structure});
-    if (!s.ok()) throw_internal_error(std::string("verify: raw tables built in memory: ") + s.message());
+    const reader::Status s =
+        built.open_memory(bytes.data(), bytes.size(), {reader::Verify::Structure});
+    if (!s.ok())
+      throw_internal_error(std::string("verify: raw tables built in memory: ") + s.message());
     const reader::Status t = raw_tables.open(built, kind);
-    if (!t.ok()) throw_internal_error(std::string("verify: raw tables built in memory: ") + t.message());
+    if (!t.ok())
+      throw_internal_error(std::string("verify: raw tables built in memory: ") + t.message());
   }
   report->raw_queries_per_second = queries_per_second(raw_tables, rects, hs);
   report->compressed_queries_per_second = queries_per_second(tables, rects, hs);
@@ -277,7 +283,8 @@ CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabri
   report.options = options;
   reader::ArrayView<uint8_t> label_view;
   const reader::Status ls = asset.array(reader::SectionType::ClusterLabels, 0, &label_view);
-  if (!ls.ok()) invalid_asset(std::string("verify: the asset has no cluster label map: ") + ls.message());
+  if (!ls.ok())
+    invalid_asset(std::string("verify: the asset has no cluster label map: ") + ls.message());
   const std::vector<uint8_t> labels(label_view.begin(), label_view.end());
 
   for (uint32_t k = 0; k < reader::kRadianceKindCount; ++k) {
@@ -311,8 +318,9 @@ CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabri
     r.min_rank = 1 << 30;
     for (uint32_t p = 0; p < reader::kCompressedPartCount; ++p) {
       reader::SectionInfo si;
-      if (asset.find(reader::SectionType::RadianceCompressedTables,
-                     reader::compressed_instance(kind, reader::CompressedPart(p)), &si)
+      if (asset
+              .find(reader::SectionType::RadianceCompressedTables,
+                    reader::compressed_instance(kind, reader::CompressedPart(p)), &si)
               .ok())
         r.compressed_bytes += si.stored_size;
     }
@@ -324,15 +332,17 @@ CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabri
       for (uint8_t c : raw.cluster)
         if (c != compress::kNoStratum) used[c] = 1;
       uint64_t stored = 0;
-      for (char u : used) stored += uint64_t(u);
+      for (char u : used)
+        stored += uint64_t(u);
       r.raw_float_bytes = stored * uint64_t(raw.bins()) * raw.texels() * 4;
     }
     r.ratio = r.compressed_bytes ? double(r.raw_float_bytes) / double(r.compressed_bytes) : 0.0;
     {
       reader::ArrayView<uint32_t> cells;
       reader::SectionInfo si;
-      if (asset.find(reader::SectionType::RadianceCompressedTables,
-                     reader::compressed_instance(kind, reader::CompressedPart::Cells), &si)
+      if (asset
+              .find(reader::SectionType::RadianceCompressedTables,
+                    reader::compressed_instance(kind, reader::CompressedPart::Cells), &si)
               .ok() &&
           asset.view_of(si, &cells).ok())
         for (uint32_t g = 0; g < info.cell_count; ++g) {
@@ -416,7 +426,8 @@ nlohmann::json compressed_report_json(const CompressedVerifyReport& report) {
   nlohmann::json thresholds = {{"max_footprint_error", report.options.max_footprint_error},
                                {"threshold_side", report.options.threshold_side}};
   if (report.options.min_ratio) thresholds["min_ratio"] = *report.options.min_ratio;
-  if (report.options.max_texel_error) thresholds["max_texel_error"] = *report.options.max_texel_error;
+  if (report.options.max_texel_error)
+    thresholds["max_texel_error"] = *report.options.max_texel_error;
   return {{"compressed", kinds},
           {"thresholds", thresholds},
           {"passed", report.passed},
@@ -426,10 +437,9 @@ nlohmann::json compressed_report_json(const CompressedVerifyReport& report) {
 std::string compressed_report_text(const CompressedVerifyReport& report) {
   std::ostringstream o;
   for (const auto& r : report.kinds) {
-    o << "compressed " << r.kind << " tables: " << r.resolution << "^2 texels, "
-      << r.bins_per_side << "^2 bins, " << r.clusters << " clusters -> " << r.cells
-      << " C-PCA cells, ranks " << r.min_rank << ".." << r.max_rank << ", " << r.images
-      << " images\n";
+    o << "compressed " << r.kind << " tables: " << r.resolution << "^2 texels, " << r.bins_per_side
+      << "^2 bins, " << r.clusters << " clusters -> " << r.cells << " C-PCA cells, ranks "
+      << r.min_rank << ".." << r.max_rank << ", " << r.images << " images\n";
     o << "  size: " << r.compressed_bytes << " bytes against " << r.raw_float_bytes
       << " of raw float tables (" << fixed(r.ratio, 1) << ":1); decoded in memory "
       << fixed(double(r.decoded_bytes) / 1048576.0, 1) << " MiB\n";
@@ -440,8 +450,9 @@ std::string compressed_report_text(const CompressedVerifyReport& report) {
       << fixed(r.tables.worst_relative_rmse, 5) << " (" << r.tables.worst_table << ")\n";
     o << "  footprints (RMS relative per cluster / of the cluster sum / max guarded):\n";
     for (const auto& c : r.classes)
-      o << "    " << c.size_class << (c.size_class.size() < 5 ? std::string(5 - c.size_class.size(), ' ') : "")
-        << " " << fixed(100 * c.rms_relative, 3) << " % / " << fixed(100 * c.rms_relative_sum, 3)
+      o << "    " << c.size_class
+        << (c.size_class.size() < 5 ? std::string(5 - c.size_class.size(), ' ') : "") << " "
+        << fixed(100 * c.rms_relative, 3) << " % / " << fixed(100 * c.rms_relative_sum, 3)
         << " % / " << fixed(100 * c.max_relative, 2) << " %  (" << c.footprints << ")\n";
     if (std::isfinite(r.min_reliable_side))
       o << "  use the compressed tables for footprints of side >= " << fixed(r.min_reliable_side, 0)
@@ -456,7 +467,8 @@ std::string compressed_report_text(const CompressedVerifyReport& report) {
         << fixed(r.cost_ratio, 2) << "x raw\n";
   }
   o << (report.passed ? "compressed tables: passed\n" : "compressed tables: FAILED\n");
-  for (const auto& f : report.failures) o << "  " << f << "\n";
+  for (const auto& f : report.failures)
+    o << "  " << f << "\n";
   return o.str();
 }
 

@@ -40,20 +40,20 @@
 namespace clothbake::verify {
 
 struct CompressedVerifyOptions {
-  int samples = 1400;                 // footprints per kind, spread over the size classes
+  int samples = 1400;  // footprints per kind, spread over the size classes
   uint64_t seed = 1;
-  double max_footprint_error = 0.01;  // RMS relative footprint error threshold...
-  double threshold_side = 4.0;        // ...for the classes whose sides are >= this (texels)
-  std::optional<double> min_ratio;    // fail below this compression ratio
+  double max_footprint_error = 0.01;      // RMS relative footprint error threshold...
+  double threshold_side = 4.0;            // ...for the classes whose sides are >= this (texels)
+  std::optional<double> min_ratio;        // fail below this compression ratio
   std::optional<double> max_texel_error;  // fail above this relative RMS texel error
-  bool throughput = true;             // measure queries/s (builds raw tables if not kept)
+  bool throughput = true;                 // measure queries/s (builds raw tables if not kept)
   int throughput_queries = 100000;
 };
 
 struct TableErrorSummary {
-  uint64_t tables = 0;              // (cluster, bin) tables with a non-zero raw texel
-  double worst_relative_rmse = 0.0; // max over tables of RMSE / peak
-  std::string worst_table;          // "cluster C bin B"
+  uint64_t tables = 0;               // (cluster, bin) tables with a non-zero raw texel
+  double worst_relative_rmse = 0.0;  // max over tables of RMSE / peak
+  std::string worst_table;           // "cluster C bin B"
   double min_psnr_db = 0.0, median_psnr_db = 0.0;
   double max_abs_error = 0.0;       // over every texel of every table
   double texel_rms_relative = 0.0;  // sqrt(sum err^2 / sum ref^2) over all tables

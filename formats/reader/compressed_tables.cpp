@@ -309,16 +309,19 @@ int CompressedRadianceTables::decode_texel(uint32_t x, uint32_t y, float* out) c
   const uint32_t bins = bins_per_side_ * bins_per_side_;
   const int c = cluster_of_texel(x, y);
   if (c < 0) {
-    for (uint32_t b = 0; b < bins; ++b) out[b] = 0.0f;
+    for (uint32_t b = 0; b < bins; ++b)
+      out[b] = 0.0f;
     return -1;
   }
   const uint32_t first = image_begin_[c], last = image_begin_[c + 1];
   double w[kMaxCompressedImages];
-  for (uint32_t i = first; i < last; ++i) w[i - first] = double(weight(i, x, y));
+  for (uint32_t i = first; i < last; ++i)
+    w[i - first] = double(weight(i, x, y));
   for (uint32_t b = 0; b < bins; ++b) {
     const float* row = basis_.get() + uint64_t(b) * images_ + first;
     double v = 0.0;
-    for (uint32_t i = 0; i < last - first; ++i) v += w[i] * double(row[i]);
+    for (uint32_t i = 0; i < last - first; ++i)
+      v += w[i] * double(row[i]);
     out[b] = float(v);
   }
   return c;
