@@ -31,6 +31,7 @@ Image read_image(const std::string& path) {
   Image image(spec.width, spec.height, spec.nchannels);
   image.source_format = in->format_name();
   image.source_bits = int(spec.format.size() * 8);
+  image.source_is_float = spec.format.is_floating_point();
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
     std::string why = in->geterror();
     throw_input_error(
@@ -63,6 +64,9 @@ void write_image(const std::string& path, const Image& image, PixelType type) {
   if (!out)
     throw_input_error(fmt::format("{}: cannot create image writer ({})", path, OIIO::geterror()));
   OIIO::ImageSpec spec(image.width, image.height, image.channels, format);
+  // OIIO stamps the current time into EXR/TIFF headers; an empty DateTime keeps the bytes a pure
+  // function of the pixels, so generated maps hash the same on every run (asset provenance).
+  spec.attribute("DateTime", "");
   if (format == OIIO::TypeDesc::FLOAT || format == OIIO::TypeDesc::HALF)
     spec.attribute("compression", "zip");
   if (!out->open(path, spec))
