@@ -25,8 +25,9 @@ struct Lobe {
 // per-sample pass is an Eigen array expression: vectorised, including the exponential.
 class Problem {
  public:
-  Problem(const FitDirections& d, const uint8_t* visible)
-      : x_(d.x.data(), Eigen::Index(d.size())),
+  Problem(const FitDirections& d, const uint8_t* visible, bool smooth_term = false)
+      : smooth_(smooth_term),
+        x_(d.x.data(), Eigen::Index(d.size())),
         y_(d.y.data(), Eigen::Index(d.size())),
         z_(d.z.data(), Eigen::Index(d.size())),
         v_(Eigen::Index(d.size())) {
@@ -54,7 +55,11 @@ class Problem {
     project(lobe.frame.col(1), vy_);
     project(lobe.frame.col(2), vz_);
     const float lambda = float(lobe.lambda), mu = float(lobe.mu);
-    e_ = (-(lambda * vx_.square() + mu * vy_.square())).exp() * positive(vz_);
+    ex_ = (-(lambda * vx_.square() + mu * vy_.square())).exp() * positive(vz_);
+    if (smooth_)
+      e_ = ex_ * vz_.max(0.f);  // Xu et al.'s smooth term (studies only, see AsgFitOptions)
+    else
+      e_ = ex_;
     r_ = float(lobe.c) * e_ - v_;
     return double(r_.matrix().squaredNorm());
   }
@@ -73,6 +78,10 @@ class Problem {
     jac_.col(3) = (-g * vx_.square()).matrix();
     jac_.col(4) = (-g * vy_.square()).matrix();
     jac_.col(5) = e_.matrix();
+    if (smooth_) {  // G = c ex v.z: plus c ex d(v.z)/dw, d(v.z)/dw = (-v.y, v.x, 0)
+      jac_.col(0) += (-c * ex_ * vy_).matrix();
+      jac_.col(1) += (c * ex_ * vx_).matrix();
+    }
     jtj = (jac_.transpose() * jac_).cast<double>();
     jtr = (jac_.transpose() * r_.matrix()).cast<double>();
   }
@@ -88,9 +97,10 @@ class Problem {
     out = float(axis.x()) * x_ + float(axis.y()) * y_ + float(axis.z()) * z_;
   }
 
+  bool smooth_ = false;
   MapF x_, y_, z_;
   ArrayF v_;
-  ArrayF vx_, vy_, vz_, e_, r_;
+  ArrayF vx_, vy_, vz_, ex_, e_, r_;
   Eigen::Matrix<float, Eigen::Dynamic, 6> jac_;
 };
 
@@ -237,40 +247,16 @@ double asg_rms_error(const FitDirections& directions, const uint8_t* visible,
   return std::sqrt(problem.energy(lobe) / double(directions.size()));
 }
 
-AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible) {
-  AsgFitResult result;
-  const std::size_t k_count = d.size();
-  if (k_count == 0) return result;
-  std::size_t seen = 0;
-  for (std::size_t k = 0; k < k_count; ++k)
-    seen += visible[k] ? 1 : 0;
-  if (seen == 0 || seen == k_count) {
-    // V = 0 or V = 1 on every sample: represented exactly by a flat lobe about +z.
-    result.params.amplitude = seen == 0 ? 0.0 : 1.0;
-    return result;
-  }
+namespace {
 
-  // Starts: the moments of the visible directions, and the best half-space (which includes the
-  // flat lobe about +z, beta = 0); the better one is refined.
-  Problem problem(d, visible);
-  int evaluations = 0;
-  Lobe lobe = moment_start(problem);
-  double energy = problem.energy(lobe);
-  Lobe half = half_space_start(problem, &evaluations);
-  double half_energy = problem.energy(half);
-  evaluations += 2;
-  if (half_energy < energy) {
-    lobe = half;
-    energy = half_energy;
-  } else {
-    problem.energy(lobe);  // the workspace must hold the start's arrays
-  }
-
+// Levenberg-Marquardt from `lobe` (energy `energy`; the problem's workspace must hold `lobe`) with
+// at most `refinements` trial steps. Returns the refined lobe and energy.
+void refine(Problem& problem, Lobe& lobe, double& energy, int refinements, int& evaluations) {
   double damping = 1e-3;
   Matrix6 jtj;
   Vector6 jtr;
   bool fresh = false;  // normal equations up to date for `lobe`
-  const int budget = evaluations + kAsgFitMaxRefinements;
+  const int budget = evaluations + refinements;
   while (evaluations < budget) {
     if (!fresh) {
       problem.normal_equations(lobe, jtj, jtr);  // the workspace holds `lobe` (see below)
@@ -297,10 +283,78 @@ AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible) {
       damping = std::max(damping / 3, 1e-9);
       if (gain < 1e-4 * energy) break;  // converged: the RMS error changes by < 0.005 %
     } else {
-      // Rejected: the workspace holds the trial; the next normal equations (only after an
-      // acceptance) recompute nothing stale because `fresh` stays true until then.
+      // Rejected: the workspace holds the trial, but the normal equations stay those of `lobe`
+      // (`fresh`), and they are only recomputed after an acceptance, when it holds `lobe` again.
       damping *= 4;
       if (damping > 1e8) break;
+    }
+  }
+}
+
+// A deterministic random lobe (splitmix64): axis uniform on the hemisphere, log-uniform
+// bandwidths in [0.1, 1000], best amplitude.
+Lobe random_start(Problem& problem, uint64_t& state) {
+  auto next = [&state] {
+    uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return double((z ^ (z >> 31)) >> 11) * 0x1p-53;
+  };
+  double cz = next(), phi = 2 * model::kPi<double> * next(), sz = std::sqrt(1 - cz * cz);
+  Lobe lobe;
+  Eigen::Vector3d z(sz * std::cos(phi), sz * std::sin(phi), cz);
+  lobe.frame.col(2) = z;
+  lobe.frame.col(0) = z.unitOrthogonal();
+  lobe.frame = lobe.frame * rotation(z * (2 * model::kPi<double> * next()));
+  project_frame(lobe.frame);
+  lobe.lambda = std::pow(10.0, -1 + 4 * next());
+  lobe.mu = std::pow(10.0, -1 + 4 * next());
+  set_best_amplitude(problem, lobe);
+  return lobe;
+}
+
+}  // namespace
+
+AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible, const AsgFitOptions& options) {
+  AsgFitResult result;
+  const std::size_t k_count = d.size();
+  if (k_count == 0) return result;
+  std::size_t seen = 0;
+  for (std::size_t k = 0; k < k_count; ++k)
+    seen += visible[k] ? 1 : 0;
+  if ((seen == 0 || seen == k_count) && !options.xu_smooth_term) {
+    // V = 0 or V = 1 on every sample: represented exactly by a flat lobe about +z.
+    result.params.amplitude = seen == 0 ? 0.0 : 1.0;
+    return result;
+  }
+
+  // Starts: the moments of the visible directions, and the best half-space (which includes the
+  // flat lobe about +z, beta = 0); the better one is refined.
+  Problem problem(d, visible, options.xu_smooth_term);
+  int evaluations = 0;
+  Lobe lobe = moment_start(problem);
+  double energy = problem.energy(lobe);
+  Lobe half = half_space_start(problem, &evaluations);
+  double half_energy = problem.energy(half);
+  evaluations += 2;
+  if (half_energy < energy) {
+    lobe = half;
+    energy = half_energy;
+  } else {
+    problem.energy(lobe);  // the workspace must hold the start's arrays
+  }
+  refine(problem, lobe, energy, options.max_refinements, evaluations);
+
+  // Optional extra starts (studies of the fit, not the bake): each refined, the best kept.
+  uint64_t state = options.seed;
+  for (int k = 0; k < options.random_starts; ++k) {
+    Lobe trial = random_start(problem, state);
+    double trial_energy = problem.energy(trial);
+    ++evaluations;
+    refine(problem, trial, trial_energy, options.max_refinements, evaluations);
+    if (trial_energy < energy) {
+      lobe = trial;
+      energy = trial_energy;
     }
   }
   result.params = to_params(lobe);

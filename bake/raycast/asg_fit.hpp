@@ -50,9 +50,19 @@ struct AsgFitResult {
 inline constexpr int kAsgFitMaxRefinements = 8;
 inline constexpr int kAsgFitMaxEvaluations = 14 + 2 + kAsgFitMaxRefinements;
 
+// Knobs for studies of the fit (benchmarks/raycast/asg_fit_study.cpp); the bake uses defaults.
+struct AsgFitOptions {
+  int max_refinements = kAsgFitMaxRefinements;  // LM trial steps per start
+  int random_starts = 0;        // extra random starts, each refined; the best result is kept
+  uint64_t seed = 1;            // of the random starts
+  bool xu_smooth_term = false;  // fit Xu et al.'s c max(v.z, 0) exp(...) instead (comparison)
+};
+
 // visible[k] in {0, 1} for direction k. Safe for any input of matching sizes (K >= 1); the result
-// is always finite and within the bounds above.
-AsgFitResult fit_asg(const FitDirections& directions, const uint8_t* visible);
+// is always finite and within the bounds above. With the default options it uses at most
+// kAsgFitMaxEvaluations objective evaluations.
+AsgFitResult fit_asg(const FitDirections& directions, const uint8_t* visible,
+                     const AsgFitOptions& options = {});
 
 // RMS error of lobe `params` against the samples.
 double asg_rms_error(const FitDirections& directions, const uint8_t* visible,

@@ -41,7 +41,8 @@ void validate_parallax_settings(const ParallaxSettings& settings) {
                       " is out of range: expected -1 (automatic) or 0 to 64");
 }
 
-ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& settings) {
+ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& settings,
+                            const ProgressCallback& progress) {
   validate_parallax_settings(settings);
   const int n = maps.resolution;
   if (n < 1 || maps.height.size() != maps.texel_count())
@@ -93,6 +94,7 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
     m.store(0);
 
   const TexelBlocks blocks(n);
+  std::atomic<int> tiles_done{0};
   tbb::parallel_for(
       tbb::blocked_range<int>(0, blocks.tile_count()), [&](const tbb::blocked_range<int>& r) {
         RayPacket packet;
@@ -151,6 +153,8 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
                    !m.compare_exchange_weak(cur, tile_max_code, std::memory_order_relaxed)) {
             }
           }
+          const int done = tiles_done.fetch_add(1, std::memory_order_relaxed) + 1;
+          if (progress) progress(double(done) / double(blocks.tile_count()));
         }
         atomic_max(max_error, local_max_error);
       });
@@ -184,13 +188,17 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
 }
 
 std::vector<uint32_t> parallax_sat(const ParallaxTable& table) {
-  const int n = table.resolution;
-  const std::size_t texels = table.texel_count();
-  const int dir_count = table.dirs * table.dirs;
   std::vector<uint32_t> sat(table.depth.size());
+  parallax_sat(table.depth.data(), table.resolution, table.dirs * table.dirs, sat.data());
+  return sat;
+}
+
+void parallax_sat(const uint16_t* codes, int resolution, int dir_count, uint32_t* out) {
+  const int n = resolution;
+  const std::size_t texels = std::size_t(n) * std::size_t(n);
   tbb::parallel_for(0, dir_count, [&](int dir) {
-    const uint16_t* src = table.depth.data() + std::size_t(dir) * texels;
-    uint32_t* dst = sat.data() + std::size_t(dir) * texels;
+    const uint16_t* src = codes + std::size_t(dir) * texels;
+    uint32_t* dst = out + std::size_t(dir) * texels;
     for (int y = 0; y < n; ++y) {
       uint32_t row = 0;  // unsigned arithmetic wraps modulo 2^32 by definition
       for (int x = 0; x < n; ++x) {
@@ -199,7 +207,6 @@ std::vector<uint32_t> parallax_sat(const ParallaxTable& table) {
       }
     }
   });
-  return sat;
 }
 
 }  // namespace clothbake::raycast

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "bake/inputs/fabric.hpp"
@@ -60,17 +61,23 @@ struct ParallaxTable {
 // "bake.parallax_min_cos").
 void validate_parallax_settings(const ParallaxSettings& settings);
 
+// Called with the fraction of the work done, from worker threads (must be thread-safe and cheap).
+using ProgressCallback = std::function<void(double)>;
+
 // Casts resolution^2 x dirs^2 rays (16-wide Embree packets of 4 x 4 neighbouring texels sharing
 // one direction, TBB over texel blocks; the result does not depend on the thread count).
 // Throws Error(Input) for bad settings or a non-finite height (naming the texel). Warns (common/
 // diagnostics) when rays never hit (Embree edge leaks that survived a re-cast) and when the heights
 // are so tall that offsets exceed a tile. A flat map gives r = 0 without casting rays.
-ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& settings);
+ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& settings,
+                            const ProgressCallback& progress = {});
 
 // Per-direction summed-area tables of the depth codes: sat[dir][y * N + x] = sum of codes over
 // texels [0, x] x [0, y], modulo 2^32 (unsigned wrap-around). Rectangle sums taken with the same
 // modular arithmetic are exact whenever the true sum is below 2^32, i.e. for any rectangle of at
 // most 65537 texels (formats/reader/parallax_query.hpp splits larger ones).
 std::vector<uint32_t> parallax_sat(const ParallaxTable& table);
+// The same from raw codes [dir][texel] (dir_count * resolution^2 values) into `out` (as many).
+void parallax_sat(const uint16_t* codes, int resolution, int dir_count, uint32_t* out);
 
 }  // namespace clothbake::raycast

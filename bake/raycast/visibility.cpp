@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdio>
@@ -44,7 +45,8 @@ void validate_visibility_settings(const VisibilitySettings& settings) {
     throw_input_error("visibility fit warning threshold must be > 0");
 }
 
-VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings) {
+VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings,
+                                    const std::function<void(double)>& progress) {
   validate_visibility_settings(settings);
   const int n = maps.resolution;
   if (n < 1 || maps.height.size() != maps.texel_count())
@@ -99,6 +101,7 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
 
   RayCounters counters;
   const TexelBlocks blocks(n);
+  std::atomic<int> tiles_done{0};
   const int words = samples.words_per_texel;
   tbb::parallel_for(
       tbb::blocked_range<int>(0, blocks.tile_count()), [&](const tbb::blocked_range<int>& r) {
@@ -130,6 +133,8 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
                                                                                  << (dir % 64);
             }
           }
+          const int done = tiles_done.fetch_add(1, std::memory_order_relaxed) + 1;
+          if (progress) progress(double(done) / double(blocks.tile_count()));
         }
       });
   samples.rays = counters.rays.load();
@@ -137,8 +142,8 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
   return samples;
 }
 
-VisibilityAsgs fit_visibility(const VisibilitySamples& samples,
-                              const VisibilitySettings& settings) {
+VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const VisibilitySettings& settings,
+                              const std::function<void(double)>& progress) {
   validate_visibility_settings(settings);
   VisibilityAsgs out;
   out.resolution = samples.resolution;
@@ -168,6 +173,7 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples,
     a.evaluations += b.evaluations;
     return a;
   };
+  std::atomic<std::size_t> fitted{0};
   Summary total = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, texels, 64), Summary{},
       [&](const tbb::blocked_range<std::size_t>& r, Summary s) {
@@ -189,6 +195,8 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples,
           s.above += err > settings.fit_warn_rms ? 1 : 0;
           s.evaluations += uint64_t(fit.evaluations);
         }
+        const std::size_t done = fitted.fetch_add(r.size(), std::memory_order_relaxed) + r.size();
+        if (progress) progress(double(done) / double(texels));
         return s;
       },
       combine);

@@ -1,0 +1,214 @@
+// clothbake query: answers the reader library's per-texel and footprint queries on an asset, for
+// looking at a bake and for scripts (docs/raycast.md, "Queries").
+//
+//   clothbake query ASSET parallax   --dir x,y,z (--texel i,j | --rect x0,y0,x1,y1) [--json]
+//   clothbake query ASSET visibility --texel i,j --dir x,y,z [--json]
+//
+// Exit codes: 1 bad arguments (naming the option), 2 missing file or missing section, 3 invalid
+// asset (layout or checksum), 0 otherwise.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bake/cli/command.hpp"
+#include "common/error.hpp"
+#include "formats/reader/parallax_sections.hpp"
+#include "formats/reader/visibility_sections.hpp"
+#include "formats/writer/open_asset.hpp"
+
+namespace clothbake::cli {
+namespace {
+
+struct QueryOptions {
+  std::string asset;
+  std::string kind;
+  std::string dir;
+  std::string texel;
+  std::string rect;
+  bool json = false;
+};
+
+// "a,b,..." into exactly `count` numbers; integers if `integers`. Throws CLI::ValidationError.
+std::vector<double> parse_numbers(const std::string& text, std::size_t count, bool integers,
+                                  const std::string& option) {
+  std::string s = text;
+  for (char& ch : s)
+    if (ch == ',') ch = ' ';
+  std::istringstream in(s);
+  std::vector<double> v;
+  std::string token;
+  while (in >> token) {
+    std::size_t used = 0;
+    double value = 0;
+    try {
+      value = integers ? double(std::stoll(token, &used)) : std::stod(token, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != token.size() || !std::isfinite(value))
+      throw CLI::ValidationError(
+          option, "'" + token + "' is not " + (integers ? "an integer" : "a finite number"));
+    v.push_back(value);
+  }
+  if (v.size() != count)
+    throw CLI::ValidationError(option, "expected " + std::to_string(count) +
+                                           " comma-separated numbers, got '" + text + "'");
+  return v;
+}
+
+std::array<double, 3> parse_direction(const std::string& text) {
+  std::array<double, 3> d = parse_vec3(text, "--dir");
+  if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2]) ||
+      !(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 0))
+    throw CLI::ValidationError("--dir", "the direction must be finite and non-zero");
+  return d;
+}
+
+nlohmann::json vec(const double* v, int n) {
+  nlohmann::json a = nlohmann::json::array();
+  for (int i = 0; i < n; ++i)
+    a.push_back(v[i]);
+  return a;
+}
+
+void fail_on(const reader::Status& status, const std::string& asset) {
+  if (status.ok()) return;
+  if (status.code() == reader::ErrorCode::NotFound)
+    throw_input_error(asset + ": " + status.message());
+  throw Error(formats::exit_code_of(status), asset + ": " + formats::describe(status));
+}
+
+int query_parallax(const QueryOptions& o) {
+  if (o.dir.empty()) throw CLI::ValidationError("--dir", "parallax queries need --dir x,y,z");
+  if (o.texel.empty() == o.rect.empty())
+    throw CLI::ValidationError("--texel",
+                               "parallax queries need exactly one of --texel i,j and "
+                               "--rect x0,y0,x1,y1");
+  const std::array<double, 3> dir = parse_direction(o.dir);
+  std::vector<double> texel, rect;
+  if (!o.texel.empty()) texel = parse_numbers(o.texel, 2, true, "--texel");
+  if (!o.rect.empty()) {
+    rect = parse_numbers(o.rect, 4, false, "--rect");
+    if (rect[2] < rect[0] || rect[3] < rect[1])
+      throw CLI::ValidationError("--rect", "x1 must be >= x0 and y1 >= y0");
+  }
+  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  reader::ParallaxView view;
+  fail_on(view.open(asset), o.asset);
+  reader::ParallaxSample sample;
+  reader::Status status;
+  if (!texel.empty())
+    status = view.depth(int64_t(texel[0]), int64_t(texel[1]), dir.data(), &sample);
+  else
+    status = view.footprint_depth({rect[0], rect[1], rect[2], rect[3]}, dir.data(), &sample);
+  if (status.code() == reader::ErrorCode::InvalidArgument)
+    throw CLI::ValidationError(texel.empty() ? "--rect" : "--texel", status.message());
+  fail_on(status, o.asset);
+  const double n = view.resolution();
+  const double len = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+  const bool clamped = dir[2] / len < view.info().min_cos;
+  if (o.json) {
+    nlohmann::json out = {{"asset", o.asset},
+                          {"query", "parallax"},
+                          {"resolution", view.resolution()},
+                          {"dirs", view.dirs()},
+                          {"min_cos", view.info().min_cos},
+                          {"reference_height", view.info().reference_height},
+                          {"dir", vec(dir.data(), 3)},
+                          {"direction_used", vec(sample.direction, 3)},
+                          {"clamped_to_cap", clamped},
+                          {"r", sample.r},
+                          {"offset_tile", vec(sample.offset, 2)},
+                          {"offset_texels", {sample.offset[0] * n, sample.offset[1] * n}}};
+    if (!texel.empty())
+      out["texel"] = {int64_t(texel[0]), int64_t(texel[1])};
+    else
+      out["rect"] = vec(rect.data(), 4);
+    print_json(out);
+    return 0;
+  }
+  if (!texel.empty())
+    std::printf("parallax at texel (%lld, %lld)", static_cast<long long>(texel[0]),
+                static_cast<long long>(texel[1]));
+  else
+    std::printf("parallax over [%g, %g) x [%g, %g) (mean)", rect[0], rect[2], rect[1], rect[3]);
+  std::printf(", view (%.6g, %.6g, %.6g)%s\n", sample.direction[0], sample.direction[1],
+              sample.direction[2], clamped ? " (clamped onto the parallax cap)" : "");
+  std::printf("  r = %.9g tile-side units (hit %.9g below the reference plane z = %.9g)\n",
+              sample.r, -sample.r, view.info().reference_height);
+  std::printf("  offset (Eq. 2) = (%.9g, %.9g) tile = (%.6g, %.6g) texels\n", sample.offset[0],
+              sample.offset[1], sample.offset[0] * n, sample.offset[1] * n);
+  return 0;
+}
+
+int query_visibility(const QueryOptions& o) {
+  if (o.dir.empty())
+    throw CLI::ValidationError("--dir", "visibility queries need --dir x,y,z (light direction)");
+  if (o.texel.empty()) throw CLI::ValidationError("--texel", "visibility queries need --texel i,j");
+  if (!o.rect.empty())
+    throw CLI::ValidationError("--rect", "visibility queries are per texel: use --texel");
+  const std::array<double, 3> dir = parse_direction(o.dir);
+  const std::vector<double> texel = parse_numbers(o.texel, 2, true, "--texel");
+  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  reader::VisibilityAsgView view;
+  fail_on(view.open(asset), o.asset);
+  const int64_t x = int64_t(texel[0]), y = int64_t(texel[1]);
+  double v = 0;
+  reader::Status status = view.visibility(x, y, dir.data(), &v);
+  if (status.code() == reader::ErrorCode::InvalidArgument)
+    throw CLI::ValidationError("--dir", status.message());
+  fail_on(status, o.asset);
+  const model::AsgParams<double> p = view.lobe(x, y);
+  const double error = view.fit_error(x, y);
+  if (o.json) {
+    nlohmann::json out = {
+        {"asset", o.asset},
+        {"query", "visibility"},
+        {"resolution", view.resolution()},
+        {"texel", {x, y}},
+        {"dir", vec(dir.data(), 3)},
+        {"visibility", v},
+        {"asg",
+         {{"axis", {p.axis.x, p.axis.y, p.axis.z}},
+          {"rotation", p.rotation},
+          {"lambda", p.lambda},
+          {"mu", p.mu},
+          {"amplitude", p.amplitude}}},
+        {"fit_error", std::isfinite(error) ? nlohmann::json(error) : nlohmann::json(nullptr)}};
+    print_json(out);
+    return 0;
+  }
+  std::printf("visibility at texel (%lld, %lld), light (%.6g, %.6g, %.6g): V = %.6g\n",
+              static_cast<long long>(x), static_cast<long long>(y), dir[0], dir[1], dir[2], v);
+  std::printf(
+      "  ASG: axis (%.6g, %.6g, %.6g), rotation %.6g rad, lambda %.6g, mu %.6g, "
+      "amplitude %.6g\n",
+      p.axis.x, p.axis.y, p.axis.z, p.rotation, p.lambda, p.mu, p.amplitude);
+  if (std::isfinite(error)) std::printf("  fit RMS error over the sampled sky: %.6g\n", error);
+  return 0;
+}
+
+const bool registered = register_command(
+    {"query", "answer per-texel and footprint queries on an asset (parallax, visibility)",
+     [](CLI::App& app) -> Action {
+       auto o = std::make_shared<QueryOptions>();
+       app.add_option("ASSET", o->asset, "asset file (.cbk)")->required();
+       app.add_option("KIND", o->kind, "what to query: parallax or visibility")
+           ->required()
+           ->check(CLI::IsMember({"parallax", "visibility"}));
+       app.add_option("--dir", o->dir,
+                      "direction x,y,z in the local frame (z = macro normal): the view direction "
+                      "(towards the viewer) for parallax, the light direction for visibility");
+       app.add_option("--texel", o->texel, "texel i,j (integers; the tile wraps)");
+       app.add_option("--rect", o->rect,
+                      "parallax footprint x0,y0,x1,y1 in texel units (mean over the rectangle)");
+       app.add_flag("--json", o->json, "print the answer as JSON on stdout");
+       return [o] { return o->kind == "parallax" ? query_parallax(*o) : query_visibility(*o); };
+     }});
+
+}  // namespace
+}  // namespace clothbake::cli

@@ -1,0 +1,56 @@
+// The `visibility` pipeline stage (paper Sec. 3.1, 4.2): the fabric's height map in, one ASG per
+// texel with its fit error out (bake/raycast/visibility.hpp,
+// formats/reader/visibility_sections.hpp), plus the decoded lobes as the artifact
+// "visibility/asg_params" (std::vector<model::AsgParams<float>>, texel order) for the visibility
+// clustering. Settings: [bake] visibility_dirs.
+//
+// Attached as an INTERFACE source of clothbake_raycast (CMakeLists.txt), so that the registration
+// is compiled into every executable that links the library (docs/pipeline.md).
+#include <nlohmann/json.hpp>
+
+#include "bake/inputs/fabric.hpp"
+#include "bake/pipeline/stage.hpp"
+#include "bake/raycast/raycast_sections.hpp"
+#include "bake/raycast/visibility.hpp"
+
+namespace clothbake::raycast {
+namespace {
+
+void run_visibility(pipeline::StageContext& ctx) {
+  const Fabric& fabric = ctx.input<Fabric>("fabric");
+  VisibilitySettings settings;
+  settings.dirs = fabric.bake.visibility_dirs;
+  VisibilitySamples samples =
+      sample_visibility(fabric.maps, settings, [&](double f) { ctx.progress(0.7 * f); });
+  VisibilityAsgs asgs =
+      fit_visibility(samples, settings, [&](double f) { ctx.progress(0.7 + 0.28 * f); });
+  nlohmann::json meta = {
+      {"dirs", settings.dirs},
+      {"direction_grid", "DirectionGrid{dirs, 0} bin centres (upper hemisphere of light)"},
+      {"normal_offset_texels", settings.normal_offset_texels},
+      {"asg", "G(w) = c [w.z > 0] exp(-lambda (w.x)^2 - mu (w.y)^2), model/asg.hpp"},
+      {"mean_fit_error", asgs.mean_fit_error},
+      {"max_fit_error", asgs.max_fit_error},
+      {"fit_warning_rms", settings.fit_warn_rms},
+      {"texels_above_warning", asgs.texels_above_warning},
+      {"rays", samples.rays},
+      {"segments", samples.segments},
+      {"rings", samples.rings},
+  };
+  ctx.output("visibility/asg_params", decoded_lobes(asgs));
+  ctx.output("section/visibility", visibility_sections(asgs, settings, settings.dirs));
+  ctx.progress(1.0);
+  ctx.output("metadata/visibility", std::move(meta));
+}
+
+}  // namespace
+}  // namespace clothbake::raycast
+
+CLOTHBAKE_REGISTER_STAGE(visibility) {
+  clothbake::pipeline::Stage s;
+  s.description = "per-texel visibility sampled by ray casting, fitted by one ASG (Sec. 3.1, 4.2)";
+  s.inputs = {"fabric"};
+  s.outputs = {"section/visibility", "metadata/visibility", "visibility/asg_params"};
+  s.run = clothbake::raycast::run_visibility;
+  return s;
+}
