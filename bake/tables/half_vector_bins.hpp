@@ -45,7 +45,7 @@ bool bins_resolve_roughness(int bins_per_side, double sigma);
 
 // Quadrature points per bin side for the narrowest roughness sigma: the sub-cell spacing
 // bin_width / s must not exceed sigma / 2 (4 points across the lobe's width), clamped to
-// [2, 8]. 32^2 bins: sigma 0.3 -> 2, 0.04 -> 4, <= 0.02 -> 8 (docs/tables.md, measured errors).
+// [2, 8]. 32^2 bins: sigma >= 0.079 -> 2, 0.06 -> 3, 0.04 -> 4, <= 0.02 -> 8 (docs/tables.md).
 int default_samples_per_side(int bins_per_side, double min_roughness);
 
 }  // namespace clothbake::tables
