@@ -220,7 +220,7 @@ void throughput(const reader::Asset& asset, const reader::CompressedRadianceTabl
   // Pixel-like footprints: 1 to 16 texels per side, anywhere, random half vectors.
   cluster::SplitMix64 rng(options.seed ^ 0x5eedull);
   const double n = raw.resolution;
-  std::vector<reader::Footprint> rects(std::size_t(options.throughput_queries));
+  std::vector<reader::Footprint> rects(static_cast<std::size_t>(options.throughput_queries));
   std::vector<std::array<double, 3>> hs(rects.size());
   for (std::size_t i = 0; i < rects.size(); ++i) {
     const double x0 = rng.uniform() * n, y0 = rng.uniform() * n, side = 1.0 + 15.0 * rng.uniform();

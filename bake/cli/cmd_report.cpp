@@ -1,0 +1,270 @@
+// clothbake report compression FABRIC.toml -o DIR [--resolution N] [--sat-resolution M]
+// [--clusters LIST] [--ranks LIST] [--targets LIST] [--samples N] [--no-sat] [--no-raw]
+// [--no-plots] [--json]
+//
+// Sweeps the C-PCA compression of the fabric's specular Integral-Radiance tables over clusters,
+// ranks and target errors (clothbake's per-texel layout), and the paper's whole-SAT layout with
+// and without normalisation at a reduced resolution (compress/compression_report.hpp), and writes
+//   DIR/compression.csv   one row per setting (the primary output),
+//   DIR/compression.json  the same rows plus the inputs of the sweep,
+//   DIR/compression_*.png / .svg  size against footprint error and error against decode time, with
+//                         the paper's operating point marked (scripts/plot_compression.py,
+//                         python3-matplotlib, run as a subprocess on the CSV; a failure to plot
+//                         is a warning, the CSV stays).
+// Visibility clusters come from the bake's own stages (visibility, cluster) when the executable
+// has them, else from a documented stand-in (yarn x tangent hemisphere, a warning says so).
+// Files are written to a temporary directory next to DIR and moved into place at the end.
+// Exit codes: 0, 1 usage, 2 bad fabric or unwritable output.
+#include <fmt/format.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "bake/cli/command.hpp"
+#include "bake/inputs/fabric_load.hpp"
+#include "bake/pipeline/driver.hpp"
+#include "bake/pipeline/stage.hpp"
+#include "bake/tables/radiance_fill.hpp"
+#include "bake/tables/radiance_sections.hpp"
+#include "cluster/visibility_clusters.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "compress/compression_report.hpp"
+#include "formats/writer/asset_writer.hpp"
+
+namespace clothbake::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReportCliOptions {
+  std::string what, fabric, output;
+  std::optional<int> resolution;
+  int sat_resolution = 64;
+  std::string clusters = "1,2,4", ranks = "2,4,8,16,32", targets = "0.03,0.02,0.01,0.008,0.005";
+  int samples = 300;
+  bool no_sat = false, no_raw = false, no_plots = false, json = false;
+};
+
+template <class T>
+std::vector<T> parse_list(const std::string& text, const std::string& option) {
+  std::vector<T> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::istringstream one(item);
+    T v{};
+    if (!(one >> v) || !(one >> std::ws).eof() || !(v > T(0)))
+      throw CLI::ValidationError(
+          option, "expects a comma-separated list of positive numbers, got '" + text + "'");
+    out.push_back(v);
+  }
+  if (out.empty()) throw CLI::ValidationError(option, "expects at least one value");
+  return out;
+}
+
+// Visibility labels of `fabric`: the bake's visibility and cluster stages, or a stand-in.
+std::vector<uint8_t> visibility_labels(const Fabric& fabric, int* clusters, std::string* source) {
+  std::vector<pipeline::Stage> stages;
+  bool have_cluster = false;
+  for (auto& s : pipeline::registered_stages()) {
+    if (s.always) continue;  // the writer
+    have_cluster = have_cluster || s.name == "cluster";
+    stages.push_back(std::move(s));
+  }
+  if (have_cluster) {
+    pipeline::Artifacts seeded;
+    seeded.put("fabric", fabric);
+    pipeline::RunOptions run;
+    pipeline::RunResult result =
+        pipeline::run_pipeline({"cluster"}, std::move(seeded), run, &stages);
+    const auto& c = result.artifacts.get<cluster::VisibilityClusters>("clusters");
+    *clusters = c.clusters;
+    *source = "visibility clusters (bake stages)";
+    return c.labels;
+  }
+  warn(
+      "report: this build has no visibility clustering stage; using stand-in clusters "
+      "(yarn x tangent hemisphere)");
+  const auto& m = fabric.maps;
+  std::vector<uint8_t> labels(m.texel_count());
+  int most = 0;
+  for (std::size_t t = 0; t < labels.size(); ++t) {
+    labels[t] = uint8_t(std::min(253, 2 * int(m.yarn_id[t]) + (m.tangent[t][2] > 0 ? 1 : 0)));
+    most = std::max(most, int(labels[t]) + 1);
+  }
+  *clusters = most;
+  *source = "stand-in clusters (yarn x tangent hemisphere)";
+  return labels;
+}
+
+struct KindData {
+  Fabric fabric;
+  std::vector<uint8_t> labels;
+  int clusters = 0;
+  std::string label_source;
+  tables::FabricRadianceInputs inputs;
+  compress::DirectionalTexels data;
+};
+
+std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<int> resolution) {
+  auto k = std::make_unique<KindData>();
+  LoadOptions lo;
+  lo.resolution = resolution;
+  k->fabric = load_fabric_description(path, lo).fabric;
+  k->labels = visibility_labels(k->fabric, &k->clusters, &k->label_source);
+  k->inputs = tables::radiance_inputs(k->fabric, k->labels, k->clusters);
+  k->data = compress::directional_texels(reader::RadianceTableKind::Specular, k->inputs.view,
+                                         k->fabric.bake.radiance_dirs);
+  return k;
+}
+
+Action setup_report(CLI::App& app) {
+  auto o = std::make_shared<ReportCliOptions>();
+  app.add_option("WHAT", o->what, "report to produce: compression")
+      ->required()
+      ->check(CLI::IsMember({"compression"}));
+  app.add_option("FABRIC", o->fabric, "fabric description (TOML)")->required();
+  app.add_option("-o,--output", o->output, "output directory (created; other files kept)")
+      ->required();
+  app.add_option("--resolution", o->resolution, "texels per tile side (default: the fabric's)")
+      ->check(CLI::Range(kMinResolution, 1024));
+  app.add_option("--sat-resolution", o->sat_resolution,
+                 "resolution of the paper's whole-SAT layout rows (default 64; it holds "
+                 "clusters x bins x N^2 floats)")
+      ->check(CLI::Range(8, 256));
+  app.add_option("--clusters", o->clusters,
+                 "C-PCA clusters per visibility cluster (default 1,2,4)");
+  app.add_option("--ranks", o->ranks, "fixed ranks (default 2,4,8,16,32)");
+  app.add_option("--targets", o->targets,
+                 "target relative RMS texel errors (default 0.03,0.02,0.01,0.008,0.005)");
+  app.add_option("--samples", o->samples, "footprints per size (default 300)")
+      ->check(CLI::Range(10, 100000));
+  app.add_flag("--no-sat", o->no_sat, "skip the paper's whole-SAT layout");
+  app.add_flag("--no-raw", o->no_raw, "skip the raw tables (built in memory: 2 GiB at 256^2)");
+  app.add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
+  app.add_flag("--json", o->json, "print the rows as JSON on stdout");
+  return [o] {
+    compress::ReportOptions options;
+    options.clusters = parse_list<int>(o->clusters, "--clusters");
+    options.ranks = parse_list<int>(o->ranks, "--ranks");
+    options.targets = parse_list<double>(o->targets, "--targets");
+    options.samples = o->samples;
+    options.sat = !o->no_sat;
+    options.raw = !o->no_raw;
+    const fs::path out(o->output);
+    if (fs::exists(out) && !fs::is_directory(out))
+      throw_input_error(o->output + ": exists and is not a directory");
+
+    const auto full = load_kind_data(o->fabric, o->resolution);
+    options.seed = full->fabric.bake.seed;
+    std::unique_ptr<KindData> low;
+    if (options.sat) low = load_kind_data(o->fabric, o->sat_resolution);
+    compress::RawTablesBuilder raw_builder = [&]() {
+      tables::RadianceOptions ro;
+      ro.bins_per_side = full->data.bins_per_side;
+      ro.samples_per_side = full->data.samples_per_bin_side;
+      ro.warn_unresolved = false;
+      std::vector<formats::Section> sections =
+          tables::radiance_sections(tables::build_specular_tables(full->inputs.view, ro));
+      return formats::serialize_asset(sections);
+    };
+    const auto rows =
+        compress::compression_sweep(full->data, low ? &low->data : nullptr, options, raw_builder,
+                                    [](int done, int total, const std::string& label) {
+                                      info(fmt::format("report: [{}/{}] {}", done, total, label));
+                                    });
+
+    // Write into a temporary directory, then move the files into place.
+    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    const fs::path tmp = parent / (out.filename().string() + ".tmp-report");
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    if (!fs::create_directories(tmp, ec) && ec)
+      throw_input_error(tmp.string() + ": cannot create: " + ec.message());
+    const std::string csv =
+        compress::report_csv(rows, compress::report_sides(full->data.resolution));
+    nlohmann::json doc;
+    doc["fabric"] = o->fabric;
+    doc["resolution"] = full->data.resolution;
+    doc["sat_resolution"] = low ? low->data.resolution : 0;
+    doc["bins_per_side"] = full->data.bins_per_side;
+    doc["clusters"] = full->clusters;
+    doc["cluster_source"] = full->label_source;
+    doc["footprint_sides"] = {"1", "2", "4", "8", "16", "64", "tile", "3 tiles"};
+    nlohmann::json jrows = nlohmann::json::array();
+    for (const auto& r : rows)
+      jrows.push_back({{"layout", r.layout},
+                       {"normalisation", r.normalisation},
+                       {"mode", r.mode},
+                       {"resolution", r.resolution},
+                       {"clusters", r.clusters},
+                       {"rank", r.rank},
+                       {"target", r.target},
+                       {"images", r.images},
+                       {"stored_bytes", r.stored_bytes},
+                       {"raw_float_bytes", r.raw_float_bytes},
+                       {"ratio", r.ratio},
+                       {"decoded_bytes", r.decoded_bytes},
+                       {"texel_error", r.texel_error},
+                       {"normalised_mse", r.normalised_mse},
+                       {"footprint_error", r.footprint_error},
+                       {"query_ns", r.query_ns},
+                       {"compress_cpu_seconds", r.compress_cpu_seconds},
+                       {"compress_wall_seconds", r.compress_wall_seconds},
+                       {"paper_point", r.paper_point}});
+    doc["rows"] = jrows;
+    auto write = [&](const std::string& name, const std::string& text) {
+      std::ofstream f(tmp / name, std::ios::binary);
+      f << text;
+      f.close();
+      if (!f) throw_input_error((tmp / name).string() + ": cannot write");
+    };
+    write("compression.csv", csv);
+    write("compression.json", doc.dump(2) + "\n");
+    std::vector<std::string> plots;
+    if (!o->no_plots) {
+      // $CLOTHBAKE_PLOT_SCRIPT, else the source tree this file was compiled from.
+      const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT");
+      const fs::path script = env ? fs::path(env)
+                                  : fs::path(__FILE__).parent_path().parent_path().parent_path() /
+                                        "scripts" / "plot_compression.py";
+      // Debian's interpreter (python3-matplotlib) when present, else whatever python3 is.
+      const std::string python =
+          fs::exists("/usr/bin/python3") ? std::string("/usr/bin/python3") : std::string("python3");
+      const std::string command = python + " '" + script.string() + "' '" +
+                                  (tmp / "compression.csv").string() + "' '" + tmp.string() +
+                                  "' > /dev/null";
+      if (!fs::exists(script) || std::system(command.c_str()) != 0)
+        warn("report: plotting failed (python3-matplotlib missing?); the CSV is written");
+    }
+    fs::create_directories(out, ec);
+    for (const auto& entry : fs::directory_iterator(tmp)) {
+      fs::rename(entry.path(), out / entry.path().filename(), ec);
+      if (ec) throw_input_error((out / entry.path().filename()).string() + ": " + ec.message());
+      plots.push_back((out / entry.path().filename()).string());
+    }
+    fs::remove_all(tmp, ec);
+    if (o->json) {
+      doc["files"] = plots;
+      doc["warnings"] = take_warnings();
+      print_json(doc);
+    } else {
+      std::cout << csv;
+    }
+    return 0;
+  };
+}
+
+const bool registered = register_command(
+    {"report", "Sweep compression settings and write CSV and plots (report compression)",
+     setup_report});
+
+}  // namespace
+}  // namespace clothbake::cli
