@@ -94,28 +94,39 @@ inline PlanPoints plan_points(const FootprintPlan& plan, uint32_t n, uint32_t co
   return pp;
 }
 
-// F of one column in integer steps: `base` points at (bin, column 0 + column). Integer parts are
-// summed in wrapping uint64 arithmetic (exact: the true bracket values fit in int64), fractional
-// coverage in double.
+// Adds sign * I(point) of one column (base at the column) to an integer part (wrapping uint64,
+// exact: the true bracket values fit in int64) and a fractional part (double).
+template <class E>
+inline void add_point(const E* base, const PlanPoint& p, uint64_t& ip, double& fp) noexcept {
+  const uint64_t s00 = uint64_t(base[p.off[0]]) & p.mask[0];
+  ip += p.negative ? uint64_t(0) - s00 : s00;
+  if (!p.frac) return;
+  const uint64_t s10 = uint64_t(base[p.off[1]]) & p.mask[1];
+  const uint64_t s01 = uint64_t(base[p.off[2]]) & p.mask[2];
+  const uint64_t s11 = uint64_t(base[p.off[3]]) & p.mask[3];
+  const double f = p.a * double(int64_t(s10 - s00)) + p.b * double(int64_t(s01 - s00)) +
+                   p.ab * double(int64_t(s11 - s10 - s01 + s00));
+  fp += p.negative ? -f : f;
+}
+
+// F of one column in integer steps (base at (bin, column)): brackets summed separately, each in
+// exact integer arithmetic plus its fractional coverage, then weighted by its tile count. The
+// points are ordered by bracket (plan_points), so each bracket is a contiguous range.
 template <class E>
 inline double evaluate_column(const E* base, const PlanPoints& pp) noexcept {
-  uint64_t ip[4] = {0, 0, 0, 0};
-  double fp[4] = {0.0, 0.0, 0.0, 0.0};
-  for (int t = 0; t < pp.count; ++t) {
-    const PlanPoint& p = pp.p[t];
-    const uint64_t s00 = uint64_t(base[p.off[0]]) & p.mask[0];
-    ip[p.bracket] += p.negative ? uint64_t(0) - s00 : s00;
-    if (!p.frac) continue;
-    const uint64_t s10 = uint64_t(base[p.off[1]]) & p.mask[1];
-    const uint64_t s01 = uint64_t(base[p.off[2]]) & p.mask[2];
-    const uint64_t s11 = uint64_t(base[p.off[3]]) & p.mask[3];
-    const double f = p.a * double(int64_t(s10 - s00)) + p.b * double(int64_t(s01 - s00)) +
-                     p.ab * double(int64_t(s11 - s10 - s01 + s00));
-    fp[p.bracket] += p.negative ? -f : f;
+  uint64_t ip = 0;
+  double fp = 0.0;
+  for (int t = 0; t < 4; ++t)
+    add_point(base, pp.p[t], ip, fp);
+  double total = double(int64_t(ip)) + fp;
+  for (int t = 4; t < pp.count;) {
+    const int bracket = pp.p[t].bracket;
+    ip = 0;
+    fp = 0.0;
+    for (; t < pp.count && pp.p[t].bracket == bracket; ++t)
+      add_point(base, pp.p[t], ip, fp);
+    total += pp.coefficient[bracket] * (double(int64_t(ip)) + fp);
   }
-  double total = double(int64_t(ip[0])) + fp[0];
-  for (int k = 1; k < 4; ++k)
-    if (pp.coefficient[k] != 0.0) total += pp.coefficient[k] * (double(int64_t(ip[k])) + fp[k]);
   return total;
 }
 
