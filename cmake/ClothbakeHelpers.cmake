@@ -32,5 +32,5 @@ function(clothbake_add_gtest name)
   # suite's time when each of hundreds of cases ran in its own process. gtest prints the failing
   # cases with --output-on-failure.
   add_test(NAME ${name} COMMAND ${name} --gtest_color=no)
-  set_tests_properties(${name} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT 300)
+  set_tests_properties(${name} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT 1200)
 endfunction()
