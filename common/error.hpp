@@ -16,6 +16,7 @@ enum class ExitCode : int {
   Input = 2,         // bad input file or I/O error (missing file, invalid value, cannot write)
   InvalidAsset = 3,  // an asset failed validation (corrupt, truncated, wrong version)
   Internal = 4,      // a bug: an invariant of clothbake itself was violated
+  VerificationFailed = 5,  // `clothbake verify` measured an error above a threshold
 };
 
 class Error : public std::runtime_error {
