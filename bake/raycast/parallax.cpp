@@ -49,6 +49,13 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
     throw_input_error("height map: expected " + std::to_string(maps.texel_count()) +
                       " texels for resolution " + std::to_string(n) + ", got " +
                       std::to_string(maps.height.size()));
+  const double bytes = double(maps.texel_count()) * settings.dirs * settings.dirs * 6.0;
+  if (bytes > kMaxParallaxBytes)
+    throw_input_error("bake.resolution = " + std::to_string(n) + " with bake.parallax_dirs = " +
+                      std::to_string(settings.dirs) + " needs a parallax table and SAT of " +
+                      std::to_string(int64_t(bytes / (1 << 20))) + " MiB, above the limit of " +
+                      std::to_string(int64_t(kMaxParallaxBytes / (1 << 20))) +
+                      " MiB: lower the resolution or the directions");
   double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {

@@ -23,6 +23,10 @@
 
 namespace clothbake::raycast {
 
+// Largest parallax table plus SAT a bake may build (6 bytes per texel and direction; 384 MiB at
+// 256^2 x 32^2): beyond, bake_parallax refuses with an input error instead of exhausting memory.
+inline constexpr double kMaxParallaxBytes = 8.0 * 1024 * 1024 * 1024;
+
 struct ParallaxSettings {
   int dirs = 32;         // n: n x n view directions on DirectionGrid{n, min_cos}, [1, 256]
   double min_cos = 0.6;  // the cap: view directions with cos(theta) >= min_cos, [0, 1)
@@ -66,7 +70,8 @@ using ProgressCallback = std::function<void(double)>;
 
 // Casts resolution^2 x dirs^2 rays (16-wide Embree packets of 4 x 4 neighbouring texels sharing
 // one direction, TBB over texel blocks; the result does not depend on the thread count).
-// Throws Error(Input) for bad settings or a non-finite height (naming the texel). Warns (common/
+// Throws Error(Input) for bad settings, a table larger than kMaxParallaxBytes (naming the keys) or
+// a non-finite height (naming the texel). Warns (common/
 // diagnostics) when rays never hit (Embree edge leaks that survived a re-cast) and when the heights
 // are so tall that offsets exceed a tile. A flat map gives r = 0 without casting rays.
 ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& settings,

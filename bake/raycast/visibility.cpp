@@ -53,6 +53,14 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
     throw_input_error("height map: expected " + std::to_string(maps.texel_count()) +
                       " texels for resolution " + std::to_string(n) + ", got " +
                       std::to_string(maps.height.size()));
+  const double bytes = double(maps.texel_count()) * settings.dirs * settings.dirs / 8.0;
+  if (bytes > kMaxVisibilitySampleBytes)
+    throw_input_error("bake.resolution = " + std::to_string(n) +
+                      " with bake.visibility_dirs = " + std::to_string(settings.dirs) + " needs " +
+                      std::to_string(int64_t(bytes / (1 << 20))) +
+                      " MiB of visibility samples, above the limit of " +
+                      std::to_string(int64_t(kMaxVisibilitySampleBytes / (1 << 20))) +
+                      " MiB: lower the resolution or the directions");
   double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {

@@ -18,6 +18,9 @@
 
 namespace clothbake::raycast {
 
+// Largest sample set (one bit per texel and direction; 8 MiB at 256^2 x 32^2) a bake may hold.
+inline constexpr double kMaxVisibilitySampleBytes = 2.0 * 1024 * 1024 * 1024;
+
 struct VisibilitySettings {
   int dirs = 32;                       // n: n x n light directions, [1, 256]
   double normal_offset_texels = 0.01;  // ray origin offset along the normal, in texel sizes, > 0
@@ -58,9 +61,9 @@ struct VisibilityAsgs {
 void validate_visibility_settings(const VisibilitySettings& settings);
 
 // Casts N^2 x dirs^2 occlusion rays (16-wide packets of 4 x 4 texels sharing one direction, TBB
-// over texel tiles; result independent of the thread count). Throws Error(Input) for bad settings
-// or a non-finite height (naming the texel). A flat map sees the whole sky (every bit set) without
-// casting rays.
+// over texel tiles; result independent of the thread count). Throws Error(Input) for bad settings,
+// more samples than kMaxVisibilitySampleBytes (naming the keys) or a non-finite height (naming the
+// texel). A flat map sees the whole sky (every bit set) without casting rays.
 // `progress` (optional) is called from worker threads with the fraction of the work done.
 VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings,
                                     const std::function<void(double)>& progress = {});

@@ -288,3 +288,19 @@ TEST(Parallax, RejectsBadSettingsNamingTheKey) {
   maps.height[maps.index(5, 6)] = std::numeric_limits<float>::infinity();
   expect_error({}, "texel (5, 6)");
 }
+
+TEST(Parallax, RefusesTablesBeyondTheMemoryLimit) {
+  // 4096^2 texels x 32^2 directions would need 96 GiB: refused before any allocation, naming the
+  // keys (the height map itself is only 64 MiB).
+  FabricMaps maps;
+  maps.resolution = 4096;
+  maps.height.assign(4096u * 4096u, 0.f);
+  try {
+    bake_parallax(maps, {});
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ExitCode::Input);
+    EXPECT_NE(std::string(e.what()).find("bake.resolution = 4096"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bake.parallax_dirs = 32"), std::string::npos);
+  }
+}

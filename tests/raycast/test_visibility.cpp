@@ -246,6 +246,22 @@ TEST(Visibility, RejectsBadSettings) {
   }
 }
 
+TEST(Visibility, RefusesSampleSetsBeyondTheMemoryLimit) {
+  FabricMaps maps;
+  maps.resolution = 8192;
+  maps.height.assign(8192u * 8192u, 0.f);
+  VisibilitySettings s;
+  s.dirs = 64;  // 8192^2 x 64^2 bits = 32 GiB
+  try {
+    sample_visibility(maps, s);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ExitCode::Input);
+    EXPECT_NE(std::string(e.what()).find("bake.visibility_dirs = 64"), std::string::npos)
+        << e.what();
+  }
+}
+
 // ---- CGAL cross-check -------------------------------------------------------------------------
 
 TEST(CgalCrossCheck, EmbreeAgreesWithExactPredicatesOnAWeave) {
