@@ -87,6 +87,13 @@ class Problem {
   }
 
   // Sums of e * V and e^2 for the last energy() call (the best amplitude is their ratio).
+  // Changes the amplitude of the last energy() call's lobe to c without recomputing the
+  // exponentials; returns the new energy (the workspace then holds the lobe with amplitude c).
+  double set_amplitude(double c) {
+    r_ = float(c) * e_ - v_;
+    return double(r_.matrix().squaredNorm());
+  }
+
   void amplitude_sums(double& ev, double& ee) const {
     ev = double((e_ * v_).sum());
     ee = double(e_.square().sum());
@@ -125,11 +132,13 @@ void project_frame(Eigen::Matrix3d& frame) {
 }
 
 // The amplitude minimising the objective for the lobe's shape (linear least squares), clamped.
-void set_best_amplitude(Problem& problem, Lobe& lobe) {
+// Returns the energy; the workspace holds the lobe afterwards.
+double set_best_amplitude(Problem& problem, Lobe& lobe) {
   problem.energy(lobe);
   double ev, ee;
   problem.amplitude_sums(ev, ee);
   lobe.c = ee > 0 ? std::clamp(ev / ee, 0.0, kAsgMaxAmplitude) : 0.0;
+  return problem.set_amplitude(lobe.c);
 }
 
 model::AsgParams<double> to_params(const Lobe& lobe) {
@@ -146,7 +155,7 @@ model::AsgParams<double> to_params(const Lobe& lobe) {
 // Start from the moments of the visible directions: axis = their mean, the principal axes of their
 // spread about it give x (smaller spread: sharper) and y, and a bandwidth ~ 1 / (3 variance) - 1
 // (the Gaussian that best matches a band of that variance, zero for a full hemisphere).
-Lobe moment_start(Problem& problem) {
+Lobe moment_start(Problem& problem, double* energy) {
   const ArrayF& v = problem.v();
   const double count = double(v.sum());
   Eigen::Vector3d mean(double((v * problem.x()).sum()), double((v * problem.y()).sum()),
@@ -180,7 +189,7 @@ Lobe moment_start(Problem& problem) {
   lobe.lambda = bandwidth(var_narrow);
   lobe.mu = bandwidth(var_wide);
   project_frame(lobe.frame);
-  set_best_amplitude(problem, lobe);
+  *energy = set_best_amplitude(problem, lobe);
   return lobe;
 }
 
@@ -332,16 +341,14 @@ AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible, const AsgFi
   // flat lobe about +z, beta = 0); the better one is refined.
   Problem problem(d, visible, options.xu_smooth_term);
   int evaluations = 0;
-  Lobe lobe = moment_start(problem);
-  double energy = problem.energy(lobe);
   Lobe half = half_space_start(problem, &evaluations);
-  double half_energy = problem.energy(half);
+  const double half_energy = problem.energy(half);
+  double energy = 0;
+  Lobe lobe = moment_start(problem, &energy);  // the workspace now holds the moment start
   evaluations += 2;
   if (half_energy < energy) {
     lobe = half;
-    energy = half_energy;
-  } else {
-    problem.energy(lobe);  // the workspace must hold the start's arrays
+    energy = problem.energy(half);  // the workspace must hold the start being refined
   }
   refine(problem, lobe, energy, options.max_refinements, evaluations);
 
@@ -349,7 +356,7 @@ AsgFitResult fit_asg(const FitDirections& d, const uint8_t* visible, const AsgFi
   uint64_t state = options.seed;
   for (int k = 0; k < options.random_starts; ++k) {
     Lobe trial = random_start(problem, state);
-    double trial_energy = problem.energy(trial);
+    double trial_energy = problem.energy(trial);  // also leaves the workspace holding `trial`
     ++evaluations;
     refine(problem, trial, trial_energy, options.max_refinements, evaluations);
     if (trial_energy < energy) {
