@@ -9,6 +9,7 @@
 #include <limits>
 #include <string>
 
+#include "bake/raycast/height_range.hpp"
 #include "bake/raycast/heightfield_scene.hpp"
 #include "bake/raycast/texel_blocks.hpp"
 #include "common/diagnostics.hpp"
@@ -56,16 +57,7 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
                       std::to_string(int64_t(bytes / (1 << 20))) + " MiB, above the limit of " +
                       std::to_string(int64_t(kMaxParallaxBytes / (1 << 20))) +
                       " MiB: lower the resolution or the directions");
-  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) {
-      float h = maps.height[maps.index(x, y)];
-      if (!std::isfinite(h))
-        throw_input_error("height map: texel (" + std::to_string(x) + ", " + std::to_string(y) +
-                          ") is not a finite number");
-      z_min = std::min(z_min, double(h));
-      z_max = std::max(z_max, double(h));
-    }
+  const auto [z_min, z_max] = height_range(maps);
 
   ParallaxTable table;
   table.resolution = n;
