@@ -2,15 +2,13 @@
 // documented equal-area map, and every bad argument exits with its code and a message naming the
 // option, writing nothing.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
-#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -18,39 +16,18 @@
 #include "common/image_io.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
+#include "tests/support/run_cli.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 namespace m = clothbake::model;
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
+using clothbake::test_support::CliRun;
 
-// Runs `clothbake bsdf ARGS`, capturing stdout, stderr and the exit code. Thread-safe.
+// Runs `clothbake bsdf ARGS` (split by the shell). Thread-safe.
 CliRun run(const std::string& args) {
-  static std::atomic<int> counter{0};
-  const fs::path err_file =
-      fs::temp_directory_path() /
-      ("clothbake_bsdf_test_err_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-  const std::string cmd = std::string(CLOTHBAKE_EXE) + " bsdf " + args + " 2>" + err_file.string();
-  CliRun r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0)
-    r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  fs::remove(err_file);
-  return r;
+  return clothbake::test_support::run_clothbake_line("bsdf " + args);
 }
 
 class TempDir {

@@ -1,0 +1,95 @@
+// Runs the built `clothbake` executable as a child process for end-to-end CLI tests: exit code,
+// stdout and stderr captured separately. One implementation for every CLI test (they used to carry
+// their own popen() copies).
+//
+// The executable is CLOTHBAKE_EXE when the test target defines it (preferred:
+// target_compile_definitions(T PRIVATE CLOTHBAKE_EXE="$<TARGET_FILE:clothbake>")), else
+// CLOTHBAKE_BINARY_DIR/bin/clothbake. POSIX only (fork/exec); not thread-safe with respect to
+// other fork()s in the same test process.
+#pragma once
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace clothbake::test_support {
+
+struct CliRun {
+  int code = -1;  // exit status; -1 if the process did not exit normally (signal, exec failure)
+  std::string out, err;
+};
+
+inline std::string clothbake_executable() {
+#ifdef CLOTHBAKE_EXE
+  return CLOTHBAKE_EXE;
+#else
+  return std::string(CLOTHBAKE_BINARY_DIR) + "/bin/clothbake";
+#endif
+}
+
+namespace detail {
+inline std::string slurp_and_remove(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  in.close();
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+  return ss.str();
+}
+
+// argv[0] is the program to execute (execv, no PATH lookup, no shell).
+inline CliRun spawn(const std::vector<std::string>& argv) {
+  static std::atomic<int> counter{0};
+  const std::string stem =
+      "clothbake_cli_" + std::to_string(::getpid()) + "_" + std::to_string(counter.fetch_add(1));
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto out_path = dir / (stem + ".out");
+  const auto err_path = dir / (stem + ".err");
+  std::vector<char*> args;
+  for (const auto& a : argv)
+    args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  std::fflush(nullptr);
+  CliRun r;
+  const pid_t pid = ::fork();
+  if (pid < 0) return r;
+  if (pid == 0) {
+    const int out = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    if (out < 0 || err < 0 || ::dup2(out, 1) < 0 || ::dup2(err, 2) < 0) ::_exit(127);
+    ::execv(args[0], args.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+  }
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp_and_remove(out_path);
+  r.err = slurp_and_remove(err_path);
+  return r;
+}
+}  // namespace detail
+
+// `clothbake ARGS...`: each element is one argument, passed verbatim (no shell, no quoting).
+inline CliRun run_clothbake(const std::vector<std::string>& args) {
+  std::vector<std::string> argv{clothbake_executable()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return detail::spawn(argv);
+}
+
+// `clothbake COMMAND_LINE` through /bin/sh -c: the words are split and quoted by the shell, as if
+// typed. For tests whose argument lists read best as one string.
+inline CliRun run_clothbake_line(const std::string& command_line) {
+  return detail::spawn({"/bin/sh", "-c", "exec '" + clothbake_executable() + "' " + command_line});
+}
+
+}  // namespace clothbake::test_support
