@@ -52,7 +52,7 @@ struct SurfaceHit {
 struct RayCounters {
   std::atomic<uint64_t> rays{0};      // rays requested
   std::atomic<uint64_t> segments{0};  // Embree casts (a ray may need several, see above)
-  std::atomic<uint64_t> packets{0};   // 16-wide Embree calls
+  std::atomic<uint64_t> packets{0};   // 16-wide Embree calls (occlusion; first hits go one by one)
 };
 
 // The neighbourhood both stages use unless told otherwise. A ray descending at the parallax cut
@@ -85,8 +85,9 @@ class PeriodicHeightField {
   // (tile-side units) along the unit normal of the height field from central differences.
   Vec3d lifted_surface_point(long x, long y, double offset) const;
 
-  // First hits of a packet: t_hit[i] = ray parameter of the first hit in [0, t_max[i]], or +inf.
-  // Thread-safe; deterministic (each lane's result depends only on that lane's ray).
+  // First hits of a packet: t_hit[i] = ray parameter of the first hit in [0, t_max[i]], or
+  // +inf. Thread-safe; deterministic (each lane's result depends only on that lane's ray). The
+  // lanes are cast one by one (rtcIntersect1), which is faster than a packet for these rays.
   void first_hits(const RayPacket& rays, std::array<double, RayPacket::kWidth>& t_hit,
                   RayCounters* counters = nullptr) const;
   // Occlusion of a packet: occluded[i] = the ray hits the surface within [0, t_max[i]].
@@ -101,9 +102,9 @@ class PeriodicHeightField {
   double margin() const { return 0.5 / double(resolution_); }
 
  private:
-  template <bool kOcclusion>
-  void cast_packet(const RayPacket& rays, std::array<double, RayPacket::kWidth>& t_hit,
-                   RayCounters* counters) const;
+  // One rtcOccluded16 per segment round: t_hit[i] = the start of the segment that was blocked.
+  void cast_occlusion_packet(const RayPacket& rays, std::array<double, RayPacket::kWidth>& t_hit,
+                             RayCounters* counters) const;
 
   int resolution_ = 0;
   int rings_ = 0;

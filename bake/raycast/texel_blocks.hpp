@@ -33,6 +33,24 @@ class TexelBlocks {
       }
     return count;
   }
+  // The same with each lane's texel coordinates as well.
+  int packet_texels(int tile, int packet, std::array<int, 16>& lanes, std::array<int, 16>& xs,
+                    std::array<int, 16>& ys) const {
+    const int tx = tile % tiles_per_side_, ty = tile / tiles_per_side_;
+    const int px = packet % (kTile / kPacket), py = packet / (kTile / kPacket);
+    const int x0 = tx * kTile + px * kPacket, y0 = ty * kTile + py * kPacket;
+    int count = 0;
+    for (int dy = 0; dy < kPacket; ++dy)
+      for (int dx = 0; dx < kPacket; ++dx) {
+        int x = x0 + dx, y = y0 + dy;
+        if (x < n_ && y < n_) {
+          xs[count] = x;
+          ys[count] = y;
+          lanes[count++] = y * n_ + x;
+        }
+      }
+    return count;
+  }
 
  private:
   int n_;

@@ -108,6 +108,7 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
         RayPacket packet;
         std::array<bool, RayPacket::kWidth> hit;
         std::array<int, RayPacket::kWidth> lane_texel;
+        RayCounters local;  // added once per task (shared counters per packet ping-pong)
         for (int tile = r.begin(); tile != r.end(); ++tile) {
           for (int dir = 0; dir < dir_count; ++dir) {
             const model::Vec3d w = light[std::size_t(dir)];
@@ -126,7 +127,7 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
                 // a point above every height, is not cast and counts as visible).
                 packet.t_max[l] = (z_max - o.z) / w.z + 1e-6;
               }
-              field.occluded(packet, hit, &counters);
+              field.occluded(packet, hit, &local);
               for (int l = 0; l < packet.count; ++l)
                 if (!hit[l])
                   samples.bits[std::size_t(lane_texel[l]) * words + dir / 64] |= uint64_t(1)
@@ -136,6 +137,8 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
           const int done = tiles_done.fetch_add(1, std::memory_order_relaxed) + 1;
           if (progress) progress(double(done) / double(blocks.tile_count()));
         }
+        counters.rays.fetch_add(local.rays.load(), std::memory_order_relaxed);
+        counters.segments.fetch_add(local.segments.load(), std::memory_order_relaxed);
       });
   samples.rays = counters.rays.load();
   samples.segments = counters.segments.load();
