@@ -45,8 +45,9 @@ struct Segment {
   long shift_x, shift_y;  // whole tiles subtracted from the origin by the wrap
 };
 
-Segment make_segment(double ox, double oy, double dx, double dy, double t_start, double t_max,
-                     int rings, double margin) {
+[[gnu::always_inline]] inline Segment make_segment(double ox, double oy, double dx, double dy,
+                                                   double t_start, double t_max, int rings,
+                                                   double margin) {
   Segment s;
   double px = ox + t_start * dx, py = oy + t_start * dy;
   double fx = std::floor(px), fy = std::floor(py);

@@ -1,9 +1,11 @@
 // Throughput of the ray-casting stages on a woven tile (docs/raycast.md, "Performance").
 //   build-*/bin/bench_raycast                                   (everything, ~1 min on 2 cores)
 //   build-*/bin/bench_raycast --benchmark_filter='Stages/256'   (the 256^2 x 32^2 target)
+//   build-*/bin/bench_raycast --benchmark_filter='ParallaxStage' (parallax alone, 1 and 2 threads)
 // Counters: rays/s over all threads (wall clock), segments per ray; fits/s for the ASG fit.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <chrono>
 #include <map>
 
 #include "bake/raycast/parallax.hpp"
@@ -50,6 +52,43 @@ BENCHMARK(BM_Parallax)
     ->Args({128, 32, -1, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// The parallax stage as a bake runs it at the size: the table, then its SATs. Args:
+// resolution, directions per side, threads. Wall time per part from a steady clock; the CPU
+// column is the process's CPU time (all threads). Counters: rays/s over the whole stage (wall,
+// SAT included) and over the ray casting alone, and the SAT build's seconds.
+void BM_ParallaxStage(benchmark::State& state) {
+  const int n = int(state.range(0));
+  raycast::ParallaxSettings settings;
+  settings.dirs = int(state.range(1));
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              std::size_t(state.range(2)));
+  const FabricMaps& maps = weave(n);
+  uint64_t rays = 0;
+  double cast_seconds = 0, sat_seconds = 0;
+  using Clock = std::chrono::steady_clock;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    raycast::ParallaxTable table = raycast::bake_parallax(maps, settings);
+    const auto t1 = Clock::now();
+    std::vector<uint32_t> sat = raycast::parallax_sat(table);
+    const auto t2 = Clock::now();
+    rays += table.stats.rays;
+    cast_seconds += std::chrono::duration<double>(t1 - t0).count();
+    sat_seconds += std::chrono::duration<double>(t2 - t1).count();
+    benchmark::DoNotOptimize(sat.data());
+  }
+  state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  state.counters["cast_rays/s"] = double(rays) / cast_seconds;
+  state.counters["sat_s"] = sat_seconds / double(state.iterations());
+}
+BENCHMARK(BM_ParallaxStage)
+    ->Args({256, 32, 1})
+    ->Args({256, 32, 2})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime()
+    ->Iterations(1);
 
 // Args: resolution, directions per side, rings, threads.
 void BM_Visibility(benchmark::State& state) {
@@ -131,7 +170,12 @@ void BM_Stages(benchmark::State& state) {
   }
   state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_Stages)->Args({256, 32, 2})->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_Stages)
+    ->Args({256, 32, 2})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime()
+    ->Iterations(1);
 
 }  // namespace
 
