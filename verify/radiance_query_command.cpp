@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "common/error.hpp"
+#include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/open_asset.hpp"
 
@@ -27,16 +28,38 @@ nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArg
                 "--lobe: " + args.lobe +
                     " has no Integral-Radiance table (diffuse and sheen lobes are not tabulated; "
                     "use specular_reflection, specular_transmission or delta_transmission)");
-  reader::RawRadianceTables tables;
-  if (const reader::Status s = tables.open(asset, kind); !s.ok()) {
-    if (s.code() == reader::ErrorCode::NotFound)
-      throw_input_error("the asset has no " + std::string(reader::radiance_kind_name(kind)) +
-                        " table for " + args.lobe +
+  // Raw tables first under Auto (exact); the compressed ones when the asset has no raw ones.
+  reader::RawRadianceTables raw;
+  reader::CompressedRadianceTables compressed;
+  const reader::RadianceTables* chosen = nullptr;
+  reader::Status status;
+  if (args.source != TableSource::Compressed) {
+    status = raw.open(asset, kind);
+    if (status.ok()) chosen = &raw;
+  }
+  if (!chosen && args.source != TableSource::Raw &&
+      (args.source == TableSource::Compressed || status.code() == reader::ErrorCode::NotFound)) {
+    status = compressed.open(asset, kind);
+    if (status.ok()) chosen = &compressed;
+  }
+  if (!chosen) {
+    if (status.code() == reader::ErrorCode::NotFound) {
+      const char* which = args.source == TableSource::Raw          ? " raw"
+                          : args.source == TableSource::Compressed ? " compressed"
+                                                                   : "";
+      throw_input_error("the asset has no" + std::string(which) + " " +
+                        reader::radiance_kind_name(kind) + " table for " + args.lobe +
                         (kind == reader::RadianceTableKind::Gap
                              ? " (the fabric has no gaps, so nothing is transmitted through them)"
                              : ""));
-    throw Error(formats::exit_code_of(s), formats::describe(s));
+    }
+    throw Error(formats::exit_code_of(status), formats::describe(status));
   }
+  const reader::RadianceTables& tables = *chosen;
+  const bool is_raw = chosen == &raw;
+  auto stored = [&](uint32_t c) {
+    return is_raw ? raw.column_of_cluster(c) >= 0 : compressed.has_cluster(c);
+  };
   if (args.cluster && *args.cluster >= tables.cluster_count())
     throw Error(ExitCode::Usage, "--cluster: " + std::to_string(*args.cluster) +
                                      " is out of range (the asset has " +
@@ -65,7 +88,7 @@ nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArg
     if (args.cluster && c != *args.cluster) continue;
     total += f[c];
     clusters.push_back({{"cluster", c},
-                        {"stored", tables.column_of_cluster(c) >= 0},
+                        {"stored", stored(c)},
                         {"F", f[c]},
                         {"average", area > 0 ? f[c] / area : 0.0}});
   }
@@ -74,6 +97,7 @@ nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArg
     bins.push_back({{"bin", weights.bin[k]}, {"weight", weights.weight[k]}});
   return {{"lobe", args.lobe},
           {"table", reader::radiance_kind_name(kind)},
+          {"source", is_raw ? "raw" : "compressed"},
           {"resolution", tables.resolution()},
           {"bins_per_side", tables.bins_per_side()},
           {"h", args.h},
@@ -92,10 +116,11 @@ std::string radiance_query_text(const nlohmann::json& a) {
   std::ostringstream out;
   out.precision(9);
   const auto& r = a["rect"];
-  out << a["lobe"].get<std::string>() << " (" << a["table"].get<std::string>() << " table) over ["
-      << r[0].get<double>() << ", " << r[2].get<double>() << ") x [" << r[1].get<double>() << ", "
-      << r[3].get<double>() << "), h (" << a["h"][0].get<double>() << ", "
-      << a["h"][1].get<double>() << ", " << a["h"][2].get<double>() << ")\n";
+  out << a["lobe"].get<std::string>() << " (" << a["table"].get<std::string>() << " table, "
+      << a.value("source", std::string("raw")) << ") over [" << r[0].get<double>() << ", "
+      << r[2].get<double>() << ") x [" << r[1].get<double>() << ", " << r[3].get<double>()
+      << "), h (" << a["h"][0].get<double>() << ", " << a["h"][1].get<double>() << ", "
+      << a["h"][2].get<double>() << ")\n";
   for (const auto& c : a["clusters"])
     out << "  cluster " << c["cluster"].get<uint32_t>() << ": F = " << c["F"].get<double>()
         << "  (average " << c["average"].get<double>() << ")"

@@ -20,18 +20,24 @@
 
 namespace clothbake::verify {
 
+// Which stored representation answers: raw fixed-point SATs or C-PCA compressed tables. Auto takes
+// the raw tables when the asset keeps them (exact) and the compressed ones otherwise.
+enum class TableSource { Auto, Raw, Compressed };
+
 struct RadianceQueryArgs {
   std::string lobe;
   std::optional<uint32_t> cluster;  // none: every cluster
   std::array<double, 3> h{0, 0, 1};
   std::array<double, 4> rect{0, 0, 1, 1};  // x0, y0, x1, y1
+  TableSource source = TableSource::Auto;
 };
 
-// The answer as JSON ({lobe, table, h, rect, area, clusters: [{cluster, F, average}], total,
-// total_average}). Errors (clothbake::Error): Usage for an unknown lobe, a lobe without a table,
-// a cluster out of range, a bad h or rect (naming the option); Input when the asset lacks the
-// table (a fabric without gaps has no delta_transmission table); InvalidAsset for malformed
-// tables.
+// The answer as JSON ({lobe, table, source ("raw" or "compressed": which representation
+// answered), h, rect, area, clusters: [{cluster, F, average}], total, total_average}). Errors
+// (clothbake::Error): Usage for an unknown lobe, a lobe without a table, a cluster out of range, a
+// bad h or rect (naming the option); Input when the asset lacks the table in the requested
+// representation (a fabric without gaps has no delta_transmission table); InvalidAsset for
+// malformed tables.
 nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArgs& args);
 
 // A short human-readable rendering of radiance_query's JSON.

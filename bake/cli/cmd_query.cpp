@@ -3,6 +3,11 @@
 //
 //   clothbake query ASSET parallax   --dir x,y,z (--texel i,j | --rect x0,y0,x1,y1) [--json]
 //   clothbake query ASSET visibility --texel i,j --dir x,y,z [--json]
+//   clothbake query ASSET radiance   --lobe L [--cluster C] --h x,y,z --rect x0,y0,x1,y1
+//                                    [--tables auto|raw|compressed] [--json]
+//
+// The radiance kind is verify::radiance_query (verify/radiance_query_command.hpp): F_c(rect, h) of
+// the lobe's Integral-Radiance table from the raw or the compressed tables (the answer says which).
 //
 // Exit codes: 1 bad arguments (naming the option), 2 missing file or missing section, 3 invalid
 // asset (layout or checksum), 0 otherwise.
@@ -10,6 +15,7 @@
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,6 +25,7 @@
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/writer/open_asset.hpp"
+#include "verify/radiance_query_command.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -29,6 +36,10 @@ struct QueryOptions {
   std::string dir;
   std::string texel;
   std::string rect;
+  std::string lobe;
+  std::optional<uint32_t> cluster;
+  std::string h;
+  std::string tables = "auto";
   bool json = false;
 };
 
@@ -192,22 +203,74 @@ int query_visibility(const QueryOptions& o) {
   return 0;
 }
 
+int query_radiance(const QueryOptions& o) {
+  if (o.lobe.empty())
+    throw CLI::ValidationError("--lobe", "radiance queries need --lobe (e.g. specular_reflection)");
+  if (o.h.empty()) throw CLI::ValidationError("--h", "radiance queries need --h x,y,z");
+  if (o.rect.empty())
+    throw CLI::ValidationError("--rect", "radiance queries need --rect x0,y0,x1,y1");
+  if (!o.dir.empty())
+    throw CLI::ValidationError("--dir", "radiance queries take the half vector as --h, not --dir");
+  if (!o.texel.empty())
+    throw CLI::ValidationError("--texel", "radiance queries take a footprint --rect, not --texel");
+  verify::RadianceQueryArgs args;
+  args.lobe = o.lobe;
+  args.cluster = o.cluster;
+  const std::vector<double> h = parse_numbers(o.h, 3, false, "--h");
+  args.h = {h[0], h[1], h[2]};
+  const std::vector<double> rect = parse_numbers(o.rect, 4, false, "--rect");
+  args.rect = {rect[0], rect[1], rect[2], rect[3]};
+  args.source = o.tables == "raw"          ? verify::TableSource::Raw
+                : o.tables == "compressed" ? verify::TableSource::Compressed
+                                           : verify::TableSource::Auto;
+  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  nlohmann::json answer = verify::radiance_query(asset, args);
+  if (o.json) {
+    answer["asset"] = o.asset;
+    answer["query"] = "radiance";
+    print_json(answer);
+  } else {
+    std::fputs(verify::radiance_query_text(answer).c_str(), stdout);
+  }
+  return 0;
+}
+
+int run_query(const QueryOptions& o) {
+  if (o.kind == "radiance") return query_radiance(o);
+  if (!o.lobe.empty() || o.cluster || !o.h.empty())
+    throw CLI::ValidationError(!o.lobe.empty() ? "--lobe"
+                               : o.cluster     ? "--cluster"
+                                               : "--h",
+                               "only radiance queries take --lobe, --cluster and --h");
+  return o.kind == "parallax" ? query_parallax(o) : query_visibility(o);
+}
+
 const bool registered = register_command(
-    {"query", "answer per-texel and footprint queries on an asset (parallax, visibility)",
+    {"query", "answer per-texel and footprint queries on an asset (parallax, visibility, radiance)",
      [](CLI::App& app) -> Action {
        auto o = std::make_shared<QueryOptions>();
        app.add_option("ASSET", o->asset, "asset file (.cbk)")->required();
-       app.add_option("KIND", o->kind, "what to query: parallax or visibility")
+       app.add_option("KIND", o->kind, "what to query: parallax, visibility or radiance")
            ->required()
-           ->check(CLI::IsMember({"parallax", "visibility"}));
+           ->check(CLI::IsMember({"parallax", "visibility", "radiance"}));
        app.add_option("--dir", o->dir,
                       "direction x,y,z in the local frame (z = macro normal): the view direction "
                       "(towards the viewer) for parallax, the light direction for visibility");
        app.add_option("--texel", o->texel, "texel i,j (integers; the tile wraps)");
        app.add_option("--rect", o->rect,
-                      "parallax footprint x0,y0,x1,y1 in texel units (mean over the rectangle)");
+                      "footprint x0,y0,x1,y1 in texel units, half-open, any size, wraps (parallax: "
+                      "mean over it; radiance: F over it)");
+       app.add_option("--lobe", o->lobe,
+                      "radiance: lobe as in `clothbake bsdf` (specular_reflection, "
+                      "specular_transmission, delta_transmission)");
+       app.add_option("--cluster", o->cluster, "radiance: one visibility cluster (default: all)");
+       app.add_option("--h", o->h, "radiance: half vector x,y,z in the local frame");
+       app.add_option("--tables", o->tables,
+                      "radiance: which tables answer: auto (raw if kept, else compressed), raw, "
+                      "compressed")
+           ->check(CLI::IsMember({"auto", "raw", "compressed"}));
        app.add_flag("--json", o->json, "print the answer as JSON on stdout");
-       return [o] { return o->kind == "parallax" ? query_parallax(*o) : query_visibility(*o); };
+       return [o] { return run_query(*o); };
      }});
 
 }  // namespace

@@ -55,6 +55,10 @@ class CompressedRadianceTables final : public RadianceTables {
   const CompressedTableInfoRecord& info() const noexcept { return info_; }
   uint32_t cell_count() const noexcept { return info_.cell_count; }
   uint32_t image_count() const noexcept { return images_; }
+  // Whether cluster c (< cluster_count()) has any stored image (clusters without one answer 0).
+  bool has_cluster(uint32_t c) const noexcept {
+    return c < cluster_count_ && image_begin_[c + 1] > image_begin_[c];
+  }
   // Bytes of the decoded SATs and basis held in memory.
   uint64_t decoded_bytes() const noexcept;
   // Visibility cluster of texel (x, y) (x, y < N), or -1 when the texel has no cell (its value is 0
