@@ -4,6 +4,14 @@
 // image is left: {H, W} (one channel), {H, W, C} with C <= 4, or {W} (one row). Integer elements
 // are converted to float unchanged (not normalised). The section's checksum is verified first.
 // Exit 3 for a corrupt asset, 2 for a bad section name, index or output path.
+//
+// Integral-Radiance tables are exported as tables, not as their stored bytes:
+//   --section radiance_tables     [--lobe L] --index bin[,cluster]   (raw fixed-point SATs)
+//   --section radiance_compressed [--lobe L] --index bin[,cluster]   (C-PCA, decompressed)
+// write the per-texel values T[cluster][bin] (N x N, one channel; without a cluster the sum over
+// every cluster, i.e. the whole tile's table of that bin). L is a lobe name of `clothbake bsdf`
+// (default specular_reflection; delta_transmission reads the gap table, which has one bin). The
+// cluster label map is the typed section cluster_labels (u8 {N, N}).
 #include <filesystem>
 #include <memory>
 
@@ -11,6 +19,8 @@
 #include "common/diagnostics.hpp"
 #include "common/image_io.hpp"
 #include "formats/reader/asset.hpp"
+#include "formats/reader/compressed_tables.hpp"
+#include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/atomic_file.hpp"
 #include "formats/writer/open_asset.hpp"
 
@@ -25,6 +35,7 @@ struct ExportOptions {
   uint32_t instance = 0;
   std::vector<uint32_t> index;
   std::string output;
+  std::string lobe;
   bool force = false;
 };
 
@@ -125,6 +136,72 @@ Image section_image(const SectionInfo& s, const std::vector<uint32_t>& index,
   return image;
 }
 
+// A typed section (instance o.instance) as an image, after verifying its checksum.
+Image section_export_image(const Asset& asset, const ExportOptions& o, SectionType type) {
+  SectionInfo section;
+  Status status = asset.find(type, o.instance, &section);
+  if (!status.ok()) throw_input_error(o.asset + ": " + status.message());
+  status = asset.verify_section(section);
+  if (!status.ok()) throw Error(ExitCode::InvalidAsset, o.asset + ": " + formats::describe(status));
+  const std::string label = o.section + " (instance " + std::to_string(o.instance) + ")";
+  return section_image(section, o.index, label);
+}
+
+// The table of one (bin, cluster), or of one bin summed over every cluster, of kind's raw or
+// compressed Integral-Radiance tables, as an N x N image of per-texel values.
+Image radiance_image(const Asset& asset, const std::string& asset_path, bool compressed,
+                     const std::string& lobe, const std::vector<uint32_t>& index) {
+  RadianceTableKind kind;
+  if (!radiance_kind_of_lobe(lobe.c_str(), &kind))
+    throw Error(ExitCode::Usage, "--lobe: '" + lobe +
+                                     "' has no Integral-Radiance table (specular_reflection, "
+                                     "specular_transmission and delta_transmission have one)");
+  const std::string label = std::string(compressed ? "radiance_compressed" : "radiance_tables") +
+                            " (" + radiance_kind_name(kind) + ")";
+  RawRadianceTables raw;
+  CompressedRadianceTables packed;
+  const Status status = compressed ? packed.open(asset, kind) : raw.open(asset, kind);
+  if (status.code() == ErrorCode::NotFound)
+    throw_input_error(asset_path + ": no " + label + " tables in the asset (" + status.message() +
+                      ")");
+  if (!status.ok())
+    throw Error(formats::exit_code_of(status), asset_path + ": " + formats::describe(status));
+  const RadianceTables& tables = compressed ? static_cast<const RadianceTables&>(packed) : raw;
+  const uint32_t n = tables.resolution();
+  const uint32_t bins = tables.bins_per_side() * tables.bins_per_side();
+  if (index.empty() || index.size() > 2)
+    throw_input_error("section " + label + ": give --index bin or --index bin,cluster (" +
+                      std::to_string(bins) + " bins, " + std::to_string(tables.cluster_count()) +
+                      " clusters)");
+  if (index[0] >= bins)
+    throw_input_error("section " + label + ": --index bin " + std::to_string(index[0]) +
+                      " is out of range (" + std::to_string(bins) + " bins)");
+  if (index.size() == 2 && index[1] >= tables.cluster_count())
+    throw_input_error("section " + label + ": --index cluster " + std::to_string(index[1]) +
+                      " is out of range (" + std::to_string(tables.cluster_count()) + " clusters)");
+  Image image(static_cast<int>(n), static_cast<int>(n), 1);
+  const uint32_t bin = index[0];
+  if (!compressed) {
+    std::vector<float> one(std::size_t(n) * n);
+    for (uint32_t c = 0; c < tables.cluster_count(); ++c) {
+      if (index.size() == 2 && c != index[1]) continue;
+      if (raw.column_of_cluster(c) < 0) continue;  // zero
+      if (!raw.texel_image(bin, c, one.data()).ok())
+        throw_internal_error("texel_image rejected a checked bin and cluster");
+      for (std::size_t t = 0; t < one.size(); ++t)
+        image.pixels[t] += one[t];
+    }
+  } else {
+    for (uint32_t y = 0; y < n; ++y)
+      for (uint32_t x = 0; x < n; ++x) {
+        const int c = packed.cluster_of_texel(x, y);
+        if (c < 0 || (index.size() == 2 && uint32_t(c) != index[1])) continue;
+        image.pixels[std::size_t(y) * n + x] = float(packed.texel_value(bin, x, y));
+      }
+  }
+  return image;
+}
+
 Action setup_export(CLI::App& app) {
   auto o = std::make_shared<ExportOptions>();
   app.add_option("ASSET", o->asset, "asset file (.cbk)")->required();
@@ -135,18 +212,35 @@ Action setup_export(CLI::App& app) {
       ->delimiter(',');
   app.add_option("-o,--output", o->output, "image to write (.exr keeps floats; .png, .tif)")
       ->required();
+  app.add_option("--lobe", o->lobe,
+                 "radiance_tables / radiance_compressed: the lobe whose table to export "
+                 "(default specular_reflection; delta_transmission: the gap table)");
   app.add_flag("--force", o->force, "replace an existing clothbake asset at the output path");
   return [o] {
     const Asset asset = formats::open_asset(o->asset, Verify::Structure);
     const SectionType type = parse_section(o->section);
-    SectionInfo section;
-    Status status = asset.find(type, o->instance, &section);
-    if (!status.ok()) throw_input_error(o->asset + ": " + status.message());
-    status = asset.verify_section(section);
-    if (!status.ok())
-      throw Error(ExitCode::InvalidAsset, o->asset + ": " + formats::describe(status));
-    const std::string label = o->section + " (instance " + std::to_string(o->instance) + ")";
-    const Image image = section_image(section, o->index, label);
+    const bool radiance =
+        type == SectionType::RadianceRawTables || type == SectionType::RadianceCompressedTables;
+    if (!o->lobe.empty() && !radiance)
+      throw Error(ExitCode::Usage,
+                  "--lobe: only radiance_tables and radiance_compressed are exported per lobe");
+    Image image;
+    if (radiance) {
+      if (o->instance != 0)
+        throw Error(ExitCode::Usage,
+                    "--instance: radiance tables are selected with --lobe, not --instance");
+      // The checksums of the sections open() reads are verified first (exit 3 when corrupt).
+      for (uint32_t i = 0; i < asset.section_count(); ++i) {
+        SectionInfo s;
+        if (!asset.section(i, &s).ok() || s.type != type) continue;
+        if (const Status v = asset.verify_section(s); !v.ok())
+          throw Error(ExitCode::InvalidAsset, o->asset + ": " + formats::describe(v));
+      }
+      image = radiance_image(asset, o->asset, type == SectionType::RadianceCompressedTables,
+                             o->lobe.empty() ? "specular_reflection" : o->lobe, o->index);
+    } else {
+      image = section_export_image(asset, *o, type);
+    }
 
     namespace fs = std::filesystem;
     const fs::path output = o->output;
