@@ -6,7 +6,9 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "compress/cpca.hpp"
 
@@ -22,9 +24,9 @@ inline constexpr double kDefaultMaxError = 0.008;
 // Rank cap per C-PCA cluster in target mode.
 inline constexpr int kDefaultRankCap = 64;
 
-// Name of the optional pipeline artifact (a CompressSettings) the bake command seeds from
-// --compress / --max-error / --keep-raw / --no-compress; without it the stage uses
-// settings_from_bake(fabric.bake).
+// Name of the optional pipeline artifact (a CompressRequest) the bake command seeds from
+// --compress / --max-error / --keep-raw / --no-compress; the stage resolves it against the
+// fabric's [bake] settings (resolve_compress_settings). Without it: settings_from_bake.
 inline constexpr const char* kCompressSettingsArtifact = "compress_options";
 
 struct CompressSettings {
@@ -40,11 +42,37 @@ struct CompressSettings {
   std::string describe() const;  // "C-PCA k=1, ranks for 2% (cap 64)" / "C-PCA k=4, r=10"
 };
 
-// From a fabric's [bake] settings: `compress` switches compression on or off; the C-PCA shape is
-// the target-error default (the fabric format's compress_clusters / compress_rank keep the
-// paper's 4 / 10 as defaults, which miss the error target on narrow lobes, so they are used only
-// when the bake passes --compress, see docs/compression.md).
+// From a fabric's [bake] settings: `compress` switches compression on or off;
+// `compress_rank` > 0 asks for a fixed C-PCA shape (k = compress_clusters, or 1 when that is 0);
+// compress_rank = 0 (the default) means "auto": the stage picks the ranks for kDefaultMaxError
+// (k = compress_clusters, or 1 when 0). docs/fabric-format.md, docs/compression.md.
 CompressSettings settings_from_bake(const BakeSettings& bake);
+
+// What the bake command line asks of the compression stage. Unset fields fall back on the
+// fabric's [bake] settings (settings_from_bake).
+struct CompressRequest {
+  bool disable = false;             // --no-compress: raw tables only
+  bool keep_raw = false;            // --keep-raw: compressed and raw tables
+  std::optional<int> clusters;      // --compress K,R: fixed shape...
+  std::optional<int> rank;          // ...(both set or neither)
+  std::optional<double> max_error;  // --max-error E: target mode, the stage picks the ranks
+  // Option names given, in command-line spelling, for messages ("--compress", ...).
+  std::vector<std::string> given() const;
+};
+
+// Throws Error(Usage) naming both options for a conflicting request: --no-compress with any of
+// the others, --compress with --max-error; and for --max-error outside (0, 1].
+void check_compress_request(const CompressRequest& request);
+
+// The settings a bake uses: the fabric's [bake] settings overridden by what the request sets.
+// --max-error keeps the fabric's compress_clusters (or 1) and caps ranks at kDefaultRankCap.
+CompressSettings resolve_compress_settings(const BakeSettings& bake,
+                                           const CompressRequest& request);
+
+// Name prefix under which a stage lists the section artifacts it supersedes (a
+// std::vector<std::string>, read by the write stage, docs/pipeline.md): the compress stage
+// publishes "supersedes/compress" = {"section/tables"} unless the raw tables are kept.
+inline constexpr const char* kSupersedesArtifact = "supersedes/compress";
 
 // "k,r" (e.g. "4,10") -> fixed settings. Throws Error(Usage) naming `option` otherwise.
 CompressSettings parse_compress_shape(const std::string& text, const std::string& option);

@@ -39,12 +39,14 @@ struct FabricMaps {
 
 // Optical parameters of one yarn material (paper Sec. 3; defaults in docs/fabric-format.md).
 struct YarnMaterial {
-  std::string name;                        // "warp", "weft", or a WIF colour name
-  double roughness = 0.3;                  // SGGX fibre roughness sigma, (0, 1]
-  double optical_thickness = 2.0;          // SpongeCake slab optical thickness T, > 0
-  Rgb specular_albedo{0.8, 0.8, 0.8};      // single-scattering albedo alpha of the specular lobes
-  Rgb diffuse_reflectance{0.3, 0.3, 0.3};  // higher-order scattering, reflection
-  Rgb diffuse_transmittance{0.2, 0.2, 0.2};
+  std::string name;                // "warp", "weft", or a WIF colour name
+  double roughness = 0.3;          // SGGX fibre roughness sigma, (0, 1]
+  double optical_thickness = 2.0;  // SpongeCake slab optical thickness T, > 0
+  // Defaults sum to exactly 1 per channel (energy conservation, model::energy_excess = 0): the
+  // earlier 0.8 / 0.3 / 0.2 scaled by 1 / 1.3 and rounded (docs/fabric-format.md).
+  Rgb specular_albedo{0.6, 0.6, 0.6};  // single-scattering albedo alpha of the specular lobes
+  Rgb diffuse_reflectance{0.25, 0.25, 0.25};  // higher-order scattering, reflection
+  Rgb diffuse_transmittance{0.15, 0.15, 0.15};
   Rgb color{1.0, 1.0, 1.0};  // yarn colour (multiplies the albedos; the albedo map)
 };
 
@@ -62,8 +64,8 @@ struct BakeSettings {
   int radiance_dirs = 32;         // Integral-Radiance half-vector bins: dirs x dirs
   int clusters = 8;               // N_c visibility clusters
   bool compress = true;           // C-PCA compress the Integral-Radiance tables
-  int compress_clusters = 4;      // C-PCA clusters k
-  int compress_rank = 10;         // C-PCA rank r
+  int compress_clusters = 0;      // C-PCA clusters k per visibility cluster; 0: auto (1)
+  int compress_rank = 0;          // C-PCA rank r (fixed shape); 0: auto (ranks for a target error)
   uint64_t seed = 1;              // seed of every randomised step (k-means++, verify sampling)
 };
 

@@ -106,8 +106,10 @@ BakeSettings parse_bake(const TomlSection& s) {
   b.radiance_dirs = int(s.integer("radiance_dirs", 2, 256).value_or(b.radiance_dirs));
   b.clusters = int(s.integer("clusters", 1, 64).value_or(b.clusters));
   b.compress = s.boolean("compress").value_or(b.compress);
-  b.compress_clusters = int(s.integer("compress_clusters", 1, 64).value_or(b.compress_clusters));
-  b.compress_rank = int(s.integer("compress_rank", 1, 256).value_or(b.compress_rank));
+  // 0 means "auto" (the compress stage's target-error mode); the upper bounds are the C-PCA's
+  // (compress/cpca.hpp: kMaxCpcaClustersPerStratum, kMaxCpcaRank).
+  b.compress_clusters = int(s.integer("compress_clusters", 0, 64).value_or(b.compress_clusters));
+  b.compress_rank = int(s.integer("compress_rank", 0, 255).value_or(b.compress_rank));
   b.seed = uint64_t(s.integer("seed", 0, INT64_MAX).value_or(int64_t(b.seed)));
   return b;
 }

@@ -1,5 +1,7 @@
 #include "bake/inputs/fabric_report.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 namespace clothbake {
@@ -260,11 +262,14 @@ std::string inspect_text(const LoadedFabric& loaded, const inputs::MapStats& s,
       "radiance {}x{} bins\n",
       b.resolution, b.parallax_dirs, b.parallax_dirs, b.parallax_min_cos, b.visibility_dirs,
       b.visibility_dirs, b.radiance_dirs, b.radiance_dirs);
-  t += fmt::format(
-      "            {} visibility clusters, compression {}, seed {}\n", b.clusters,
-      b.compress ? fmt::format("C-PCA {} clusters x rank {}", b.compress_clusters, b.compress_rank)
-                 : std::string("off"),
-      b.seed);
+  t += fmt::format("            {} visibility clusters, compression {}, seed {}\n", b.clusters,
+                   !b.compress ? std::string("off")
+                   : b.compress_rank > 0
+                       ? fmt::format("C-PCA {} clusters x rank {}",
+                                     std::max(b.compress_clusters, 1), b.compress_rank)
+                       : fmt::format("C-PCA {} clusters, ranks chosen for the default target error",
+                                     std::max(b.compress_clusters, 1)),
+                   b.seed);
   t += "\ninputs\n";
   for (const auto& in : f.inputs)
     t += fmt::format("  {:<8} {}  {}\n", in.role, in.xxh64, in.path);

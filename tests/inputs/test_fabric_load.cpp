@@ -51,8 +51,9 @@ TEST_F(FabricLoad, ImageFabricWithDefaults) {
   EXPECT_EQ(fabric.yarns[0].name, "yarn");
   EXPECT_EQ(fabric.yarns[0].roughness, YarnMaterial{}.roughness);
   EXPECT_EQ(fabric.bake.clusters, 8);  // paper defaults
-  EXPECT_EQ(fabric.bake.compress_clusters, 4);
-  EXPECT_EQ(fabric.bake.compress_rank, 10);
+  // 0 = "auto": the compress stage picks the ranks for its target error (docs/fabric-format.md).
+  EXPECT_EQ(fabric.bake.compress_clusters, 0);
+  EXPECT_EQ(fabric.bake.compress_rank, 0);
   EXPECT_EQ(fabric.bake.radiance_dirs, 32);
   EXPECT_DOUBLE_EQ(fabric.bake.parallax_min_cos, 0.6);
   const std::size_t texels = 64;
@@ -175,6 +176,12 @@ TEST_F(FabricLoad, WrongTypeAndOutOfRange) {
   f = write_image_fabric(dir, 8, "",
                          "[[yarn]]\ndiffuse_reflectance = 0.7\ndiffuse_transmittance = 0.5\n");
   EXPECT_THAT(load_error(f.toml), HasSubstr("exceeds 1 (energy is not conserved)"));
+  f = write_image_fabric(dir, 8, "", "[bake]\ncompress_rank = 256\n");
+  EXPECT_THAT(load_error(f.toml),
+              HasSubstr("bake.compress_rank = 256 is out of range; valid range is [0, 255]"));
+  f = write_image_fabric(dir, 8, "", "[bake]\ncompress_clusters = -1\n");
+  EXPECT_THAT(load_error(f.toml),
+              HasSubstr("bake.compress_clusters = -1 is out of range; valid range is [0, 64]"));
   f = write_image_fabric(dir, 8, "", "[[yarn]]\nname = \"a\"\n[[yarn]]\nname = \"a\"\n");
   EXPECT_THAT(load_error(f.toml), HasSubstr("yarn[1].name = \"a\" is already the name of yarn[0]"));
 }
@@ -492,6 +499,30 @@ TEST_F(FabricLoad, TwillExampleKeepsThePaperResolution) {
   std::string text =
       testing::read_text(std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/fabrics/twill.toml");
   EXPECT_THAT(text, HasSubstr("resolution = 256"));
+}
+
+TEST_F(FabricLoad, CompressShapeKeysZeroMeansAuto) {
+  ScratchDir dir;
+  auto f = write_image_fabric(dir, 8, "", "[bake]\ncompress_clusters = 0\ncompress_rank = 0\n");
+  Fabric fabric = load_fabric_description(f.toml).fabric;
+  EXPECT_EQ(fabric.bake.compress_clusters, 0);
+  EXPECT_EQ(fabric.bake.compress_rank, 0);
+  f = write_image_fabric(dir, 8, "", "[bake]\ncompress_clusters = 3\ncompress_rank = 12\n");
+  fabric = load_fabric_description(f.toml).fabric;
+  EXPECT_EQ(fabric.bake.compress_clusters, 3);
+  EXPECT_EQ(fabric.bake.compress_rank, 12);
+}
+
+TEST(FabricDefaults, YarnAlbedosConserveEnergy) {
+  // alpha + R_d + T_d <= 1 per channel (model::energy_excess <= 0): a fabric that leaves the
+  // albedos out must not reflect and transmit more than it receives.
+  const YarnMaterial y;
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_LE(y.specular_albedo[c] + y.diffuse_reflectance[c] + y.diffuse_transmittance[c], 1.0)
+        << "channel " << c;
+    EXPECT_GT(y.specular_albedo[c], y.diffuse_reflectance[c]) << "specular stays the main lobe";
+    EXPECT_GT(y.diffuse_reflectance[c], y.diffuse_transmittance[c]);
+  }
 }
 
 }  // namespace
