@@ -1,12 +1,12 @@
 // The `compress` pipeline stage (paper Sec. 4.4): the raw Integral-Radiance table sections of the
 // `tables` stage and the label map of the `cluster` stage (artifact "clusters") in, C-PCA
 // compressed sections out (compress/compressed_set.hpp), one kind after the other, with the
-// settings seeded by the bake command (artifact kCompressSettingsArtifact) or the fabric's [bake]
-// defaults.
+// fabric's [bake] settings overridden by the bake command's request (artifact
+// kCompressSettingsArtifact, a CompressRequest).
 //
-// Whether the raw sections are also written is the write stage's business: with keep_raw false it
-// must drop "section/tables" when "section/compress" holds compressed tables (docs/compression.md,
-// "Bake").
+// Unless the raw tables are kept, the stage also publishes "supersedes/compress" =
+// {"section/tables"} when it produced compressed tables: the write stage then leaves the raw
+// tables out of the asset (docs/pipeline.md, "Superseded sections"; docs/compression.md, "Bake").
 //
 // Attached as an INTERFACE source of clothbake_compress (see CMakeLists.txt) so that the
 // registration is compiled into every executable that links the library.
@@ -29,9 +29,11 @@ namespace {
 
 void run_compress(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
-  CompressSettings settings = settings_from_bake(fabric.bake);
-  if (ctx.has_input(kCompressSettingsArtifact))
-    settings = ctx.input<CompressSettings>(kCompressSettingsArtifact);
+  const CompressSettings settings =
+      ctx.has_input(kCompressSettingsArtifact)
+          ? resolve_compress_settings(fabric.bake,
+                                      ctx.input<CompressRequest>(kCompressSettingsArtifact))
+          : settings_from_bake(fabric.bake);
   nlohmann::json meta;
   meta["enabled"] = settings.enabled;
   meta["keep_raw"] = settings.keep_raw || !settings.enabled;
@@ -40,6 +42,7 @@ void run_compress(pipeline::StageContext& ctx) {
   if (!settings.enabled) {
     ctx.output("section/compress", std::move(out));
     ctx.output("metadata/compress", meta);
+    ctx.output(kSupersedesArtifact, std::vector<std::string>{});
     return;
   }
   const auto& raw = ctx.input<std::vector<formats::Section>>("section/tables");
@@ -79,8 +82,17 @@ void run_compress(pipeline::StageContext& ctx) {
                      {"seconds", ctx.options().record_timings ? seconds : 0.0}});
   }
   meta["kinds"] = kinds;
+  meta["mode"] = settings.fixed ? "fixed" : "target";
+  meta["clusters"] = settings.clusters;
+  meta["rank"] = settings.rank;
+  if (!settings.fixed) meta["max_error"] = settings.max_error;
+  // The raw tables are superseded only when there is something to replace them with.
+  const bool drop_raw = !settings.keep_raw && !out.empty();
+  meta["keep_raw"] = !drop_raw;
   ctx.output("section/compress", std::move(out));
   ctx.output("metadata/compress", meta);
+  ctx.output(kSupersedesArtifact,
+             drop_raw ? std::vector<std::string>{"section/tables"} : std::vector<std::string>{});
 }
 
 }  // namespace
@@ -90,7 +102,7 @@ CLOTHBAKE_REGISTER_STAGE(compress) {
   clothbake::pipeline::Stage s;
   s.description = "C-PCA compression of the Integral-Radiance tables (paper Sec. 4.4)";
   s.inputs = {"fabric", "section/tables", "clusters"};
-  s.outputs = {"section/compress", "metadata/compress"};
+  s.outputs = {"section/compress", "metadata/compress", clothbake::compress::kSupersedesArtifact};
   s.collects = {clothbake::compress::kCompressSettingsArtifact};
   s.run = clothbake::compress::run_compress;
   return s;

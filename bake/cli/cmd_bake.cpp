@@ -1,7 +1,11 @@
 // clothbake bake FABRIC.toml -o OUT.cbk [--stages a,b] [--threads N] [--quiet] [--report R.json]
-// [--json] [--force] [--record-timings] [--list-stages]: runs the bake pipeline (docs/pipeline.md)
-// and writes one asset atomically. Exit 2 on bad input or an unwritable output (nothing written),
-// 1 on a bad command line (unknown stage).
+// [--json] [--force] [--record-timings] [--list-stages]
+// [--compress K,R | --max-error E] [--keep-raw] [--no-compress]: runs the bake pipeline
+// (docs/pipeline.md) and writes one asset atomically. By default the asset holds the C-PCA
+// compressed Integral-Radiance tables only (docs/compression.md, "Bake"). Exit 2 on bad input or
+// an unwritable output (nothing written), 1 on a bad command line (unknown stage, conflicting
+// compression options, compression options with --stages that leave out the compress stage).
+#include <algorithm>
 #include <iostream>
 #include <memory>
 
@@ -9,6 +13,8 @@
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
 #include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "compress/compress_settings.hpp"
 #include "formats/writer/atomic_file.hpp"
 
 namespace clothbake::cli {
@@ -25,7 +31,36 @@ struct BakeOptions {
   bool record_timings = false;
   bool list_stages = false;
   std::string report;
+  // Compression (compress/compress_settings.hpp).
+  std::string compress_shape;  // --compress K,R
+  double max_error = 0.0;      // --max-error E
+  CLI::Option* max_error_option = nullptr;
+  bool keep_raw = false;
+  bool no_compress = false;
 };
+
+// The compression request of the command line, checked (Error(Usage) naming the options).
+compress::CompressRequest compress_request(const BakeOptions& o) {
+  compress::CompressRequest r;
+  r.disable = o.no_compress;
+  r.keep_raw = o.keep_raw;
+  if (!o.compress_shape.empty()) {
+    const compress::CompressSettings shape =
+        compress::parse_compress_shape(o.compress_shape, "--compress");
+    r.clusters = shape.clusters;
+    r.rank = shape.rank;
+  }
+  if (o.max_error_option && o.max_error_option->count() > 0) r.max_error = o.max_error;
+  compress::check_compress_request(r);
+  const auto given = r.given();
+  if (!given.empty() && !o.stages.empty() &&
+      std::find(o.stages.begin(), o.stages.end(), "compress") == o.stages.end())
+    throw Error(ExitCode::Usage, given.front() +
+                                     " has no effect: --stages does not include the compress "
+                                     "stage (add it, or drop " +
+                                     given.front() + ")");
+  return r;
+}
 
 void print_stage_list(bool json) {
   const auto stages = pipeline::registered_stages();
@@ -72,6 +107,19 @@ Action setup_bake(CLI::App& app) {
   app.add_flag("--record-timings", o->record_timings,
                "store stage timings in the asset metadata (makes the bytes differ run to run)");
   app.add_flag("--list-stages", o->list_stages, "list the registered stages and exit");
+  app.add_option("--compress", o->compress_shape,
+                 "C-PCA with a fixed shape K,R: K clusters per visibility cluster, rank R "
+                 "(default: ranks chosen for the target error, see --max-error)");
+  o->max_error_option = app.add_option(
+      "--max-error", o->max_error,
+      "target relative RMS error of the compressed texels; the stage picks the ranks "
+      "(default " +
+          std::to_string(compress::kDefaultMaxError) + ")");
+  app.add_flag(
+      "--keep-raw", o->keep_raw,
+      "also keep the raw Integral-Radiance tables in the asset (default: compressed only)");
+  app.add_flag("--no-compress", o->no_compress,
+               "write the raw Integral-Radiance tables only (no C-PCA compression)");
   return [o] {
     if (o->list_stages) {
       print_stage_list(o->json);
@@ -80,6 +128,7 @@ Action setup_bake(CLI::App& app) {
     if (o->fabric.empty()) throw CLI::RequiredError("FABRIC");
     if (o->output.empty()) throw CLI::RequiredError("--output");
     if (o->quiet) set_quiet(true);
+    const compress::CompressRequest compression = compress_request(*o);
     take_warnings();
     // Check the report path before the bake, so that a typo does not cost a whole bake.
     formats::OutputOptions report_output;
@@ -94,6 +143,8 @@ Action setup_bake(CLI::App& app) {
     request.run.threads = o->threads;
     request.run.show_progress = !o->quiet && pipeline::ProgressBar::stderr_is_terminal();
     request.run.record_timings = o->record_timings;
+    if (!compression.given().empty())
+      request.seeds.put(compress::kCompressSettingsArtifact, compression);
     const pipeline::BakeResult result = pipeline::bake(request);
 
     nlohmann::json report = pipeline::bake_report_json(request, result);

@@ -43,6 +43,15 @@ class Artifacts {
     return out;
   }
 
+  // Adds every value of `other` to this set (shared, not copied). Throws Error(Internal) naming
+  // the first name present in both.
+  void merge(const Artifacts& other) {
+    for (const auto& [name, value] : other.values_)
+      if (values_.count(name)) throw_internal_error("artifact '" + name + "' is produced twice");
+    for (const auto& [name, value] : other.values_)
+      values_.emplace(name, value);
+  }
+
   // Moves `name` from `other` into this set (shared, not copied).
   void take(Artifacts& other, const std::string& name) {
     auto it = other.values_.find(name);

@@ -25,6 +25,7 @@ BakeResult bake(const BakeRequest& request) {
   else
     seeded.put("fabric_path", request.fabric_path);
   seeded.put("output", OutputRequest{request.output_path, request.force});
+  seeded.merge(request.seeds);
 
   BakeResult result;
   result.run = run_pipeline(request.stages, std::move(seeded), request.run);

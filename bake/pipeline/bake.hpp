@@ -45,6 +45,12 @@ struct BakeRequest {
   bool force = false;
   std::vector<std::string> stages;  // --stages (empty: all)
   RunOptions run;
+  // Optional artifacts available to every stage from the start, beside "fabric"/"fabric_path" and
+  // "output": options that a command line gives to a stage of another folder (e.g. the compress
+  // stage's "compress_options") without bake/pipeline knowing their types. A stage reads them by
+  // listing their names in Stage::collects. Names must not collide with the seeded ones above or
+  // with an artifact a stage produces (Error(Internal)).
+  Artifacts seeds;
 };
 
 struct BakeResult {

@@ -2,6 +2,8 @@
 //
 // This file is an INTERFACE source of clothbake_pipeline (see CMakeLists.txt and stage.hpp): it is
 // compiled into every executable that links the library, so its registrations are never dropped.
+#include <map>
+
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/stage.hpp"
@@ -55,22 +57,50 @@ nlohmann::json metadata(StageContext& ctx) {
   return m;
 }
 
+// Section artifacts that a stage replaces: every "supersedes/<stage>" artifact lists names of
+// "section/..." artifacts that the write stage leaves out of the asset (the compress stage lists
+// "section/tables" when the asset is to hold the compressed tables only). Name -> superseding
+// artifact, sorted.
+std::map<std::string, std::string> superseded_sections(StageContext& ctx) {
+  std::map<std::string, std::string> out;
+  for (const auto& name : ctx.collected("supersedes/"))
+    for (const std::string& section : ctx.input<std::vector<std::string>>(name)) {
+      if (section.rfind("section/", 0) != 0)
+        throw_internal_error("artifact '" + name + "' supersedes '" + section +
+                             "', which is not a section artifact");
+      out.emplace(section, name.substr(std::string("supersedes/").size()));
+    }
+  return out;
+}
+
 void write_stage(StageContext& ctx) {
   const auto& request = ctx.input<OutputRequest>("output");
-  std::vector<Section> sections;
-  for (const auto& name : ctx.collected("section/"))
+  const auto superseded = superseded_sections(ctx);
+  // References to the sections the stages hold (no copy of the payloads: the raw tables alone can
+  // be gigabytes).
+  std::vector<const Section*> sections;
+  nlohmann::json omitted = nlohmann::json::array();
+  for (const auto& name : ctx.collected("section/")) {
+    if (auto it = superseded.find(name); it != superseded.end()) {
+      omitted.push_back({{"artifact", name}, {"superseded_by", it->second}});
+      continue;
+    }
     for (const Section& s : ctx.input<std::vector<Section>>(name))
-      sections.push_back(s);
-  sections.push_back(formats::make_metadata_section(metadata(ctx)));
+      sections.push_back(&s);
+  }
+  nlohmann::json meta = metadata(ctx);
+  if (!omitted.empty()) meta["omitted_sections"] = omitted;
+  const Section metadata_section = formats::make_metadata_section(meta);
+  sections.push_back(&metadata_section);
 
   formats::OutputOptions options;
   options.force = request.force;
-  formats::write_asset_file(request.path, sections, options);
+  formats::write_asset_file(request.path, formats::SectionRefs(sections), options);
 
   // Summarise from the table order the writer used.
   AssetSummary summary;
   summary.path = request.path;
-  summary.size_bytes = formats::asset_size(sections);
+  summary.size_bytes = formats::asset_size(formats::SectionRefs(sections));
   reader::Asset asset;
   const reader::Status status = asset.open_file(request.path.c_str(), {reader::Verify::Structure});
   if (!status.ok())
@@ -134,7 +164,7 @@ CLOTHBAKE_REGISTER_STAGE(write) {
   Stage s;
   s.description = "write the asset atomically (temporary file, fsync, rename)";
   s.inputs = {"fabric", "output"};
-  s.collects = {"section/", "metadata/"};
+  s.collects = {"section/", "metadata/", "supersedes/"};
   s.outputs = {"asset"};
   s.always = true;
   s.run = write_stage;

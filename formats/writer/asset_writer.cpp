@@ -158,9 +158,23 @@ Section make_metadata_section(const nlohmann::json& metadata) {
   return make_array_section<uint8_t>(SectionType::Metadata, 0, bytes, {uint32_t(text.size())});
 }
 
-void check_sections(std::span<const Section> sections) {
+namespace {
+
+std::vector<const Section*> pointers_to(std::span<const Section> sections) {
+  std::vector<const Section*> refs;
+  refs.reserve(sections.size());
   for (const Section& s : sections)
-    check_section(s);
+    refs.push_back(&s);
+  return refs;
+}
+
+}  // namespace
+
+void check_sections(SectionRefs sections) {
+  for (const Section* s : sections) {
+    if (s == nullptr) throw_internal_error("a null section was passed to the asset writer");
+    check_section(*s);
+  }
   const auto order = table_order(sections);
   for (std::size_t i = 1; i < order.size(); ++i)
     if (order[i]->type == order[i - 1]->type && order[i]->instance == order[i - 1]->instance)
@@ -169,17 +183,24 @@ void check_sections(std::span<const Section> sections) {
     throw_internal_error("too many sections: " + std::to_string(sections.size()));
 }
 
-std::vector<const Section*> table_order(std::span<const Section> sections) {
-  std::vector<const Section*> order;
-  for (const Section& s : sections)
-    order.push_back(&s);
-  std::sort(order.begin(), order.end(), [](const Section* a, const Section* b) {
+void check_sections(std::span<const Section> sections) {
+  check_sections(SectionRefs(pointers_to(sections)));
+}
+
+std::vector<const Section*> table_order(SectionRefs sections) {
+  std::vector<const Section*> order(sections.begin(), sections.end());
+  // Stable, so that the order (and the duplicate message) does not depend on the sort's whims.
+  std::stable_sort(order.begin(), order.end(), [](const Section* a, const Section* b) {
     return std::pair(uint32_t(a->type), a->instance) < std::pair(uint32_t(b->type), b->instance);
   });
   return order;
 }
 
-uint64_t asset_size(std::span<const Section> sections) {
+std::vector<const Section*> table_order(std::span<const Section> sections) {
+  return table_order(SectionRefs(pointers_to(sections)));
+}
+
+uint64_t asset_size(SectionRefs sections) {
   uint64_t offset =
       align_up(sizeof(reader::FileHeader) + sections.size() * sizeof(reader::SectionEntry));
   for (const Section* s : table_order(sections))
@@ -187,7 +208,11 @@ uint64_t asset_size(std::span<const Section> sections) {
   return offset;
 }
 
-uint64_t write_asset(std::span<const Section> sections, Sink& sink) {
+uint64_t asset_size(std::span<const Section> sections) {
+  return asset_size(SectionRefs(pointers_to(sections)));
+}
+
+uint64_t write_asset(SectionRefs sections, Sink& sink) {
   check_sections(sections);
   const auto order = table_order(sections);
   const uint64_t table_end =
@@ -236,17 +261,27 @@ uint64_t write_asset(std::span<const Section> sections, Sink& sink) {
   return file_size;
 }
 
+uint64_t write_asset(std::span<const Section> sections, Sink& sink) {
+  return write_asset(SectionRefs(pointers_to(sections)), sink);
+}
+
 std::vector<std::byte> serialize_asset(std::span<const Section> sections) {
   MemorySink sink;
   write_asset(sections, sink);
   return std::move(sink.bytes());
 }
 
-void write_asset_file(const std::filesystem::path& path, std::span<const Section> sections,
+void write_asset_file(const std::filesystem::path& path, SectionRefs sections,
                       const OutputOptions& options) {
   check_sections(sections);  // before creating anything
   write_file_atomically(
       path, [&](Sink& sink) { write_asset(sections, sink); }, options);
+}
+
+void write_asset_file(const std::filesystem::path& path, std::span<const Section> sections,
+                      const OutputOptions& options) {
+  const std::vector<const Section*> refs = pointers_to(sections);
+  write_asset_file(path, SectionRefs(refs), options);
 }
 
 }  // namespace clothbake::formats

@@ -61,26 +61,38 @@ Section make_record_section(SectionType type, uint32_t instance, std::span<const
 // strings is replaced by U+FFFD rather than failing).
 Section make_metadata_section(const nlohmann::json& metadata);
 
+// The functions below come in two forms: over a contiguous array of sections, and over pointers
+// to sections (`SectionRefs`), so that a caller holding sections in several containers (the bake's
+// write stage) writes them without copying the payloads. Both forms give the same bytes for the
+// same sections, in whatever order they are passed.
+using SectionRefs = std::span<const Section* const>;
+
 // Checks a set of sections for writing: rank <= 4, payload size = shape x element size, unique
-// (type, instance). Throws Error(Internal) naming the section on failure.
+// (type, instance). Throws Error(Internal) naming the section on failure (also for a null pointer).
 void check_sections(std::span<const Section> sections);
+void check_sections(SectionRefs sections);
 
 // The table order: sections sorted by (type, instance). Pointers into `sections`.
 std::vector<const Section*> table_order(std::span<const Section> sections);
+std::vector<const Section*> table_order(SectionRefs sections);
 
 // Bytes of a complete asset written through `sink` (header, table, payloads, padding). Returns
 // the file size. Throws what the sink throws, and Error(Internal) for invalid sections.
 uint64_t write_asset(std::span<const Section> sections, Sink& sink);
+uint64_t write_asset(SectionRefs sections, Sink& sink);
 
 // The asset in memory (for tests and the golden file).
 std::vector<std::byte> serialize_asset(std::span<const Section> sections);
 
 // Size the asset will have, without writing it.
 uint64_t asset_size(std::span<const Section> sections);
+uint64_t asset_size(SectionRefs sections);
 
 // Writes the asset atomically to `path` (see atomic_file.hpp for the guarantees and errors).
 struct OutputOptions;
 void write_asset_file(const std::filesystem::path& path, std::span<const Section> sections,
+                      const OutputOptions& options);
+void write_asset_file(const std::filesystem::path& path, SectionRefs sections,
                       const OutputOptions& options);
 
 }  // namespace clothbake::formats

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -311,3 +312,93 @@ TEST_F(Cli, DamagedAndForeignAssets) {
 }
 
 }  // namespace
+
+namespace {
+
+// Section names of a bake's --json report, counted.
+std::map<std::string, int> section_counts(const nlohmann::json& report) {
+  std::map<std::string, int> counts;
+  for (const auto& s : report["asset"]["sections"])
+    ++counts[s["name"].get<std::string>()];
+  return counts;
+}
+
+const char* kSmallCompressFabric =
+    "name = \"compress cli\"\n[weave]\nname = \"twill2/1\"\n"
+    "[[yarn]]\nname = \"warp\"\nroughness = 0.3\n[[yarn]]\nname = \"weft\"\nroughness = 0.2\n"
+    "[bake]\nresolution = 32\nradiance_dirs = 8\nparallax_dirs = 8\nvisibility_dirs = 8\n"
+    "clusters = 4\n";
+
+}  // namespace
+
+TEST_F(Cli, CompressionOptionsDecideWhichTablesAreWritten) {
+  std::ofstream(dir_ / "c.toml") << kSmallCompressFabric;
+  // Default: compressed tables only; the raw ones are superseded (named in the metadata).
+  Outcome r = run({"bake", "@c.toml", "-o", "@default.cbk", "--json", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto counts = section_counts(nlohmann::json::parse(r.out));
+  EXPECT_GT(counts["radiance_compressed"], 0);
+  EXPECT_EQ(counts["radiance_tables"], 0);
+  r = run({"info", "@default.cbk", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto metadata = nlohmann::json::parse(r.out)["metadata"];
+  EXPECT_EQ(metadata["omitted_sections"][0]["artifact"], "section/tables");
+  EXPECT_EQ(metadata["parameters"]["compress"]["mode"], "target");
+  EXPECT_EQ(metadata["parameters"]["compress"]["keep_raw"], false);
+
+  r = run({"bake", "@c.toml", "-o", "@both.cbk", "--keep-raw", "--json", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  counts = section_counts(nlohmann::json::parse(r.out));
+  EXPECT_GT(counts["radiance_compressed"], 0);
+  EXPECT_GT(counts["radiance_tables"], 0);
+
+  r = run({"bake", "@c.toml", "-o", "@raw.cbk", "--no-compress", "--json", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  counts = section_counts(nlohmann::json::parse(r.out));
+  EXPECT_EQ(counts["radiance_compressed"], 0);
+  EXPECT_GT(counts["radiance_tables"], 0);
+
+  // --stages without compress: the raw tables, as before compression existed.
+  r = run({"bake", "@c.toml", "-o", "@tables.cbk", "--stages", "tables", "--json", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  counts = section_counts(nlohmann::json::parse(r.out));
+  EXPECT_EQ(counts["radiance_compressed"], 0);
+  EXPECT_GT(counts["radiance_tables"], 0);
+
+  // A fixed shape and a target error reach the stage.
+  r = run({"bake", "@c.toml", "-o", "@fixed.cbk", "--compress", "1,3", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = run({"info", "@fixed.cbk", "--json"});
+  auto compress = nlohmann::json::parse(r.out)["metadata"]["parameters"]["compress"];
+  EXPECT_EQ(compress["mode"], "fixed");
+  EXPECT_EQ(compress["kinds"][0]["max_rank"], 3);
+  r = run({"bake", "@c.toml", "-o", "@target.cbk", "--max-error", "0.05", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = run({"info", "@target.cbk", "--json"});
+  compress = nlohmann::json::parse(r.out)["metadata"]["parameters"]["compress"];
+  EXPECT_EQ(compress["mode"], "target");
+  EXPECT_DOUBLE_EQ(compress["max_error"].get<double>(), 0.05);
+  EXPECT_LE(compress["kinds"][0]["relative_rms_error"].get<double>(), 0.05 * 1.0001);
+}
+
+TEST_F(Cli, ConflictingCompressionOptionsAreUsageErrors) {
+  std::ofstream(dir_ / "c.toml") << kSmallCompressFabric;
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--no-compress", "--keep-raw"}, "--no-compress conflicts with --keep-raw"},
+      {{"--no-compress", "--compress", "1,4"}, "--no-compress conflicts with --compress"},
+      {{"--no-compress", "--max-error", "0.01"}, "--no-compress conflicts with --max-error"},
+      {{"--compress", "1,4", "--max-error", "0.01"}, "--compress conflicts with --max-error"},
+      {{"--compress", "4"}, "--compress expects K,R"},
+      {{"--compress", "0,4"}, "K must be in [1, 64]"},
+      {{"--max-error", "0"}, "--max-error expects a relative RMS error in (0, 1]"},
+      {{"--keep-raw", "--stages", "feature_maps"}, "--keep-raw has no effect: --stages"},
+  };
+  for (const auto& [options, message] : cases) {
+    std::vector<std::string> args{"bake", "@c.toml", "-o", "@x.cbk"};
+    args.insert(args.end(), options.begin(), options.end());
+    const Outcome r = run(args);
+    EXPECT_EQ(r.code, 1) << message << "\n" << r.err;
+    EXPECT_IN(message, r.err);
+    EXPECT_FALSE(fs::exists(dir_ / "x.cbk")) << message;
+  }
+}
