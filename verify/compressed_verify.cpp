@@ -8,6 +8,8 @@
 #include <array>
 #include <cmath>
 #include <ctime>
+#include <optional>
+#include <span>
 #include <sstream>
 
 #include "bake/tables/radiance_fill.hpp"
@@ -33,6 +35,13 @@ double thread_seconds() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// Thresholds as given (1e-07, 0.01), not rounded to a fixed number of digits.
+std::string general(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
 }
 
 std::string fixed(double v, int digits) {
@@ -262,6 +271,36 @@ void throughput(const reader::Asset& asset, const reader::CompressedRadianceTabl
   report->throughput_measured = true;
 }
 
+// The raw tables the asset keeps, as exact texel values recovered from its fixed-point SATs (what
+// the compress stage started from), or nothing when the asset does not keep them. Malformed raw
+// tables are an invalid asset.
+std::optional<compress::DirectionalTexels> raw_texels_from_asset(const reader::Asset& asset,
+                                                                 RadianceTableKind kind,
+                                                                 std::span<const uint8_t> labels) {
+  reader::RawRadianceTables checked;  // validates the four sections' shapes against each other
+  const reader::Status s = checked.open(asset, kind);
+  if (s.code() == reader::ErrorCode::NotFound) return std::nullopt;
+  if (!s.ok())
+    invalid_asset(std::string("verify: the asset's raw ") + reader::radiance_kind_name(kind) +
+                  " tables: " + s.message());
+  reader::SectionInfo parts[4];
+  for (uint32_t p = 0; p < 4; ++p)
+    if (!asset
+             .find(reader::SectionType::RadianceRawTables,
+                   reader::radiance_instance(kind, reader::RadiancePart(p)), &parts[p])
+             .ok())
+      return std::nullopt;
+  const unsigned char* base = asset.bytes();
+  tables::RadianceSectionView view;
+  view.info = reinterpret_cast<const reader::RadianceTableInfoRecord*>(base + parts[0].offset);
+  view.clusters = {reinterpret_cast<const uint32_t*>(base + parts[1].offset),
+                   std::size_t(parts[1].stored_size / 4)};
+  view.units = {reinterpret_cast<const double*>(base + parts[2].offset),
+                std::size_t(parts[2].stored_size / 8)};
+  view.sat = reinterpret_cast<const std::byte*>(base + parts[3].offset);
+  return compress::directional_texels(view, labels);
+}
+
 }  // namespace
 
 bool has_compressed_tables(const reader::Asset& asset) {
@@ -325,8 +364,18 @@ CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabri
         r.compressed_bytes += si.stored_size;
     }
     const auto inputs = tables::radiance_inputs(fabric, labels, int(info.cluster_count));
-    const compress::DirectionalTexels raw = compress::directional_texels(
-        kind, inputs.view, int(info.bins_per_side), int(info.samples_per_bin_side));
+    // The reference: the asset's own raw tables when it keeps them, else recomputed from the
+    // fabric with the asset's label map and the quadrature its info record states.
+    std::optional<compress::DirectionalTexels> kept = raw_texels_from_asset(asset, kind, labels);
+    r.raw_reference_from_asset = kept.has_value();
+    const compress::DirectionalTexels raw =
+        kept ? std::move(*kept)
+             : compress::directional_texels(kind, inputs.view, int(info.bins_per_side),
+                                            int(info.samples_per_bin_side));
+    kept.reset();
+    if (raw.resolution != n || raw.bins_per_side != int(info.bins_per_side))
+      invalid_asset("verify: the asset's raw " + r.kind +
+                    " tables do not match its compressed ones (resolution or bins)");
     {
       std::vector<char> used(256, 0);
       for (uint8_t c : raw.cluster)
@@ -360,14 +409,14 @@ CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabri
           c.rms_relative > options.max_footprint_error)
         report.failures.push_back(r.kind + ": footprints of class " + c.size_class +
                                   " have an RMS relative error of " + fixed(c.rms_relative, 5) +
-                                  " > " + fixed(options.max_footprint_error, 5));
+                                  " > " + general(options.max_footprint_error));
     if (options.min_ratio && r.ratio < *options.min_ratio)
       report.failures.push_back(r.kind + ": compression ratio " + fixed(r.ratio, 1) + " < " +
                                 fixed(*options.min_ratio, 1));
     if (options.max_texel_error && r.tables.texel_rms_relative > *options.max_texel_error)
       report.failures.push_back(r.kind + ": relative RMS texel error " +
                                 fixed(r.tables.texel_rms_relative, 5) + " > " +
-                                fixed(*options.max_texel_error, 5));
+                                general(*options.max_texel_error));
     report.kinds.push_back(std::move(r));
   }
   if (report.kinds.empty())
@@ -404,6 +453,7 @@ nlohmann::json compressed_report_json(const CompressedVerifyReport& report) {
         {"decoded_bytes", r.decoded_bytes},
         {"ratio", r.ratio},
         {"bake_error", r.bake_error},
+        {"raw_reference", r.raw_reference_from_asset ? "asset" : "fabric"},
         {"tables",
          {{"count", r.tables.tables},
           {"texel_rms_relative", r.tables.texel_rms_relative},
@@ -439,7 +489,8 @@ std::string compressed_report_text(const CompressedVerifyReport& report) {
   for (const auto& r : report.kinds) {
     o << "compressed " << r.kind << " tables: " << r.resolution << "^2 texels, " << r.bins_per_side
       << "^2 bins, " << r.clusters << " clusters -> " << r.cells << " C-PCA cells, ranks "
-      << r.min_rank << ".." << r.max_rank << ", " << r.images << " images\n";
+      << r.min_rank << ".." << r.max_rank << ", " << r.images << " images; against raw tables "
+      << (r.raw_reference_from_asset ? "kept in the asset" : "recomputed from the fabric") << "\n";
     o << "  size: " << r.compressed_bytes << " bytes against " << r.raw_float_bytes
       << " of raw float tables (" << fixed(r.ratio, 1) << ":1); decoded in memory "
       << fixed(double(r.decoded_bytes) / 1048576.0, 1) << " MiB\n";
@@ -447,7 +498,8 @@ std::string compressed_report_text(const CompressedVerifyReport& report) {
       << " % (bake claimed " << fixed(100 * r.bake_error, 3) << " %), " << r.tables.tables
       << " tables, PSNR min " << fixed(r.tables.min_psnr_db, 1) << " dB / median "
       << fixed(r.tables.median_psnr_db, 1) << " dB, worst RMSE/peak "
-      << fixed(r.tables.worst_relative_rmse, 5) << " (" << r.tables.worst_table << ")\n";
+      << fixed(r.tables.worst_relative_rmse, 5) << " (" << r.tables.worst_table
+      << "), max abs error " << general(r.tables.max_abs_error) << "\n";
     o << "  footprints (RMS relative per cluster / of the cluster sum / max guarded):\n";
     for (const auto& c : r.classes)
       o << "    " << c.size_class

@@ -1,6 +1,7 @@
 // Verification of an asset's C-PCA compressed Integral-Radiance tables against the raw tables
-// (`clothbake verify`, docs/compression.md "Verify"). The raw values are recomputed from the
-// fabric with the asset's label map and quadrature (the asset need not keep its raw tables).
+// (`clothbake verify`, docs/compression.md "Verify"). The raw reference is the asset's own raw
+// tables when it keeps them (exact texel values from the fixed-point SATs, what the compress stage
+// started from), else recomputed from the fabric with the asset's label map and quadrature.
 //
 // Per table kind it reports:
 //  - per table (cluster, bin): RMSE over the tile's texels, maximum error and PSNR
@@ -75,6 +76,8 @@ struct CompressedKindReport {
   uint64_t compressed_bytes = 0, raw_float_bytes = 0, decoded_bytes = 0;
   double ratio = 0.0;
   double bake_error = 0.0;  // what the asset claims (info record)
+  // The raw reference: the asset's own raw tables (true) or recomputed from the fabric (false).
+  bool raw_reference_from_asset = false;
   TableErrorSummary tables;
   std::vector<FootprintClassError> classes;
   // Smallest class side from which every class meets the threshold (infinity: none does).

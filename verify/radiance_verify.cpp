@@ -378,7 +378,7 @@ std::string report_text(const RadianceVerifyReport& report) {
       out << "\n";
     }
   }
-  out << (report.passed ? "verification passed" : "VERIFICATION FAILED") << "\n";
+  out << (report.passed ? "raw tables: passed" : "raw tables: FAILED") << "\n";
   for (const auto& f : report.failures)
     out << "  " << f << "\n";
   return out.str();

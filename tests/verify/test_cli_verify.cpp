@@ -1,10 +1,14 @@
 // `clothbake verify` end to end: a faithful asset exits 0 with a JSON report, a tampered one 5
-// (verification failed), an unreadable or incomplete asset 2/3, a bad command line 1.
+// (verification failed), an unreadable or incomplete asset 2/3, a bad command line 1; assets
+// baked by `clothbake bake` with compressed tables (raw dropped or kept) are verified against raw
+// tables, with thresholds on the footprint error and the ratio.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -119,8 +123,152 @@ TEST_F(CliVerify, BadInputsHaveTheirExitCodes) {
   });
   CliRun r = run("verify " + bare + " --fabric " + toml_.string());
   EXPECT_EQ(r.code, 3) << r.err;
-  EXPECT_NE(r.err.find("no raw specular"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no Integral-Radiance tables, raw or compressed"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(bare), std::string::npos) << "names the asset: " << r.err;
   EXPECT_EQ(run("verify " + asset).code, 1);  // --fabric missing
   EXPECT_EQ(run("verify " + asset + " --fabric " + toml_.string() + " --samples 0").code, 1);
   EXPECT_EQ(run("verify " + asset + " --fabric " + toml_.string() + " --max-rel-error -1").code, 1);
+}
+
+namespace {
+
+// A small fabric (32^2 tile, 8^2 half-vector bins) baked by the CLI with every stage.
+class CliVerifyCompressed : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("clothbake_verify_compressed_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    toml_ = (dir_ / "fabric.toml").string();
+    std::ofstream(toml_) << "name = \"verify compressed\"\n[weave]\nname = \"twill2/1\"\n"
+                            "[[yarn]]\nname = \"warp\"\nroughness = 0.3\n"
+                            "[[yarn]]\nname = \"weft\"\nroughness = 0.2\n"
+                            "[bake]\nresolution = 32\nradiance_dirs = 8\nparallax_dirs = 8\n"
+                            "visibility_dirs = 8\nclusters = 4\n";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string bake(const std::string& name, const std::string& options = "") {
+    const std::string path = (dir_ / name).string();
+    const CliRun r = run("bake " + toml_ + " -o " + path + " --quiet " + options);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return path;
+  }
+  CliRun verify(const std::string& asset, const std::string& options = "") {
+    return run("verify " + asset + " --fabric " + toml_ + " --compressed-samples 210 " + options);
+  }
+
+  fs::path dir_;
+  std::string toml_;
+};
+
+}  // namespace
+
+TEST_F(CliVerifyCompressed, CompressedWithoutRawPasses) {
+  const std::string asset = bake("c.cbk");
+  CliRun r = verify(asset, "--json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["passed"], true);
+  EXPECT_EQ(doc["raw_tables_verified"], false);
+  EXPECT_TRUE(doc["tables"].empty());
+  ASSERT_GE(doc["compressed"].size(), 1u);
+  const auto& specular = doc["compressed"][0];
+  EXPECT_EQ(specular["kind"], "specular");
+  EXPECT_GT(specular["ratio"].get<double>(), 1.0);
+  EXPECT_EQ(specular["resolution"], 32);
+  EXPECT_EQ(specular["bins_per_side"], 8);
+  // Per table RMSE/max/PSNR, per class footprint errors from one texel to many tiles.
+  EXPECT_GT(specular["tables"]["count"].get<int>(), 0);
+  EXPECT_GT(specular["tables"]["min_psnr_db"].get<double>(), 20.0);
+  EXPECT_GE(specular["tables"]["max_abs_error"].get<double>(), 0.0);
+  const auto& classes = specular["footprints"];
+  ASSERT_GE(classes.size(), 4u);
+  EXPECT_EQ(classes.front()["class"], "1");
+  EXPECT_EQ(classes.back()["class"], "tiles");
+  for (const auto& c : classes) {
+    EXPECT_GT(c["footprints"].get<int>(), 0) << c;
+    if (c["min_side"].get<double>() >= 4) EXPECT_LE(c["rms_relative"].get<double>(), 0.01) << c;
+  }
+  EXPECT_TRUE(specular["min_reliable_side"].is_number());
+  EXPECT_GT(specular["throughput"]["compressed_queries_per_second"].get<double>(), 0.0);
+  EXPECT_GT(specular["throughput"]["raw_queries_per_second"].get<double>(), 0.0);
+  EXPECT_EQ(specular["throughput"]["raw_from_asset"], false) << "raw tables were dropped";
+  EXPECT_EQ(specular["raw_reference"], "fabric");
+
+  // The human summary: ratio, classes, the direct-evaluation advice, the verdict.
+  r = verify(asset, "--no-throughput");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(":1)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("evaluate the texels directly"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("raw tables: not in the asset"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("verification passed"), std::string::npos) << r.out;
+}
+
+TEST_F(CliVerifyCompressed, ImpossibleThresholdsExitFive) {
+  const std::string asset = bake("c.cbk");
+  CliRun r = verify(asset, "--no-throughput --max-footprint-error 1e-9");
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_NE(r.err.find("verification failed: specular: footprints of class"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find("VERIFICATION FAILED"), std::string::npos) << r.out;
+  r = verify(asset, "--no-throughput --min-ratio 100000 --json");
+  EXPECT_EQ(r.code, 5) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["passed"], false);
+  ASSERT_FALSE(doc["failures"].empty());
+  EXPECT_NE(doc["failures"][0].get<std::string>().find("compression ratio"), std::string::npos);
+  r = verify(asset, "--no-throughput --max-texel-error 1e-9");
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_NE(r.err.find("relative RMS texel error"), std::string::npos) << r.err;
+  // Only footprints from --footprint-min-side on are held to the threshold: with a threshold
+  // between the 1-texel class's error and the largest error of the classes >= 4 texels, the
+  // default side passes, side 1 fails, and the "direct evaluation below" side moves above 1.
+  r = verify(asset, "--no-throughput --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto classes = nlohmann::json::parse(r.out)["compressed"][0]["footprints"];
+  double one_texel = 0.0, from_four = 0.0;
+  for (const auto& c : classes) {
+    const double e = c["rms_relative"].get<double>(), side = c["min_side"].get<double>();
+    if (side < 2) one_texel = e;
+    if (side >= 4) from_four = std::max(from_four, e);
+  }
+  ASSERT_GT(one_texel, 1.5 * from_four) << "compression errors shrink with the footprint";
+  const std::string between = std::to_string(std::sqrt(one_texel * from_four));
+  r = verify(asset, "--no-throughput --json --max-footprint-error " + between);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_GT(nlohmann::json::parse(r.out)["compressed"][0]["min_reliable_side"].get<double>(), 1.0);
+  r = verify(asset, "--no-throughput --footprint-min-side 1 --max-footprint-error " + between);
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_NE(r.err.find("footprints of class 1 "), std::string::npos) << r.err;
+  EXPECT_EQ(verify(asset, "--max-footprint-error 0").code, 1) << "thresholds must be positive";
+}
+
+TEST_F(CliVerifyCompressed, KeptRawTablesAreVerifiedToo) {
+  const std::string asset = bake("both.cbk", "--keep-raw");
+  const CliRun r = verify(asset, "--json --samples 35");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["raw_tables_verified"], true);
+  ASSERT_FALSE(doc["tables"].empty());
+  EXPECT_LE(doc["tables"][0]["sat_error_max"].get<double>(), 1e-5);
+  ASSERT_FALSE(doc["compressed"].empty());
+  const auto& specular = doc["compressed"][0];
+  EXPECT_EQ(specular["throughput"]["raw_from_asset"], true);
+  // Against the asset's own raw tables (what the compress stage started from), verify measures
+  // the error the bake claimed.
+  EXPECT_EQ(specular["raw_reference"], "asset");
+  const double claimed = specular["bake_error"].get<double>();
+  ASSERT_GT(claimed, 0.0);
+  EXPECT_NEAR(specular["tables"]["texel_rms_relative"].get<double>(), claimed, 1e-3 * claimed);
+}
+
+TEST_F(CliVerifyCompressed, AssetWithoutTablesGivesAClearMessage) {
+  const std::string asset = bake("maps.cbk", "--stages feature_maps");
+  const CliRun r = verify(asset);
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("no Integral-Radiance tables, raw or compressed"), std::string::npos)
+      << r.err;
 }
