@@ -5,6 +5,8 @@
 #include <cinttypes>
 #include <cmath>
 
+#include "formats/reader/validate.hpp"
+
 namespace clothbake::reader {
 namespace {
 
@@ -335,6 +337,32 @@ Status RawRadianceTables::check_contents() const noexcept {
                                  radiance_kind_name(kind_), unsigned(b), unsigned(x), unsigned(y),
                                  unsigned(cluster_ids_[k]));
         }
+  return {};
+}
+
+Status RawRadianceTables::check_against_labels(const uint8_t* labels) const noexcept {
+  if (!is_open() || labels == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "radiance tables not open");
+  const uint32_t bins = bins_per_side_ * bins_per_side_;
+  for (uint32_t b = 0; b < bins; ++b)
+    for (uint32_t y = 0; y < n_; ++y)
+      for (uint32_t x = 0; x < n_; ++x) {
+        const uint32_t label = labels[uint64_t(y) * n_ + x];
+        for (uint32_t k = 0; k < columns_; ++k) {
+          if (cluster_ids_[k] == label) continue;
+          // The texel's integer, exact in wrapping arithmetic.
+          const uint64_t q = sat_element(b, x, y, k) - (x ? sat_element(b, x - 1, y, k) : 0) -
+                             (y ? sat_element(b, x, y - 1, k) : 0) +
+                             (x && y ? sat_element(b, x - 1, y - 1, k) : 0);
+          const uint64_t mask = element_bits_ == 32 ? 0xffffffffull : ~0ull;
+          if ((q & mask) != 0)
+            return Status::error(ErrorCode::Malformed, kCheckCrossSection,
+                                 "radiance_tables %s: bin %u texel (%u, %u) has a value in the "
+                                 "table of cluster %u but the label map puts it in cluster %u",
+                                 radiance_kind_name(kind_), unsigned(b), unsigned(x), unsigned(y),
+                                 unsigned(cluster_ids_[k]), unsigned(label));
+        }
+      }
   return {};
 }
 

@@ -64,6 +64,11 @@ class RawRadianceTables final : public RadianceTables {
   // non-negative, i.e. the SAT is non-decreasing in x and y. ValueRange (CBK-E021) naming the
   // first offending bin, texel and cluster otherwise.
   Status check_contents() const noexcept;
+  // O(size) scan against the label map (labels: N x N, texel (x, y) at y * N + x): every texel
+  // whose label is not a column's cluster holds 0 in that column (T[c] = ... * [label = c]).
+  // kCheckCrossSection (CBK-E022, validate.hpp) naming the first offending bin, texel and cluster
+  // otherwise; InvalidArgument when not open or labels is null.
+  Status check_against_labels(const uint8_t* labels) const noexcept;
 
  private:
   template <class E>

@@ -7,7 +7,12 @@
 #include <cstdio>
 #include <cstring>
 
+#include "formats/reader/cluster_sections.hpp"
+#include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/parallax_sections.hpp"
+#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader/visibility_sections.hpp"
 #include "formats/reader/xxh64.hpp"
 
 namespace clothbake::reader {
@@ -354,6 +359,172 @@ void check_feature_maps(const Asset& asset, Reporter& r, uint32_t yarn_count, bo
   }
 }
 
+bool has_type(const Asset& asset, SectionType type, uint32_t first_instance = 0,
+              uint32_t end_instance = 0xffffffffu) {
+  for (uint32_t i = 0; i < asset.section_count(); ++i) {
+    SectionInfo s;
+    if (asset.section(i, &s).ok() && s.type == type && s.instance >= first_instance &&
+        s.instance < end_instance)
+      return true;
+  }
+  return false;
+}
+
+// The parallax SAT must be the inclusive SAT (mod 2^32) of the depth codes: O(D N^2).
+void check_parallax_sat(const Asset& asset, const ParallaxView& view, Reporter& r) {
+  SectionInfo codes_info, sat_info;
+  ArrayView<uint16_t> codes;
+  ArrayView<uint32_t> sat;
+  if (!asset.find(SectionType::ParallaxTable, 1, &codes_info).ok() ||
+      !asset.find(SectionType::ParallaxSat, 0, &sat_info).ok() ||
+      !asset.view_of(codes_info, &codes).ok() || !asset.view_of(sat_info, &sat).ok() ||
+      codes.size != sat.size)
+    return;  // open() accepted the shapes; nothing else to compare
+  const uint64_t n = view.resolution(), dirs = uint64_t(view.dirs()) * view.dirs();
+  if (codes.size != dirs * n * n) return;
+  for (uint64_t d = 0; d < dirs; ++d)
+    for (uint64_t y = 0; y < n; ++y)
+      for (uint64_t x = 0; x < n; ++x) {
+        const uint64_t t = (d * n + y) * n + x;
+        const uint32_t expected = uint32_t(codes[t] + (x ? sat[t - 1] : 0u) +
+                                           (y ? sat[t - n] : 0u) - (x && y ? sat[t - n - 1] : 0u));
+        if (sat[t] != expected) {
+          r.report(kCheckCrossSection, sat_info.index,
+                   "parallax_sat: direction %" PRIu64 " texel (%" PRIu64 ", %" PRIu64
+                   ") is %u, the SAT of the parallax codes gives %u",
+                   d, x, y, unsigned(sat[t]), unsigned(expected));
+          return;
+        }
+      }
+}
+
+// Opens the baked tables as a renderer does and checks them against each other and the maps:
+// resolutions (CBK-E016), cluster counts and supports, raw against compressed (CBK-E022), and
+// every view's own open() checks (their IDs).
+void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resolution) {
+  int64_t resolution = reference_resolution;
+  const char* resolution_from = "fabric_info";
+  auto check_resolution = [&](const char* what, uint32_t n) {
+    if (resolution < 0) {
+      resolution = n;
+      resolution_from = what;
+    } else if (uint32_t(resolution) != n) {
+      r.report(Check::MapResolution, kNoSection, "%s is %u x %u but %s is %u x %u", what,
+               unsigned(n), unsigned(n), resolution_from, unsigned(resolution),
+               unsigned(resolution));
+    }
+  };
+  if (has_type(asset, SectionType::ParallaxTable) || has_type(asset, SectionType::ParallaxSat)) {
+    ParallaxView parallax;
+    const Status s = parallax.open(asset);
+    if (!s.ok()) {
+      r.report_status(s, kNoSection);
+    } else {
+      check_resolution("parallax", parallax.resolution());
+      if (parallax.has_sat()) check_parallax_sat(asset, parallax, r);
+    }
+  }
+  if (has_type(asset, SectionType::VisibilityAsg) || has_type(asset, SectionType::AsgFitError)) {
+    VisibilityAsgView visibility;
+    const Status s = visibility.open(asset);
+    if (!s.ok())
+      r.report_status(s, kNoSection);
+    else
+      check_resolution("visibility_asg", visibility.resolution());
+  }
+  VisibilityClusterView clusters;
+  bool have_clusters = false;
+  if (has_type(asset, SectionType::ClusterLabels) ||
+      has_type(asset, SectionType::ClusterMeanVisibility)) {
+    const Status s = clusters.open(asset);
+    if (!s.ok()) {
+      r.report_status(s, kNoSection);
+    } else {
+      have_clusters = true;
+      check_resolution("cluster_labels", clusters.resolution());
+    }
+  }
+  SectionInfo labels_info;
+  ArrayView<uint8_t> labels;
+  if (have_clusters && (!asset.find(SectionType::ClusterLabels, 0, &labels_info).ok() ||
+                        !asset.view_of(labels_info, &labels).ok()))
+    have_clusters = false;
+  for (uint32_t k = 0; k < kRadianceKindCount; ++k) {
+    const RadianceTableKind kind = RadianceTableKind(k);
+    const char* name = radiance_kind_name(kind);
+    const bool raw_present = has_type(asset, SectionType::RadianceRawTables, k * 16, k * 16 + 16);
+    const bool packed_present =
+        has_type(asset, SectionType::RadianceCompressedTables, k * 16, k * 16 + 16);
+    if ((raw_present || packed_present) && !have_clusters &&
+        !has_type(asset, SectionType::ClusterLabels))
+      r.report(Check::MissingSection, kNoSection,
+               "the %s Integral-Radiance tables are present but there is no cluster_labels "
+               "section to say which texels belong to which cluster",
+               name);
+    RawRadianceTables raw;
+    bool raw_ok = false;
+    if (raw_present) {
+      Status s = raw.open(asset, kind);
+      if (!s.ok()) {
+        r.report_status(s, kNoSection);
+      } else {
+        raw_ok = true;
+        check_resolution(k == 0 ? "radiance_tables (specular)" : "radiance_tables (gap)",
+                         raw.resolution());
+        s = raw.check_contents();
+        if (!s.ok()) r.report_status(s, kNoSection);
+        if (have_clusters && raw.cluster_count() != clusters.cluster_count()) {
+          r.report(kCheckCrossSection, kNoSection,
+                   "radiance_tables (%s) has %u clusters, the label map %u", name,
+                   unsigned(raw.cluster_count()), unsigned(clusters.cluster_count()));
+        } else if (have_clusters && s.ok() && raw.resolution() == clusters.resolution()) {
+          s = raw.check_against_labels(labels.data);
+          if (!s.ok()) r.report_status(s, kNoSection);
+        }
+      }
+    }
+    if (packed_present) {
+      CompressedRadianceTables packed;
+      const Status s = packed.open(asset, kind);
+      if (!s.ok()) {
+        r.report_status(s, kNoSection);
+        continue;
+      }
+      check_resolution(k == 0 ? "radiance_compressed (specular)" : "radiance_compressed (gap)",
+                       packed.resolution());
+      if (have_clusters && packed.cluster_count() != clusters.cluster_count()) {
+        r.report(kCheckCrossSection, kNoSection,
+                 "radiance_compressed (%s) has %u clusters, the label map %u", name,
+                 unsigned(packed.cluster_count()), unsigned(clusters.cluster_count()));
+      } else if (have_clusters && packed.resolution() == clusters.resolution()) {
+        const uint32_t n = packed.resolution();
+        bool reported = false;
+        for (uint32_t y = 0; y < n && !reported; ++y)
+          for (uint32_t x = 0; x < n && !reported; ++x) {
+            const int c = packed.cluster_of_texel(x, y);
+            const uint32_t label = labels.data[uint64_t(y) * n + x];
+            if (c >= 0 && uint32_t(c) != label) {
+              r.report(kCheckCrossSection, kNoSection,
+                       "radiance_compressed (%s): texel (%u, %u) is compressed in cluster %d "
+                       "but the label map puts it in cluster %u",
+                       name, unsigned(x), unsigned(y), c, unsigned(label));
+              reported = true;
+            }
+          }
+      }
+      if (raw_ok && (raw.resolution() != packed.resolution() ||
+                     raw.bins_per_side() != packed.bins_per_side() ||
+                     raw.cluster_count() != packed.cluster_count()))
+        r.report(kCheckCrossSection, kNoSection,
+                 "the raw and compressed %s tables differ in shape: %u^2 texels, %u^2 bins, %u "
+                 "clusters against %u^2, %u^2, %u",
+                 name, unsigned(raw.resolution()), unsigned(raw.bins_per_side()),
+                 unsigned(raw.cluster_count()), unsigned(packed.resolution()),
+                 unsigned(packed.bins_per_side()), unsigned(packed.cluster_count()));
+    }
+  }
+}
+
 }  // namespace
 
 ValidationSummary validate_asset(const Asset& asset, FindingCallback callback,
@@ -429,6 +600,7 @@ ValidationSummary validate_asset(const Asset& asset, FindingCallback callback,
   SectionInfo s;
   const bool have_yarns = asset.find(SectionType::YarnMaterials, 0, &s).ok();
   check_feature_maps(asset, r, yarn_count, have_yarns, info_resolution);
+  check_baked_tables(asset, r, info_resolution);
   return r.summary();
 }
 

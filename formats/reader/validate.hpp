@@ -1,10 +1,14 @@
 // Deep validation of an opened asset: everything open() checks is already true; this adds every
 // section checksum (all of them, not just the first failure), zero padding and reserved bytes,
-// NaN/Inf in every floating-point section, and the layout and value ranges of the sections this
-// reader interprets. Each finding carries a stable check ID (docs/format.md, "Validation checks").
+// NaN/Inf in every floating-point section, the layout and value ranges of the sections this
+// reader interprets, and the views of the baked tables (parallax, visibility, clusters, raw and
+// compressed Integral-Radiance tables) opened as a renderer opens them, with their consistency
+// against each other and the feature maps. Each finding carries a stable check ID (docs/format.md,
+// "Validation checks").
 //
-// C++17, standard library only, noexcept, no allocation; reads every byte of the asset once or
-// twice. Safe on untrusted assets (that open() accepted).
+// C++17, standard library only, noexcept; allocates only to decode compressed tables (nothrow;
+// a failed allocation is reported, not thrown); reads every byte of the asset once or twice. Safe
+// on untrusted assets (that open() accepted).
 #pragma once
 
 #include <cstdint>
@@ -14,6 +18,13 @@
 namespace clothbake::reader {
 
 inline constexpr uint32_t kNoSection = 0xffffffffu;
+
+// CBK-E022: sections that are each well formed but disagree with each other (a table's cluster
+// count against the label map's, a compressed texel's cluster against its label, a raw table with
+// values outside its cluster's texels, a parallax SAT that is not the SAT of the depth codes, raw
+// and compressed tables of one kind with different shapes). Not yet a named value of Check
+// (formats/reader/status.hpp); check_id() prints it as "CBK-E022".
+inline constexpr Check kCheckCrossSection = Check(22);
 
 // Called once per finding. `section` is the table index or kNoSection; `message` is only valid
 // during the call.
