@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <memory>
+#include <string>
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/tables/radiance_fill.hpp"
@@ -89,8 +90,39 @@ const Queries& queries() {
   return q;
 }
 
+// Coherent queries: a scanline of 4 x 4 footprints one texel apart with a slowly turning h (as
+// neighbouring pixels ask), the pattern bench_tables' BM_QueryRaw/1/* uses.
+const Queries& coherent_queries() {
+  static Queries q = [] {
+    Queries q;
+    const uint32_t n = data().texels.resolution;
+    for (int i = 0; i < 65536; ++i) {
+      const double x = double(uint32_t(i) % n), y = double(uint32_t(i) / n % n) + 0.37;
+      q.rects.push_back({x + 0.25, y, x + 4.25, y + 4.0});
+      const double phi = 0.3 + 1e-3 * double(i);
+      q.hs.push_back({0.3 * std::cos(phi), 0.3 * std::sin(phi), 0.9});
+    }
+    return q;
+  }();
+  return q;
+}
+
+// range(0): 0 random footprints (1-16 texels, anywhere), 1 coherent; range(1): 0 every cluster
+// (query_all), 1 one cluster (try_query, cycling through them).
 void run_queries(benchmark::State& state, const reader::RadianceTables& t) {
-  const Queries& q = queries();
+  const Queries& q = state.range(0) ? coherent_queries() : queries();
+  if (state.range(1)) {
+    double out = 0;
+    std::size_t i = 0;
+    for (auto _ : state) {
+      t.try_query(q.rects[i], q.hs[i].data(), uint32_t(i % t.cluster_count()), &out);
+      benchmark::DoNotOptimize(out);
+      i = (i + 1) & 65535;
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()));
+    state.SetLabel(std::string(state.range(0) ? "coherent" : "random") + ", one cluster");
+    return;
+  }
   std::vector<double> out(t.cluster_count());
   std::size_t i = 0;
   for (auto _ : state) {
@@ -99,6 +131,7 @@ void run_queries(benchmark::State& state, const reader::RadianceTables& t) {
     i = (i + 1) & 65535;
   }
   state.SetItemsProcessed(int64_t(state.iterations()));
+  state.SetLabel(std::string(state.range(0) ? "coherent" : "random") + ", all clusters");
 }
 
 void BM_QueryCompressed(benchmark::State& state) {
@@ -114,7 +147,7 @@ void BM_QueryCompressed(benchmark::State& state) {
   run_queries(state, t);
   state.counters["images"] = t.image_count();
 }
-BENCHMARK(BM_QueryCompressed);
+BENCHMARK(BM_QueryCompressed)->ArgsProduct({{0, 1}, {0, 1}});
 
 void BM_QueryRaw(benchmark::State& state) {
   static std::vector<std::byte> bytes = [] {
@@ -132,7 +165,7 @@ void BM_QueryRaw(benchmark::State& state) {
   }
   run_queries(state, t);
 }
-BENCHMARK(BM_QueryRaw);
+BENCHMARK(BM_QueryRaw)->ArgsProduct({{0, 1}, {0, 1}});
 
 }  // namespace
 }  // namespace clothbake::compress
