@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
+#include "bake/raycast/heightfield_scene.hpp"
 #include "bake/raycast/parallax.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -212,6 +214,66 @@ TEST(Parallax, SameBytesForAnyThreadCount) {
   EXPECT_EQ(one.depth, two.depth);
   EXPECT_EQ(one.depth_scale, two.depth_scale);
   EXPECT_EQ(parallax_sat(one), parallax_sat(two));
+}
+
+// The table is exactly what one ray cast through the slow single-ray path (first_hit), encoded
+// with std::round, gives: pins the packet path (lanes cast one by one, segments that skip the
+// border arithmetic) and the stage's own rounding to the reference encoding, bit for bit, on a
+// field whose rays cross the tile border and, with k = 0 and a tall field, need several segments.
+TEST(Parallax, CodesEqualSingleRayHitsRoundedToNearest) {
+  struct Case {
+    FabricMaps maps;
+    int rings;
+  };
+  std::vector<Case> cases;
+  cases.push_back({rctest::plain_weave_maps(40), -1});
+  cases.push_back({rctest::maps_from(24,
+                                     [](double u, double v) {
+                                       return 0.8 * std::sin(6.283185307179586 * u) *
+                                              std::cos(6.283185307179586 * v);
+                                     }),
+                   0});
+  for (const Case& c : cases) {
+    ParallaxSettings settings;
+    settings.dirs = 6;
+    settings.rings = c.rings;
+    testing::internal::CaptureStderr();  // the tall field warns about its offsets
+    const ParallaxTable table = bake_parallax(c.maps, settings);
+    testing::internal::GetCapturedStderr();
+    const int n = c.maps.resolution;
+    double z_min = 1e300, z_max = -1e300;
+    for (float h : c.maps.height) {
+      z_min = std::min(z_min, double(h));
+      z_max = std::max(z_max, double(h));
+    }
+    const double range = z_max - z_min, lift = std::max(1e-3 * range, 1e-6);
+    PeriodicHeightField field(c.maps.height, n, table.stats.rings);
+    model::DirectionGrid<double> grid{settings.dirs, settings.min_cos};
+    std::size_t checked = 0, multi_segment = 0;
+    for (int j = 0; j < settings.dirs; ++j)
+      for (int i = 0; i < settings.dirs; ++i) {
+        const Vec3d o = grid.bin_center(i, j);
+        const double t_max = (lift + range + lift) / o.z;
+        for (int y = 0; y < n; ++y)
+          for (int x = 0; x < n; ++x) {
+            const Vec3d origin{(x + 0.5) / n, (y + 0.5) / n, z_max + lift};
+            const SurfaceHit hit = field.first_hit(origin, -o, t_max);
+            ASSERT_TRUE(hit.hit);
+            const double depth = std::clamp(hit.t * o.z - lift, 0.0, range);
+            const double code = std::clamp(std::round(depth / table.depth_scale), 0.0, 65535.0);
+            ASSERT_EQ(table.depth[std::size_t(grid.bin_index(i, j)) * table.texel_count() +
+                                  std::size_t(y) * n + x],
+                      uint16_t(code))
+                << "texel (" << x << ", " << y << "), bin (" << i << ", " << j << ")";
+            ++checked;
+            multi_segment += hit.t * std::hypot(o.x, o.y) > 1.0 ? 1 : 0;
+          }
+      }
+    EXPECT_EQ(checked, table.depth.size());
+    if (c.rings == 0) {
+      EXPECT_GT(multi_segment, 0u);  // the tall field did need several segments
+    }
+  }
 }
 
 TEST(Parallax, SatHoldsExactRectangleSums) {
