@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "bake/cli/command.hpp"
 #include "bake/pipeline/bake.hpp"
@@ -38,6 +39,12 @@ struct BakeOptions {
   bool keep_raw = false;
   bool no_compress = false;
 };
+
+std::string default_max_error_text() {
+  std::ostringstream text;
+  text << compress::kDefaultMaxError;  // "0.008", not to_string's "0.008000"
+  return text.str();
+}
 
 // The compression request of the command line, checked (Error(Usage) naming the options).
 compress::CompressRequest compress_request(const BakeOptions& o) {
@@ -114,7 +121,7 @@ Action setup_bake(CLI::App& app) {
       "--max-error", o->max_error,
       "target relative RMS error of the compressed texels; the stage picks the ranks "
       "(default " +
-          std::to_string(compress::kDefaultMaxError) + ")");
+          default_max_error_text() + ")");
   app.add_flag(
       "--keep-raw", o->keep_raw,
       "also keep the raw Integral-Radiance tables in the asset (default: compressed only)");
