@@ -188,11 +188,21 @@ struct DirectionGrid {
   }
 
   // Bilinear weights over the 4 bin centres nearest to d in the square; clamped at the border
-  // (a direction outside the outermost bin centres takes the border bins' values). Uses
-  // to_square_fast: the weights equal those of to_square within n * 1e-8.
+  // (a direction outside the outermost bin centres takes the border bins' values).
   BinBilinear<T> bilinear(const Vec3<T>& d) const {
     T u, v;
+    to_square(d, u, v);
+    return bilinear_at(u, v);
+  }
+  // The same through to_square_fast (no atan2): weights equal bilinear's within n * 1e-8. What
+  // the radiance footprint queries use (formats/reader/radiance_query.cpp).
+  BinBilinear<T> bilinear_fast(const Vec3<T>& d) const {
+    T u, v;
     to_square_fast(d, u, v);
+    return bilinear_at(u, v);
+  }
+  // Bilinear weights at square point (u, v) in [0, 1]^2.
+  BinBilinear<T> bilinear_at(T u, T v) const {
     T fx = std::clamp(u * T(n) - T(0.5), T(0), T(n - 1));
     T fy = std::clamp(v * T(n) - T(0.5), T(0), T(n - 1));
     int i0 = std::min(int(fx), n - 1), j0 = std::min(int(fy), n - 1);

@@ -239,14 +239,14 @@ void BM_QueryPartBinWeightsExactAtan2(benchmark::State& state) {
 }
 BENCHMARK(BM_QueryPartBinWeightsExactAtan2);
 
-// The fast lookup alone (model::DirectionGrid::bilinear), for the same directions.
+// The fast lookup alone (model::DirectionGrid::bilinear_fast), for the same directions.
 void BM_QueryPartBilinearFast(benchmark::State& state) {
   const auto queries = make_queries(0);
   const model::DirectionGrid<double> grid{32, 0.0};
   std::size_t i = 0;
   for (auto _ : state) {
     const double* h = queries[i++ & 4095].h;
-    auto w = grid.bilinear(model::fold_to_upper_hemisphere(model::Vec3d(h[0], h[1], h[2])));
+    auto w = grid.bilinear_fast(model::fold_to_upper_hemisphere(model::Vec3d(h[0], h[1], h[2])));
     benchmark::DoNotOptimize(w);
   }
   state.SetItemsProcessed(int64_t(state.iterations()));

@@ -92,7 +92,7 @@ bool make_bin_weights(uint32_t bins_per_side, const double h[3], BinWeights* out
   if (!(len2 > 0.0) || !(len2 < 1e300)) return false;  // zero, NaN or Inf
   const model::DirectionGrid<double> grid{int(bins_per_side), 0.0};
   const model::BinBilinear<double> b =
-      grid.bilinear(model::fold_to_upper_hemisphere(model::Vec3d(h[0], h[1], h[2])));
+      grid.bilinear_fast(model::fold_to_upper_hemisphere(model::Vec3d(h[0], h[1], h[2])));
   uint32_t count = 0;
   for (int k = 0; k < 4; ++k) {
     if (!(b.weight[k] > 0.0)) continue;

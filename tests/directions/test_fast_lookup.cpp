@@ -1,4 +1,4 @@
-// The atan2-free direction lookup (DirectionGrid::to_square_fast, used by bilinear) against the
+// The atan2-free direction lookup (DirectionGrid::to_square_fast and bilinear_fast) against the
 // exact Shirley-Chiu inverse (to_square, through concentric_disk_to_square and atan2): the same
 // square point within 1e-8, and the same bins with the same weights within 1e-5, on random
 // directions and on every kind of boundary (octant diagonals, axes, pole, rim, below the cap,
@@ -41,7 +41,7 @@ std::map<int, double> exact_weights(const DirectionGrid<T>& grid, const Vec3<T>&
 
 template <class T>
 std::map<int, double> fast_weights(const DirectionGrid<T>& grid, const Vec3<T>& d) {
-  const auto b = grid.bilinear(d);
+  const auto b = grid.bilinear_fast(d);
   std::map<int, double> w;
   for (int k = 0; k < 4; ++k)
     w[b.index[k]] += double(b.weight[k]);
@@ -132,7 +132,7 @@ TEST_P(FastLookup, BoundaryDirectionsAreConsistent) {
     EXPECT_NEAR(v, vf, 1e-8) << d.x << " " << d.y << " " << d.z;
     EXPECT_LT(max_weight_difference(exact_weights(grid, d), fast_weights(grid, d)), 1e-5)
         << d.x << " " << d.y << " " << d.z;
-    const auto b = grid.bilinear(d);
+    const auto b = grid.bilinear_fast(d);
     double sum = 0;
     for (int k = 0; k < 4; ++k) {
       EXPECT_GE(b.weight[k], 0.0);

@@ -151,7 +151,7 @@ TEST_F(QueryCli, BadArgumentsExitOneNamingTheOption) {
       {" visibility --dir 0,0,1", "--texel"},
       {" visibility --texel 1,1", "--dir"},
       {" visibility --dir 0,0,1 --rect 0,0,1,1", "--texel"},
-      {" radiance --dir 0,0,1 --texel 1,1", "KIND"},
+      {" radiance --dir 0,0,1 --texel 1,1", "--lobe"},  // radiance is a kind now (needs --lobe)
   };
   for (const Case& c : cases) {
     CliRun r = run(asset() + c.args);

@@ -312,7 +312,9 @@ TEST(RadianceQuery, BinInterpolationAndFolding) {
       for (int y = 2; y < 7; ++y)
         for (int x = 1; x < 5; ++x)
           direct += copy.texel_value(grid.bin_index(i, j), x, y, 0);
-      EXPECT_NEAR(q, direct, 1e-9 * direct);
+      // Queries find bins through DirectionGrid::bilinear_fast (polynomial atan): at a bin centre
+      // the neighbours' weights are below n * 1e-8.
+      EXPECT_NEAR(q, direct, 1e-7 * direct);
       EXPECT_EQ(q, qm);
       // Unnormalised h gives the same answer.
       const double h3[3] = {3 * c.x, 3 * c.y, 3 * c.z};
