@@ -2,13 +2,12 @@
 // codes, JSON schema on stdout, diagnostics on stderr, nothing written on failure, round trip.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "tests/support/run_cli.hpp"
 
 namespace clothbake {
 namespace {
@@ -19,7 +18,6 @@ using testing::read_text;
 using testing::ScratchDir;
 using testing::write_text;
 
-const std::string kBinary = std::string(CLOTHBAKE_BINARY_DIR) + "/bin/clothbake";
 const std::string kExamples = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/fabrics/";
 
 struct ProcessResult {
@@ -27,37 +25,11 @@ struct ProcessResult {
   std::string out, err;
 };
 
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) {
-    if (c == '\'')
-      q += "'\\''";
-    else
-      q.push_back(c);
-  }
-  q.push_back('\'');
-  return q;
-}
-
-ProcessResult run_cli(const ScratchDir& dir, const std::vector<std::string>& args) {
-  std::string command = quote(kBinary);
-  // Appends only (no "literal" + string temporaries: GCC 12 -Wrestrict false positive).
-  for (const auto& a : args) {
-    command += ' ';
-    command += quote(a);
-  }
-  command += " > ";
-  command += quote(dir / "stdout.txt");
-  command += " 2> ";
-  command += quote(dir / "stderr.txt");
-  int status = std::system(command.c_str());
-  ProcessResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = read_text(dir / "stdout.txt");
-  r.err = read_text(dir / "stderr.txt");
-  fs::remove(dir / "stdout.txt");
-  fs::remove(dir / "stderr.txt");
-  return r;
+// `clothbake ARGS...`, each element one argument (no shell). `dir` is unused: kept so that every
+// call names the scratch directory the command works in.
+ProcessResult run_cli(const ScratchDir& /*dir*/, const std::vector<std::string>& args) {
+  const test_support::CliRun r = test_support::run_clothbake(args);
+  return {r.code, r.out, r.err};
 }
 
 void expect_stats(const nlohmann::json& s) {

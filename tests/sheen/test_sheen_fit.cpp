@@ -2,7 +2,6 @@
 // determinism across thread counts, the header format, reproduction of the committed table's
 // albedos, atomic writing, and the CLI's error handling.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <tbb/global_control.h>
 
 #include <cstdlib>
@@ -17,6 +16,7 @@
 #include "bake/sheen/sheen_table_writer.hpp"
 #include "common/error.hpp"
 #include "model/sheen_table.hpp"
+#include "tests/support/run_cli.hpp"
 
 namespace fs = std::filesystem;
 using namespace clothbake::sheen;
@@ -170,27 +170,11 @@ TEST(SheenFit, WritesAtomicallyAndReportsTheFailingPath) {
 
 // --- the CLI ------------------------------------------------------------------------------------
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
+using clothbake::test_support::CliRun;
 
-CliRun run_clothbake(const std::string& args, const fs::path& dir) {
-  const fs::path exe = fs::path(CLOTHBAKE_BINARY_DIR) / "bin" / "clothbake";
-  CliRun run;
-  const std::string command = exe.string() + " " + args + " > " + (dir / "out.txt").string() +
-                              " 2> " + (dir / "err.txt").string();
-  const int status = std::system(command.c_str());
-  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  };
-  run.out = slurp(dir / "out.txt");
-  run.err = slurp(dir / "err.txt");
-  return run;
+// `clothbake ARGS` (split by the shell); `dir` is unused (the command names its own outputs).
+CliRun run_clothbake(const std::string& args, const fs::path& /*dir*/) {
+  return clothbake::test_support::run_clothbake_line(args);
 }
 
 class FitSheenCli : public ::testing::Test {

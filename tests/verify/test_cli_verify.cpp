@@ -3,19 +3,17 @@
 // baked by `clothbake bake` with compressed tables (raw dropped or kept) are verified against raw
 // tables, with thresholds on the footprint error and the ratio.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "formats/writer/atomic_file.hpp"
+#include "tests/support/run_cli.hpp"
 #include "verify_fixtures.hpp"
 
 namespace fs = std::filesystem;
@@ -23,30 +21,11 @@ using namespace clothbake;
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
+using test_support::CliRun;
 
+// `clothbake ARGS` (split by the shell).
 CliRun run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("clothbake_verify_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(CLOTHBAKE_EXE) + " " + args + " 2>" + err_file.string();
-  CliRun r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0)
-    r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  fs::remove(err_file);
-  return r;
+  return test_support::run_clothbake_line(args);
 }
 
 class CliVerify : public ::testing::Test {
