@@ -49,6 +49,7 @@ enum class Check : uint16_t {
   MissingSection = 19,    // CBK-E019 a required section is absent
   Metadata = 20,          // CBK-E020 metadata is not a UTF-8 JSON object
   ValueRange = 21,        // CBK-E021 a parameter outside its documented range
+  CrossSection = 22,      // CBK-E022 well-formed sections that disagree with each other
   // Warnings (numbered from 1001; printed as CBK-W001...).
   UnknownSection = 1001,       // CBK-W001 section type unknown to this reader (skipped)
   NewerMinor = 1002,           // CBK-W002 asset written by a newer minor version

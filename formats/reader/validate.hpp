@@ -19,12 +19,11 @@ namespace clothbake::reader {
 
 inline constexpr uint32_t kNoSection = 0xffffffffu;
 
-// CBK-E022: sections that are each well formed but disagree with each other (a table's cluster
-// count against the label map's, a compressed texel's cluster against its label, a raw table with
-// values outside its cluster's texels, a parallax SAT that is not the SAT of the depth codes, raw
-// and compressed tables of one kind with different shapes). Not yet a named value of Check
-// (formats/reader/status.hpp); check_id() prints it as "CBK-E022".
-inline constexpr Check kCheckCrossSection = Check(22);
+// CBK-E022 (Check::CrossSection): sections that are each well formed but disagree with each other
+// (a table's cluster count against the label map's, a compressed texel's cluster against its
+// label, a raw table with values outside its cluster's texels, a parallax SAT that is not the SAT
+// of the depth codes, raw and compressed tables of one kind with different shapes).
+inline constexpr Check kCheckCrossSection = Check::CrossSection;
 
 // Called once per finding. `section` is the table index or kNoSection; `message` is only valid
 // during the call.

@@ -1,51 +1,30 @@
 // `clothbake query`: the JSON answers equal the reader library's, and every bad argument or asset
 // exits with its documented code and a message naming the option or the problem.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
+#include "tests/support/run_cli.hpp"
 
 using namespace clothbake;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
+using test_support::CliRun;
 
+// `clothbake query ARGS` (split by the shell).
 CliRun run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("clothbake_query_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(CLOTHBAKE_EXE) + " query " + args + " 2>" + err_file.string();
-  CliRun r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0)
-    r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  fs::remove(err_file);
-  return r;
+  return test_support::run_clothbake_line("query " + args);
 }
 
 // One small asset with both stages, one without them, and a corrupted copy, shared by the tests.

@@ -169,7 +169,9 @@ TEST_F(CliVerifyCompressed, CompressedWithoutRawPasses) {
   EXPECT_EQ(classes.back()["class"], "tiles");
   for (const auto& c : classes) {
     EXPECT_GT(c["footprints"].get<int>(), 0) << c;
-    if (c["min_side"].get<double>() >= 4) EXPECT_LE(c["rms_relative"].get<double>(), 0.01) << c;
+    if (c["min_side"].get<double>() >= 4) {
+      EXPECT_LE(c["rms_relative"].get<double>(), 0.01) << c;
+    }
   }
   EXPECT_TRUE(specular["min_reliable_side"].is_number());
   EXPECT_GT(specular["throughput"]["compressed_queries_per_second"].get<double>(), 0.0);
