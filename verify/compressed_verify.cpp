@@ -52,6 +52,10 @@ std::string fixed(double v, int digits) {
   return s.str();
 }
 
+std::string psnr_text(double db) {
+  return db >= kExactPsnrDb ? "exact" : fixed(db, 1) + " dB";
+}
+
 // Per (cluster, bin) table: RMSE, max error, PSNR from the full decompression.
 TableErrorSummary table_errors(const reader::CompressedRadianceTables& tables,
                                const compress::DirectionalTexels& raw) {
@@ -111,7 +115,7 @@ TableErrorSummary table_errors(const reader::CompressedRadianceTables& tables,
       s.worst_relative_rmse = rmse / peak[i];
       s.worst_table = "cluster " + std::to_string(i / bins) + " bin " + std::to_string(i % bins);
     }
-    psnr.push_back(rmse > 0.0 ? 20.0 * std::log10(peak[i] / rmse) : 999.0);
+    psnr.push_back(rmse > 0.0 ? 20.0 * std::log10(peak[i] / rmse) : kExactPsnrDb);
   }
   if (!psnr.empty()) {
     std::sort(psnr.begin(), psnr.end());
@@ -496,8 +500,8 @@ std::string compressed_report_text(const CompressedVerifyReport& report) {
       << fixed(double(r.decoded_bytes) / 1048576.0, 1) << " MiB\n";
     o << "  texels: relative RMS error " << fixed(100 * r.tables.texel_rms_relative, 3)
       << " % (bake claimed " << fixed(100 * r.bake_error, 3) << " %), " << r.tables.tables
-      << " tables, PSNR min " << fixed(r.tables.min_psnr_db, 1) << " dB / median "
-      << fixed(r.tables.median_psnr_db, 1) << " dB, worst RMSE/peak "
+      << " tables, PSNR min " << psnr_text(r.tables.min_psnr_db) << " / median "
+      << psnr_text(r.tables.median_psnr_db) << ", worst RMSE/peak "
       << fixed(r.tables.worst_relative_rmse, 5) << " (" << r.tables.worst_table
       << "), max abs error " << general(r.tables.max_abs_error) << "\n";
     o << "  footprints (RMS relative per cluster / of the cluster sum / max guarded):\n";

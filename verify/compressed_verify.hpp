@@ -51,13 +51,16 @@ struct CompressedVerifyOptions {
   int throughput_queries = 100000;
 };
 
+// PSNR reported for a table decompressed without any error (JSON has no infinity).
+inline constexpr double kExactPsnrDb = 999.0;
+
 struct TableErrorSummary {
   uint64_t tables = 0;               // (cluster, bin) tables with a non-zero raw texel
   double worst_relative_rmse = 0.0;  // max over tables of RMSE / peak
   std::string worst_table;           // "cluster C bin B"
-  double min_psnr_db = 0.0, median_psnr_db = 0.0;
-  double max_abs_error = 0.0;       // over every texel of every table
-  double texel_rms_relative = 0.0;  // sqrt(sum err^2 / sum ref^2) over all tables
+  double min_psnr_db = 0.0, median_psnr_db = 0.0;  // kExactPsnrDb when the tables are exact
+  double max_abs_error = 0.0;                      // over every texel of every table
+  double texel_rms_relative = 0.0;                 // sqrt(sum err^2 / sum ref^2) over all tables
 };
 
 struct FootprintClassError {
