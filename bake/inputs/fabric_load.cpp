@@ -82,6 +82,19 @@ YarnMaterial parse_yarn(const TomlSection& s, const std::string& default_name) {
              fmt::format("[{}] = {} plus diffuse_reflectance[{}] = {} exceeds 1 (energy is not "
                          "conserved)",
                          c, y.diffuse_transmittance[c], c, y.diffuse_reflectance[c]));
+  // alpha + R_d + T_d <= 1 per channel guarantees that the BSDF conserves energy (docs/model.md);
+  // it is sufficient, not necessary (the specular lobes reflect less than alpha), hence a warning,
+  // not an error.
+  for (int c = 0; c < 3; ++c) {
+    const double sum = y.specular_albedo[c] + y.diffuse_reflectance[c] + y.diffuse_transmittance[c];
+    if (sum > 1.0 + 1e-9) {
+      warn(
+          fmt::format("{}: {} [{}] + diffuse_reflectance + diffuse_transmittance = {:.6g} exceeds "
+                      "1: the BSDF may not conserve energy (lower one of them)",
+                      s.where("specular_albedo"), s.dotted("specular_albedo"), c, sum));
+      break;
+    }
+  }
   return y;
 }
 

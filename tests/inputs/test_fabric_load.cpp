@@ -360,6 +360,21 @@ TEST_F(FabricLoad, UnusedYarnWarns) {
   EXPECT_THAT(warnings[0], HasSubstr("yarn[1] 'spare' is declared but no texel uses it"));
 }
 
+TEST_F(FabricLoad, AlbedosAboveOneWarnNamingTheYarnAndTheDefaultsDoNot) {
+  ScratchDir dir;
+  auto f =
+      write_image_fabric(dir, 8, "", "[[yarn]]\nname = \"a\"\nspecular_albedo = [0.6, 0.9, 0.6]\n");
+  load_fabric(f.toml);
+  auto warnings = take_warnings();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_THAT(warnings[0], HasSubstr("yarn[0].specular_albedo [1]"));
+  EXPECT_THAT(warnings[0], HasSubstr("= 1.3 exceeds 1"));
+  // The defaults (0.6 + 0.25 + 0.15) sum to exactly 1: no warning.
+  auto g = write_image_fabric(dir, 8, "", "[[yarn]]\nname = \"a\"\n");
+  load_fabric(g.toml);
+  EXPECT_TRUE(take_warnings().empty());
+}
+
 TEST_F(FabricLoad, BakeResolutionMustMatchTheMaps) {
   ScratchDir dir;
   auto f = write_image_fabric(dir, 8, "", "[bake]\nresolution = 16\n");
