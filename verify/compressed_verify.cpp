@@ -302,22 +302,39 @@ std::optional<compress::DirectionalTexels> raw_texels_from_asset(const reader::A
   view.units = {reinterpret_cast<const double*>(base + parts[2].offset),
                 std::size_t(parts[2].stored_size / 8)};
   view.sat = reinterpret_cast<const std::byte*>(base + parts[3].offset);
-  return compress::directional_texels(view, labels);
+  // Both the raw tables and the label map come from the asset: a disagreement between them is an
+  // invalid asset (exit 3), not the input error directional_texels reports for its callers.
+  try {
+    return compress::directional_texels(view, labels);
+  } catch (const Error& e) {
+    if (e.code() != ExitCode::Input) throw;
+    invalid_asset(std::string("verify: the asset's raw ") + reader::radiance_kind_name(kind) +
+                  " tables disagree with its label map: " + e.what());
+  }
 }
 
 }  // namespace
 
-bool has_compressed_tables(const reader::Asset& asset) {
+namespace {
+bool has_info_section(const reader::Asset& asset, reader::SectionType type, bool compressed) {
   for (uint32_t k = 0; k < reader::kRadianceKindCount; ++k) {
+    const auto kind = RadianceTableKind(k);
+    const uint32_t instance = compressed
+                                  ? reader::compressed_instance(kind, reader::CompressedPart::Info)
+                                  : reader::radiance_instance(kind, reader::RadiancePart::Info);
     reader::SectionInfo info;
-    if (asset
-            .find(reader::SectionType::RadianceCompressedTables,
-                  reader::compressed_instance(RadianceTableKind(k), reader::CompressedPart::Info),
-                  &info)
-            .ok())
-      return true;
+    if (asset.find(type, instance, &info).ok()) return true;
   }
   return false;
+}
+}  // namespace
+
+bool has_compressed_tables(const reader::Asset& asset) {
+  return has_info_section(asset, reader::SectionType::RadianceCompressedTables, true);
+}
+
+bool has_raw_tables(const reader::Asset& asset) {
+  return has_info_section(asset, reader::SectionType::RadianceRawTables, false);
 }
 
 CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabric& fabric,

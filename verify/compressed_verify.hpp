@@ -98,8 +98,10 @@ struct CompressedVerifyReport {
   std::vector<std::string> failures;
 };
 
-// True when the asset holds compressed tables of some kind.
+// True when the asset holds compressed (resp. raw) Integral-Radiance tables of some kind (their
+// info section is present; whether they are well formed is for the readers' open() to say).
 bool has_compressed_tables(const reader::Asset& asset);
+bool has_raw_tables(const reader::Asset& asset);
 
 // Runs the comparison (deterministic for a seed, except the measured throughput).
 CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabric& fabric,

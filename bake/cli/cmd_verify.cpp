@@ -7,8 +7,9 @@
 //  - raw Integral-Radiance tables (when kept): SAT answers against direct summation over the same
 //    texels and bins, and binned against exact per-texel D(h) (verify/radiance_verify.hpp,
 //    docs/tables.md);
-//  - C-PCA compressed tables (when present): decompressed against raw tables recomputed from the
-//    fabric with the asset's label map and quadrature: per-table RMSE / max / PSNR, footprint
+//  - C-PCA compressed tables (when present): decompressed against the asset's own raw tables when
+//    it keeps them, else raw tables recomputed from the fabric with the asset's label map and
+//    quadrature: per-table RMSE / max / PSNR, footprint
 //    error per size class, ratio, compressed vs raw query throughput, and the footprint side below
 //    which a renderer should evaluate texels directly (verify/compressed_verify.hpp,
 //    docs/compression.md "Verify").
@@ -49,21 +50,6 @@ struct VerifyOptions {
   bool no_throughput = false;
 };
 
-// True when the asset holds raw Integral-Radiance tables of some kind.
-bool has_raw_tables(const reader::Asset& asset) {
-  for (uint32_t k = 0; k < reader::kRadianceKindCount; ++k) {
-    reader::SectionInfo info;
-    if (asset
-            .find(
-                reader::SectionType::RadianceRawTables,
-                reader::radiance_instance(reader::RadianceTableKind(k), reader::RadiancePart::Info),
-                &info)
-            .ok())
-      return true;
-  }
-  return false;
-}
-
 Action setup_verify(CLI::App& app) {
   auto o = std::make_shared<VerifyOptions>();
   app.add_option("ASSET", o->asset, "asset to verify (.cbk)")->required();
@@ -103,7 +89,7 @@ Action setup_verify(CLI::App& app) {
                "compressed tables: skip the compressed-vs-raw query throughput measurement");
   return [o] {
     const reader::Asset asset = formats::open_asset(o->asset, reader::Verify::Checksums);
-    const bool raw = has_raw_tables(asset);
+    const bool raw = verify::has_raw_tables(asset);
     const bool compressed = verify::has_compressed_tables(asset);
     if (!raw && !compressed)
       throw Error(ExitCode::InvalidAsset,

@@ -48,8 +48,10 @@ struct BakeRequest {
   // Optional artifacts available to every stage from the start, beside "fabric"/"fabric_path" and
   // "output": options that a command line gives to a stage of another folder (e.g. the compress
   // stage's "compress_options") without bake/pipeline knowing their types. A stage reads them by
-  // listing their names in Stage::collects. Names must not collide with the seeded ones above or
-  // with an artifact a stage produces (Error(Internal)).
+  // listing their names in Stage::collects. Names must not collide with the seeded ones above
+  // (Error(Internal)). A seed named like a stage's output replaces it: a stage whose outputs are
+  // all seeded does not run (plan_stages), one whose outputs are partly seeded is an
+  // Error(Internal) when it tries to produce the seeded one.
   Artifacts seeds;
 };
 

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -70,9 +71,11 @@ inline CliRun spawn(const std::vector<std::string>& argv) {
     ::_exit(127);
   }
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-  }
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  pid_t waited;
+  do {
+    waited = ::waitpid(pid, &status, 0);
+  } while (waited < 0 && errno == EINTR);
+  r.code = waited == pid && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.out = slurp_and_remove(out_path);
   r.err = slurp_and_remove(err_path);
   return r;
