@@ -6,7 +6,6 @@
 // nothing.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 #include <unistd.h>
 #include <algorithm>
 
@@ -25,31 +24,18 @@
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
+#include "tests/support/run_cli.hpp"
 
 using namespace clothbake;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string err;
-};
+using clothbake::test_support::CliRun;
 
+// `clothbake export ARGS` (split by the shell).
 CliRun run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("clothbake_export_err_" + std::to_string(::getpid()));
-  const std::string cmd =
-      std::string(CLOTHBAKE_EXE) + " export " + args + " >/dev/null 2>" + err_file.string();
-  CliRun r;
-  const int status = std::system(cmd.c_str());
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  fs::remove(err_file);
-  return r;
+  return clothbake::test_support::run_clothbake_line("export " + args);
 }
 
 class ExportRadiance : public ::testing::Test {

@@ -5,7 +5,6 @@
 // covered area of every texel, on footprints that wrap and span tiles; the JSON says which
 // representation answered; bad arguments exit 1 naming the option, missing tables exit 2.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -22,36 +21,18 @@
 #include "bake/pipeline/bake.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
+#include "tests/support/run_cli.hpp"
 
 using namespace clothbake;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
+using clothbake::test_support::CliRun;
 
+// `clothbake query ARGS` (split by the shell).
 CliRun run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("clothbake_qrad_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(CLOTHBAKE_EXE) + " query " + args + " 2>" + err_file.string();
-  CliRun r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0)
-    r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  fs::remove(err_file);
-  return r;
+  return clothbake::test_support::run_clothbake_line("query " + args);
 }
 
 // Direct sum over the texels a rectangle covers (each with its covered area), of
