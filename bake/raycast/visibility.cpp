@@ -139,6 +139,7 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
         }
         counters.rays.fetch_add(local.rays.load(), std::memory_order_relaxed);
         counters.segments.fetch_add(local.segments.load(), std::memory_order_relaxed);
+        counters.packets.fetch_add(local.packets.load(), std::memory_order_relaxed);
       });
   samples.rays = counters.rays.load();
   samples.segments = counters.segments.load();
