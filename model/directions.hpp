@@ -73,9 +73,9 @@ inline void concentric_disk_to_square(T x, T y, T& a, T& b) {
 
 // atan(t) / (pi / 4) for t in [-1, 1], without atan: an odd polynomial of degree 17 fitted to
 // minimise the maximum error on [0, 1] (Lawson-weighted least squares on Chebyshev nodes; max
-// |error| in atan about 6e-9 rad, so the quarter-turn result is off by < 1e-8). What the hot
-// direction lookups (DirectionGrid::to_square_fast, bilinear) use instead of atan2, which cost
-// about half of a radiance footprint query.
+// |error| in atan about 6e-9 rad, so the quarter-turn result is off by < 1e-8). What the radiance
+// footprint queries' direction lookup (DirectionGrid::to_square_fast, bilinear_fast) uses instead
+// of atan2, which cost about half of such a query.
 template <class T>
 inline T quarter_turns_of_atan(T t) {
   const T s = t * t;

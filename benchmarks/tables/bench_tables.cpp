@@ -217,23 +217,17 @@ void BM_QueryPartBinWeights(benchmark::State& state) {
 }
 BENCHMARK(BM_QueryPartBinWeights);
 
-// The same direction -> 4 bins lookup through the exact inverse (to_square: atan2 and an extra
-// square root), as DirectionGrid::bilinear did before it used to_square_fast: what the polynomial
-// atan saves per query, measured in the same run.
+// The same direction -> 4 bins lookup through the exact inverse (DirectionGrid::bilinear: atan2
+// and an extra square root), which the radiance queries used before bilinear_fast: what the
+// polynomial atan saves per query, measured in the same run.
 void BM_QueryPartBinWeightsExactAtan2(benchmark::State& state) {
   const auto queries = make_queries(0);
   const model::DirectionGrid<double> grid{32, 0.0};
   std::size_t i = 0;
   for (auto _ : state) {
     const double* h = queries[i++ & 4095].h;
-    double u, v;
-    grid.to_square(model::fold_to_upper_hemisphere(model::Vec3d(h[0], h[1], h[2])), u, v);
-    const double fx = std::clamp(u * 32 - 0.5, 0.0, 31.0), fy = std::clamp(v * 32 - 0.5, 0.0, 31.0);
-    const int i0 = std::min(int(fx), 31), j0 = std::min(int(fy), 31);
-    double w[4] = {(1 - (fx - i0)) * (1 - (fy - j0)), (fx - i0) * (1 - (fy - j0)),
-                   (1 - (fx - i0)) * (fy - j0), (fx - i0) * (fy - j0)};
+    auto w = grid.bilinear(model::fold_to_upper_hemisphere(model::Vec3d(h[0], h[1], h[2])));
     benchmark::DoNotOptimize(w);
-    benchmark::DoNotOptimize(i0 + 32 * j0);
   }
   state.SetItemsProcessed(int64_t(state.iterations()));
 }
