@@ -10,7 +10,7 @@
 #include <string>
 
 #include "cluster/nearest_centre.hpp"
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 
 namespace clothbake::cluster {
@@ -66,7 +66,7 @@ void validate(const PointSet& points, const KMeansOptions& options, const Blocks
 int seed_centres(const PointSet& points, const Blocks& blocks, int clusters, uint64_t seed,
                  std::vector<double>& centres) {
   const std::size_t n = points.count, dim = points.dim;
-  SplitMix64 rng(seed);
+  model::SplitMix64 rng(seed);
   centres.assign(std::size_t(clusters) * dim, 0.0);
   auto set_centre = [&](int c, std::size_t i) {
     for (std::size_t j = 0; j < dim; ++j)

@@ -12,7 +12,7 @@
 // thread count. Points are processed in fixed blocks of kBlockPoints; every parallel loop writes
 // disjoint outputs, every sum is formed per block in point order and the block partials are added
 // in block order; ties in the nearest-centre search go to the lower centre index. The seeding
-// RNG is SplitMix64 (cluster/rng.hpp), specified bit for bit.
+// RNG is SplitMix64 (model/splitmix64.hpp), specified bit for bit.
 //
 // Nearest-centre search: brute force over the centres in double precision (ties to the lower
 // index). A FLANN kd-tree over the centres was measured against it (docs/tables.md, "Nearest-centre

@@ -8,7 +8,7 @@
 #include <functional>
 #include <sstream>
 
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress/compressed_set.hpp"
 #include "compress/sat_pca.hpp"
@@ -38,7 +38,7 @@ struct Probe {
 
 std::vector<Probe> make_probes(int n, int per_side, uint64_t seed) {
   const auto sides = report_sides(n);
-  cluster::SplitMix64 rng(seed);
+  model::SplitMix64 rng(seed);
   std::vector<Probe> out;
   for (std::size_t s = 0; s < sides.size(); ++s)
     for (int i = 0; i < per_side; ++i) {
@@ -115,7 +115,7 @@ std::vector<double> footprint_errors(const DirectionalTexels& d, const std::vect
 }
 
 double query_nanoseconds(int n, int count, uint64_t seed, const QueryAll& query, int clusters) {
-  cluster::SplitMix64 rng(seed ^ 0x71e5ull);
+  model::SplitMix64 rng(seed ^ 0x71e5ull);
   std::vector<reader::Footprint> rects(static_cast<std::size_t>(count));
   std::vector<std::array<double, 3>> hs(rects.size());
   for (std::size_t i = 0; i < rects.size(); ++i) {

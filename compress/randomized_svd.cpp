@@ -9,7 +9,7 @@
 #include <mutex>
 #include <vector>
 
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 
 namespace clothbake::compress {
 namespace {
@@ -116,7 +116,7 @@ void pin_eigen_blocking() {
 }
 
 Eigen::MatrixXd gaussian_matrix(std::size_t rows, std::size_t cols, uint64_t seed) {
-  cluster::SplitMix64 rng(seed);
+  model::SplitMix64 rng(seed);
   Eigen::MatrixXd g(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
   double* p = g.data();
   const std::size_t count = rows * cols;

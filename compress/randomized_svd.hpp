@@ -7,7 +7,7 @@
 // costs m n^2 (40-55 s for 8192^2 on this machine) and a full eigensolver minutes; the randomized
 // range finder costs (2 q + 2) passes over the data with r + p columns, i.e. a few GEMMs.
 //
-// Determinism: the Gaussian test matrix comes from SplitMix64 (cluster/rng.hpp) and Box-Muller,
+// Determinism: the Gaussian test matrix comes from SplitMix64 (model/splitmix64.hpp) and Box-Muller,
 // specified bit for bit; products run over fixed blocks of kSvdBlockRows rows (TBB, disjoint
 // outputs), partial sums of A^T Q are added in block order, and Eigen's cache-blocking sizes are
 // pinned (pin_eigen_blocking) so that GEMM sums in the same order on every machine. Same inputs,

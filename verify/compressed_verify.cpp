@@ -14,7 +14,7 @@
 
 #include "bake/tables/radiance_fill.hpp"
 #include "bake/tables/radiance_sections.hpp"
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress/directional_texels.hpp"
 #include "formats/reader/compressed_tables.hpp"
@@ -231,7 +231,7 @@ void throughput(const reader::Asset& asset, const reader::CompressedRadianceTabl
                 const tables::RadianceInputs& inputs, const compress::DirectionalTexels& raw,
                 const CompressedVerifyOptions& options, CompressedKindReport* report) {
   // Pixel-like footprints: 1 to 16 texels per side, anywhere, random half vectors.
-  cluster::SplitMix64 rng(options.seed ^ 0x5eedull);
+  model::SplitMix64 rng(options.seed ^ 0x5eedull);
   const double n = raw.resolution;
   std::vector<reader::Footprint> rects(static_cast<std::size_t>(options.throughput_queries));
   std::vector<std::array<double, 3>> hs(rects.size());

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 
 namespace clothbake::verify {
 
@@ -27,7 +27,7 @@ std::vector<SizeClass> size_classes(int n) {
 
 std::vector<SampledFootprint> sample_footprints(int n, int count, uint64_t seed) {
   const auto classes = size_classes(n);
-  cluster::SplitMix64 rng(seed);
+  model::SplitMix64 rng(seed);
   std::vector<SampledFootprint> out;
   for (int i = 0; i < count; ++i) {
     SampledFootprint f;

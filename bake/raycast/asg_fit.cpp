@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "model/splitmix64.hpp"
+
 namespace clothbake::raycast {
 namespace {
 
@@ -303,12 +305,7 @@ void refine(Problem& problem, Lobe& lobe, double& energy, int refinements, int& 
 // A deterministic random lobe (splitmix64): axis uniform on the hemisphere, log-uniform
 // bandwidths in [0.1, 1000], best amplitude.
 Lobe random_start(Problem& problem, uint64_t& state) {
-  auto next = [&state] {
-    uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return double((z ^ (z >> 31)) >> 11) * 0x1p-53;
-  };
+  auto next = [&state] { return double(model::splitmix64_next(state) >> 11) * 0x1p-53; };
   double cz = next(), phi = 2 * model::kPi<double> * next(), sz = std::sqrt(1 - cz * cz);
   Lobe lobe;
   Eigen::Vector3d z(sz * std::cos(phi), sz * std::sin(phi), cz);

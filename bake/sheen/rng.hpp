@@ -1,9 +1,13 @@
 // A small deterministic random number generator for the sheen layer simulation: xoshiro256++
-// (Blackman and Vigna 2019) seeded through splitmix64, so that a (seed, stream) pair gives the same
-// sequence on every platform and thread count. Not cryptographic.
+// (Blackman and Vigna 2019) seeded through the project's SplitMix64 (model/splitmix64.hpp), so that
+// a (seed, stream) pair gives the same sequence on every platform and thread count. The generator
+// stays xoshiro256++ (not SplitMix64 itself) because the committed sheen table
+// (model/sheen_table.hpp) was fitted from its streams. Not cryptographic.
 #pragma once
 
 #include <cstdint>
+
+#include "model/splitmix64.hpp"
 
 namespace clothbake::sheen {
 
@@ -13,7 +17,7 @@ class Rng {
   Rng(uint64_t seed, uint64_t stream) {
     uint64_t s = seed ^ (stream * 0xD1B54A32D192ED03ull + 0x8BB84B93962EACC9ull);
     for (uint64_t& word : state_)
-      word = splitmix64(s);
+      word = model::splitmix64_next(s);
   }
 
   uint64_t next_u64() {
@@ -33,12 +37,6 @@ class Rng {
 
  private:
   static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-  static uint64_t splitmix64(uint64_t& s) {
-    uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
   uint64_t state_[4];
 };
 

@@ -17,7 +17,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/tables/radiance_fill.hpp"
 #include "bake/tables/radiance_sections.hpp"
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/compressed_set.hpp"
 #include "formats/reader/compressed_tables.hpp"
@@ -76,7 +76,7 @@ struct Queries {
 const Queries& queries() {
   static Queries q = [] {
     Queries q;
-    cluster::SplitMix64 rng(7);
+    model::SplitMix64 rng(7);
     const double n = data().texels.resolution;
     for (int i = 0; i < 65536; ++i) {
       const double x0 = rng.uniform() * n, y0 = rng.uniform() * n, s = 1 + 15 * rng.uniform();

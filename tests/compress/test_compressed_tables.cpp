@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress_test_util.hpp"
 
@@ -17,7 +17,7 @@ using test::direct_sums;
 void expect_queries_exact(const reader::CompressedRadianceTables& tables,
                           const std::vector<float>& decoded, const std::vector<uint8_t>& cluster,
                           int n, int bins_per_side, int clusters, uint64_t seed) {
-  cluster::SplitMix64 rng(seed);
+  model::SplitMix64 rng(seed);
   std::vector<reader::Footprint> rects = {
       {double(n - 1), double(n - 1), double(n), double(n)},  // far corner texel
       {0, 0, double(n), double(n)},                          // one tile

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "cluster/rng.hpp"
+#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress/cpca.hpp"
 
@@ -23,7 +23,7 @@ struct Synthetic {
 Synthetic make_synthetic(int groups, int per_group, std::size_t dim, int rank, uint64_t seed) {
   Synthetic s;
   s.dim = dim;
-  cluster::SplitMix64 rng(seed);
+  model::SplitMix64 rng(seed);
   for (int g = 0; g < groups; ++g) {
     const Eigen::MatrixXd basis = gaussian_matrix(dim, std::size_t(rank), seed + 10 + g);
     const Eigen::VectorXd offset = 5.0 * gaussian_matrix(dim, 1, seed + 100 + g);
