@@ -23,7 +23,7 @@
 #include "bake/cli/command.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
 

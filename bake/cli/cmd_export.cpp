@@ -1,7 +1,7 @@
 // clothbake export ASSET --section S [--instance I] [--index i,j,...] -o FILE.exr [--force]:
-// writes one section of an asset as an image for looking at it (common/image_io.hpp; the format
-// follows the extension, EXR keeps float values). --index fixes the leading dimensions until an
-// image is left: {H, W} (one channel), {H, W, C} with C <= 4, or {W} (one row). Integer elements
+// writes one section of an asset as an image for looking at it (common/image_io/image_io.hpp; the
+// format follows the extension, EXR keeps float values). --index fixes the leading dimensions until
+// an image is left: {H, W} (one channel), {H, W, C} with C <= 4, or {W} (one row). Integer elements
 // are converted to float unchanged (not normalised). The section's checksum is verified first.
 // Exit 3 for a corrupt asset, 2 for a bad section name, index or output path.
 //
@@ -17,7 +17,7 @@
 
 #include "bake/cli/command.hpp"
 #include "common/diagnostics.hpp"
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"

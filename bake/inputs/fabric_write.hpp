@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "bake/inputs/fabric.hpp"
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 
 namespace clothbake {
 

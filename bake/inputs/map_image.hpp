@@ -1,6 +1,6 @@
-// Feature maps from image files: reading through common/image_io.hpp (OpenImageIO), the channel
-// rules per map, decoding of the stored values and per-pixel validation (docs/fabric-format.md,
-// "Map conventions").
+// Feature maps from image files: reading through common/image_io/image_io.hpp (OpenImageIO), the
+// channel rules per map, decoding of the stored values and per-pixel validation
+// (docs/fabric-format.md, "Map conventions").
 //
 //  map      channels            stored value -> decoded value
 //  height   1                   h (any finite value) * scale
@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "bake/inputs/fabric.hpp"
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 
 namespace clothbake::inputs {
 

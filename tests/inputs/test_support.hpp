@@ -10,7 +10,7 @@
 #include <string>
 
 #include "common/error.hpp"
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 
 namespace clothbake::testing {
 

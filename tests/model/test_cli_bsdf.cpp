@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
 #include "tests/support/run_cli.hpp"

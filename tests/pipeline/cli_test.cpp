@@ -17,7 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 #include "formats/reader/layout.hpp"
 
 namespace {

@@ -20,7 +20,7 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"

@@ -1,4 +1,4 @@
-#include "common/image_io.hpp"
+#include "common/image_io/image_io.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
