@@ -7,7 +7,7 @@
 // registration is compiled into every executable that links the library (docs/pipeline.md).
 #include <nlohmann/json.hpp>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/pipeline/stage.hpp"
 #include "cluster/cluster_sections.hpp"
 #include "cluster/visibility_clusters.hpp"

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <regex>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "common/error.hpp"
 
 namespace clothbake::compress {

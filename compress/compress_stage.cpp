@@ -13,7 +13,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/pipeline/stage.hpp"
 #include "bake/tables/radiance_sections.hpp"
 #include "cluster/visibility_clusters.hpp"

@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "formats/reader/asset.hpp"
 
 namespace clothbake::verify {

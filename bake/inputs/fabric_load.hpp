@@ -12,7 +12,7 @@
 #include <optional>
 #include <string>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/inputs/weave_maps.hpp"
 
 namespace clothbake {

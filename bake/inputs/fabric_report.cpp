@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "fabric/fabric_json.hpp"
+
 namespace clothbake {
 namespace {
 
@@ -66,23 +68,12 @@ json fabric_parameters_json(const Fabric& f) {
                      {"diffuse_transmittance", rgb(y.diffuse_transmittance)},
                      {"color", rgb(y.color)}});
   }
-  const BakeSettings& b = f.bake;
   return {{"tile",
            {{"size_mm", f.tile_size_mm > 0 ? json(f.tile_size_mm) : json(nullptr)},
             {"height_unit", "tile side"}}},
           {"yarns", yarns},
           {"sheen", {{"color", rgb(f.sheen.color)}, {"roughness", f.sheen.roughness}}},
-          {"bake",
-           {{"resolution", b.resolution},
-            {"parallax_dirs", b.parallax_dirs},
-            {"parallax_min_cos", b.parallax_min_cos},
-            {"visibility_dirs", b.visibility_dirs},
-            {"radiance_dirs", b.radiance_dirs},
-            {"clusters", b.clusters},
-            {"compress", b.compress},
-            {"compress_clusters", b.compress_clusters},
-            {"compress_rank", b.compress_rank},
-            {"seed", b.seed}}}};
+          {"bake", bake_settings_json(f.bake)}};
 }
 
 json weave_json(const LoadedFabric& loaded) {

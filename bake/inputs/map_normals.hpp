@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::inputs {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::inputs {
 

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/inputs/weave.hpp"
 #include "model/vec.hpp"
 

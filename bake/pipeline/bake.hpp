@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/pipeline/driver.hpp"
 
 namespace clothbake::pipeline {

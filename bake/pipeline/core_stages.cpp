@@ -11,7 +11,7 @@
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 
 namespace clothbake::pipeline::core_stages {
 namespace {
@@ -24,12 +24,12 @@ void load_fabric_stage(StageContext& ctx) {
 
 void fabric_records_stage(StageContext& ctx) {
   ctx.output("section/fabric_records",
-             formats::fabric_record_sections(ctx.input<Fabric>("fabric")));
+             fabric_record_sections(ctx.input<Fabric>("fabric")));
 }
 
 void feature_maps_stage(StageContext& ctx) {
   ctx.output("section/feature_maps",
-             formats::feature_map_sections(ctx.input<Fabric>("fabric").maps));
+             feature_map_sections(ctx.input<Fabric>("fabric").maps));
 }
 
 // Metadata: provenance and parameters, deterministic unless timings are asked for.
@@ -39,7 +39,7 @@ nlohmann::json metadata(StageContext& ctx) {
   m["format_version"] =
       std::to_string(reader::kFormatMajor) + "." + std::to_string(reader::kFormatMinor);
   m["tool"] = {{"name", "clothbake"}, {"version", CLOTHBAKE_VERSION_STRING}};
-  m["fabric"] = formats::fabric_metadata(ctx.input<Fabric>("fabric"));
+  m["fabric"] = fabric_metadata(ctx.input<Fabric>("fabric"));
   m["stages"] = ctx.stage_order();
   nlohmann::json parameters = nlohmann::json::object();
   for (const auto& name : ctx.collected("metadata/"))

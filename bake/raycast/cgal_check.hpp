@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::raycast {
 

@@ -7,7 +7,7 @@
 #include <limits>
 #include <string>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "common/error.hpp"
 
 namespace clothbake::raycast {

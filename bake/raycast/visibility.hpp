@@ -13,7 +13,7 @@
 #include <functional>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "model/asg.hpp"
 
 namespace clothbake::raycast {

@@ -8,7 +8,7 @@
 // is compiled into every executable that links the library (docs/pipeline.md).
 #include <nlohmann/json.hpp>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/pipeline/stage.hpp"
 #include "bake/raycast/raycast_sections.hpp"
 #include "bake/raycast/visibility.hpp"

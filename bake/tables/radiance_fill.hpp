@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/tables/half_vector_bins.hpp"
 #include "formats/reader/radiance_layout.hpp"
 

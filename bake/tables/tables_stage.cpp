@@ -9,7 +9,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "bake/pipeline/stage.hpp"
 #include "bake/tables/fixed_point_sat.hpp"
 #include "bake/tables/half_vector_bins.hpp"

@@ -14,7 +14,7 @@
 #include "formats/reader/validate.hpp"
 #include "formats/reader/xxh64.hpp"
 #include "formats/writer/asset_writer.hpp"
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {
@@ -23,8 +23,8 @@ using namespace clothbake;
 
 std::vector<formats::Section> sections_for(int n, int extra_sections) {
   const Fabric fabric = test_support::make_test_fabric(n);
-  auto sections = formats::fabric_record_sections(fabric);
-  for (auto& s : formats::feature_map_sections(fabric.maps))
+  auto sections = fabric_record_sections(fabric);
+  for (auto& s : feature_map_sections(fabric.maps))
     sections.push_back(std::move(s));
   sections.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   std::vector<float> block(1 << 18, 0.25f);

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 #include "common/error.hpp"
 #include "compress/compress_settings.hpp"
 

@@ -7,20 +7,20 @@
 #include <vector>
 
 #include "formats/writer/asset_writer.hpp"
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace clothbake::test_support {
 
 inline std::vector<formats::Section> golden_sections() {
   const Fabric fabric = make_test_fabric(4, "golden");
-  std::vector<formats::Section> sections = formats::fabric_record_sections(fabric);
-  for (auto& s : formats::feature_map_sections(fabric.maps))
+  std::vector<formats::Section> sections = fabric_record_sections(fabric);
+  for (auto& s : feature_map_sections(fabric.maps))
     sections.push_back(std::move(s));
   nlohmann::json metadata;
   metadata["format"] = "clothbake-asset";
   metadata["tool"] = {{"name", "clothbake"}, {"version", "golden"}};
-  metadata["fabric"] = formats::fabric_metadata(fabric);
+  metadata["fabric"] = fabric_metadata(fabric);
   metadata["stages"] = {"load_fabric", "feature_maps", "write"};
   sections.push_back(formats::make_metadata_section(metadata));
   return sections;

@@ -17,7 +17,7 @@
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {
@@ -41,8 +41,8 @@ class Output : public ::testing::Test {
   }
   static std::vector<formats::Section> sections(int n, const std::string& name) {
     const Fabric fabric = test_support::make_test_fabric(n, name);
-    auto s = formats::fabric_record_sections(fabric);
-    for (auto& m : formats::feature_map_sections(fabric.maps))
+    auto s = fabric_record_sections(fabric);
+    for (auto& m : feature_map_sections(fabric.maps))
       s.push_back(std::move(m));
     s.push_back(formats::make_metadata_section({{"fabric", name}}));
     return s;

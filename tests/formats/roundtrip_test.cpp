@@ -13,7 +13,7 @@
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {
@@ -104,8 +104,8 @@ TEST(RoundTrip, HalfToFloatIsExactForEveryFiniteHalf) {
 
 TEST(RoundTrip, FabricSections) {
   const Fabric fabric = test_support::make_test_fabric(16);
-  std::vector<Section> sections = formats::fabric_record_sections(fabric);
-  for (auto& s : formats::feature_map_sections(fabric.maps))
+  std::vector<Section> sections = fabric_record_sections(fabric);
+  for (auto& s : feature_map_sections(fabric.maps))
     sections.push_back(std::move(s));
   sections.push_back(metadata());
   Opened opened(formats::serialize_asset(sections));
@@ -198,7 +198,7 @@ TEST(RoundTrip, ReservedSectionTypesAsTypedArrays) {
 
 TEST(RoundTrip, LayoutFollowsTheSpecification) {
   const Fabric fabric = test_support::make_test_fabric(5);  // odd sizes: payloads need padding
-  std::vector<Section> sections = formats::feature_map_sections(fabric.maps);
+  std::vector<Section> sections = feature_map_sections(fabric.maps);
   sections.push_back(metadata());
   std::reverse(sections.begin(), sections.end());
   const auto bytes = formats::serialize_asset(sections);
@@ -233,7 +233,7 @@ TEST(RoundTrip, LayoutFollowsTheSpecification) {
 
 TEST(RoundTrip, SameSectionsGiveSameBytesWhateverTheOrder) {
   const Fabric fabric = test_support::make_test_fabric(8);
-  std::vector<Section> a = formats::feature_map_sections(fabric.maps);
+  std::vector<Section> a = feature_map_sections(fabric.maps);
   a.push_back(metadata());
   std::vector<Section> b = a;
   std::reverse(b.begin(), b.end());
@@ -328,7 +328,7 @@ TEST(Writer, RefusesNanAndInfNamingSectionAndElement) {
   Fabric fabric = test_support::make_test_fabric(4);
   fabric.maps.normal[6][2] = std::numeric_limits<float>::infinity();
   try {
-    formats::feature_map_sections(fabric.maps);
+    feature_map_sections(fabric.maps);
     FAIL() << "Inf normal accepted";
   } catch (const Error& e) {
     // Texel x=2, y=1, channel z.
@@ -337,7 +337,7 @@ TEST(Writer, RefusesNanAndInfNamingSectionAndElement) {
   }
   fabric = test_support::make_test_fabric(4);
   fabric.yarns[1].roughness = std::nan("");
-  EXPECT_THROW(formats::fabric_record_sections(fabric), Error);
+  EXPECT_THROW(fabric_record_sections(fabric), Error);
 }
 
 TEST(Writer, RejectsInconsistentSections) {
@@ -350,7 +350,7 @@ TEST(Writer, RejectsInconsistentSections) {
   Fabric fabric = test_support::make_test_fabric(4);
   fabric.maps.gap.pop_back();
   try {
-    formats::feature_map_sections(fabric.maps);
+    feature_map_sections(fabric.maps);
     FAIL();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("'gap' has 15 texels, expected 16"), std::string::npos);
@@ -360,7 +360,7 @@ TEST(Writer, RejectsInconsistentSections) {
 TEST(Writer, LongYarnNamesAreCutAtACharacterBoundary) {
   Fabric fabric = test_support::make_test_fabric(4);
   fabric.yarns[0].name = std::string(29, 'a') + "\xc3\xa9\xc3\xa9";  // 29 + 2 + 2 bytes
-  std::vector<Section> sections = formats::fabric_record_sections(fabric);
+  std::vector<Section> sections = fabric_record_sections(fabric);
   sections.push_back(metadata());
   Opened opened(formats::serialize_asset(sections));
   reader::ArrayView<reader::YarnMaterialRecord> yarns;

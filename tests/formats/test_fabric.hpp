@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::test_support {
 

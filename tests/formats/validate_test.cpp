@@ -8,7 +8,7 @@
 #include "formats/reader/asset.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {
@@ -18,8 +18,8 @@ using formats::Section;
 using reader::SectionType;
 
 std::vector<Section> fabric_sections(const Fabric& fabric) {
-  auto s = formats::fabric_record_sections(fabric);
-  for (auto& m : formats::feature_map_sections(fabric.maps))
+  auto s = fabric_record_sections(fabric);
+  for (auto& m : feature_map_sections(fabric.maps))
     s.push_back(std::move(m));
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;

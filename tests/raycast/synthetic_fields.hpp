@@ -8,7 +8,7 @@
 #include <functional>
 #include <vector>
 
-#include "bake/inputs/fabric.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::raycast::rctest {
 

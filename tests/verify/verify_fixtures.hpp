@@ -10,7 +10,7 @@
 #include "bake/tables/radiance_sections.hpp"
 #include "cluster/cluster_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 
 namespace clothbake::verify_testing {
 
@@ -35,8 +35,8 @@ inline std::vector<formats::Section> asset_sections(
   vc.visibility_dirs = 4;
   vc.labels = block_labels(n, clusters);
   vc.mean_visibility.assign(std::size_t(clusters) * 16, 1.0f);
-  std::vector<formats::Section> sections = formats::fabric_record_sections(fabric);
-  for (auto& s : formats::feature_map_sections(fabric.maps))
+  std::vector<formats::Section> sections = fabric_record_sections(fabric);
+  for (auto& s : feature_map_sections(fabric.maps))
     sections.push_back(std::move(s));
   for (auto& s : cluster::cluster_sections(vc))
     sections.push_back(std::move(s));

@@ -1,14 +1,19 @@
-#include "formats/writer/fabric_sections.hpp"
+#include "fabric/fabric_sections.hpp"
 
 #include <cmath>
 #include <cstring>
 
 #include "common/error.hpp"
+#include "fabric/fabric_json.hpp"
 
-namespace clothbake::formats {
+namespace clothbake {
 namespace {
 
+using formats::make_array_section;
+using formats::make_record_section;
+using formats::Section;
 using reader::FabricInfoRecord;
+using reader::SectionType;
 using reader::YarnMaterialRecord;
 
 void copy_rgb(double out[3], const Rgb& in) {
@@ -132,17 +137,7 @@ nlohmann::json fabric_metadata(const Fabric& fabric) {
     yarns.push_back(y.name);
   j["yarns"] = yarns;
   j["sheen"] = {{"color", fabric.sheen.color}, {"roughness", fabric.sheen.roughness}};
-  const BakeSettings& b = fabric.bake;
-  j["bake"] = {{"resolution", b.resolution},
-               {"parallax_dirs", b.parallax_dirs},
-               {"parallax_min_cos", b.parallax_min_cos},
-               {"visibility_dirs", b.visibility_dirs},
-               {"radiance_dirs", b.radiance_dirs},
-               {"clusters", b.clusters},
-               {"compress", b.compress},
-               {"compress_clusters", b.compress_clusters},
-               {"compress_rank", b.compress_rank},
-               {"seed", b.seed}};
+  j["bake"] = bake_settings_json(fabric.bake);
   nlohmann::json inputs = nlohmann::json::array();
   for (const auto& in : fabric.inputs)
     inputs.push_back({{"role", in.role}, {"path", in.path}, {"xxh64", in.xxh64}});
@@ -150,4 +145,4 @@ nlohmann::json fabric_metadata(const Fabric& fabric) {
   return j;
 }
 
-}  // namespace clothbake::formats
+}  // namespace clothbake

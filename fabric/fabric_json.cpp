@@ -1,0 +1,18 @@
+#include "fabric/fabric_json.hpp"
+
+namespace clothbake {
+
+nlohmann::json bake_settings_json(const BakeSettings& b) {
+  return {{"resolution", b.resolution},
+          {"parallax_dirs", b.parallax_dirs},
+          {"parallax_min_cos", b.parallax_min_cos},
+          {"visibility_dirs", b.visibility_dirs},
+          {"radiance_dirs", b.radiance_dirs},
+          {"clusters", b.clusters},
+          {"compress", b.compress},
+          {"compress_clusters", b.compress_clusters},
+          {"compress_rank", b.compress_rank},
+          {"seed", b.seed}};
+}
+
+}  // namespace clothbake
