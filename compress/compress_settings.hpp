@@ -24,11 +24,6 @@ inline constexpr double kDefaultMaxError = 0.008;
 // Rank cap per C-PCA cluster in target mode.
 inline constexpr int kDefaultRankCap = 64;
 
-// Name of the optional pipeline artifact (a CompressRequest) the bake command seeds from
-// --compress / --max-error / --keep-raw / --no-compress; the stage resolves it against the
-// fabric's [bake] settings (resolve_compress_settings). Without it: settings_from_bake.
-inline constexpr const char* kCompressSettingsArtifact = "compress_options";
-
 struct CompressSettings {
   bool enabled = true;         // write compressed tables
   bool keep_raw = false;       // also keep the raw tables in the asset
@@ -68,11 +63,6 @@ void check_compress_request(const CompressRequest& request);
 // --max-error keeps the fabric's compress_clusters (or 1) and caps ranks at kDefaultRankCap.
 CompressSettings resolve_compress_settings(const BakeSettings& bake,
                                            const CompressRequest& request);
-
-// Name prefix under which a stage lists the section artifacts it supersedes (a
-// std::vector<std::string>, read by the write stage, docs/pipeline.md): the compress stage
-// publishes "supersedes/compress" = {"section/tables"} unless the raw tables are kept.
-inline constexpr const char* kSupersedesArtifact = "supersedes/compress";
 
 // "k,r" (e.g. "4,10") -> fixed settings. Throws Error(Usage) naming `option` otherwise.
 CompressSettings parse_compress_shape(const std::string& text, const std::string& option);

@@ -13,6 +13,7 @@
 #include "bake/cli/command.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
+#include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "compress/compress_settings.hpp"
@@ -70,20 +71,21 @@ compress::CompressRequest compress_request(const BakeOptions& o) {
 }
 
 void print_stage_list(bool json) {
-  const auto stages = pipeline::registered_stages();
+  // The explicit list: the order in which a full bake runs the stages.
+  const auto list = stages::bake_stages();
   if (json) {
-    nlohmann::json list = nlohmann::json::array();
-    for (const auto& s : stages)
-      list.push_back({{"name", s.name},
-                      {"description", s.description},
-                      {"inputs", s.inputs},
-                      {"outputs", s.outputs},
-                      {"collects", s.collects},
-                      {"always", s.always}});
-    print_json({{"stages", list}});
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& s : list)
+      out.push_back({{"name", s.name},
+                     {"description", s.description},
+                     {"inputs", s.inputs},
+                     {"outputs", s.outputs},
+                     {"collects", s.collects},
+                     {"always", s.always}});
+    print_json({{"stages", out}});
     return;
   }
-  for (const auto& s : stages) {
+  for (const auto& s : list) {
     std::cout << s.name << (s.always ? " (always)" : "") << ": " << s.description << "\n    in:";
     for (const auto& i : s.inputs)
       std::cout << ' ' << i;
@@ -113,7 +115,7 @@ Action setup_bake(CLI::App& app) {
   app.add_flag("--force", o->force, "replace an existing output file that is not an asset");
   app.add_flag("--record-timings", o->record_timings,
                "store stage timings in the asset metadata (makes the bytes differ run to run)");
-  app.add_flag("--list-stages", o->list_stages, "list the registered stages and exit");
+  app.add_flag("--list-stages", o->list_stages, "list the stages in run order and exit");
   app.add_option("--compress", o->compress_shape,
                  "C-PCA with a fixed shape K,R: K clusters per visibility cluster, rank R "
                  "(default: ranks chosen for the target error, see --max-error)");
@@ -151,8 +153,8 @@ Action setup_bake(CLI::App& app) {
     request.run.show_progress = !o->quiet && pipeline::ProgressBar::stderr_is_terminal();
     request.run.record_timings = o->record_timings;
     if (!compression.given().empty())
-      request.seeds.put(compress::kCompressSettingsArtifact, compression);
-    const pipeline::BakeResult result = pipeline::bake(request);
+      request.seeds.put(stages::kCompressSettingsArtifact, compression);
+    const pipeline::BakeResult result = pipeline::bake(request, stages::bake_stages());
 
     nlohmann::json report = pipeline::bake_report_json(request, result);
     report["warnings"] = take_warnings();

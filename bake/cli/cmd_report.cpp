@@ -30,6 +30,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
+#include "bake/stages/stages.hpp"
 #include "bake/tables/radiance_fill.hpp"
 #include "bake/tables/radiance_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
@@ -69,39 +70,20 @@ std::vector<T> parse_list(const std::string& text, const std::string& option) {
   return out;
 }
 
-// Visibility labels of `fabric`: the bake's visibility and cluster stages, or a stand-in.
+// Visibility labels of `fabric`: the bake's own visibility and cluster stages (without the
+// always-run fabric records and writer, which need an output).
 std::vector<uint8_t> visibility_labels(const Fabric& fabric, int* clusters, std::string* source) {
-  std::vector<pipeline::Stage> stages;
-  bool have_cluster = false;
-  for (auto& s : pipeline::registered_stages()) {
-    if (s.always) continue;  // the writer
-    have_cluster = have_cluster || s.name == "cluster";
-    stages.push_back(std::move(s));
-  }
-  if (have_cluster) {
-    pipeline::Artifacts seeded;
-    seeded.put("fabric", fabric);
-    pipeline::RunOptions run;
-    pipeline::RunResult result =
-        pipeline::run_pipeline({"cluster"}, std::move(seeded), run, &stages);
-    const auto& c = result.artifacts.get<cluster::VisibilityClusters>("clusters");
-    *clusters = c.clusters;
-    *source = "visibility clusters (bake stages)";
-    return c.labels;
-  }
-  warn(
-      "report: this build has no visibility clustering stage; using stand-in clusters "
-      "(yarn x tangent hemisphere)");
-  const auto& m = fabric.maps;
-  std::vector<uint8_t> labels(m.texel_count());
-  int most = 0;
-  for (std::size_t t = 0; t < labels.size(); ++t) {
-    labels[t] = uint8_t(std::min(253, 2 * int(m.yarn_id[t]) + (m.tangent[t][2] > 0 ? 1 : 0)));
-    most = std::max(most, int(labels[t]) + 1);
-  }
-  *clusters = most;
-  *source = "stand-in clusters (yarn x tangent hemisphere)";
-  return labels;
+  std::vector<pipeline::Stage> list;
+  for (auto& s : stages::bake_stages())
+    if (!s.always) list.push_back(std::move(s));
+  pipeline::Artifacts seeded;
+  seeded.put("fabric", fabric);
+  pipeline::RunOptions run;
+  pipeline::RunResult result = pipeline::run_pipeline({"cluster"}, std::move(seeded), run, list);
+  const auto& c = result.artifacts.get<cluster::VisibilityClusters>("clusters");
+  *clusters = c.clusters;
+  *source = "visibility clusters (bake stages)";
+  return c.labels;
 }
 
 struct KindData {

@@ -14,7 +14,7 @@ std::string hex64(uint64_t value) {
   return buf;
 }
 
-BakeResult bake(const BakeRequest& request) {
+BakeResult bake(const BakeRequest& request, const std::vector<Stage>& stages) {
   formats::OutputOptions output;
   output.force = request.force;
   formats::check_output_path(request.output_path, output);
@@ -28,7 +28,7 @@ BakeResult bake(const BakeRequest& request) {
   seeded.merge(request.seeds);
 
   BakeResult result;
-  result.run = run_pipeline(request.stages, std::move(seeded), request.run);
+  result.run = run_pipeline(request.stages, std::move(seeded), request.run, stages);
   result.asset = result.run.artifacts.get<AssetSummary>("asset");
   return result;
 }

@@ -1,6 +1,7 @@
-// One bake: fabric description in, one asset out (atomically), plus a JSON report. The stages
-// of this issue are load_fabric -> fabric_records, feature_maps -> write (core_stages.cpp); other
-// folders register more (stage.hpp).
+// One bake: fabric description in, one asset out (atomically), plus a JSON report. The request
+// seeds the artifacts every bake starts from ("fabric_path" or "fabric", "output", the seeds) and
+// runs the given stages (stages::bake_stages() from bake/stages: load_fabric ... write); the
+// write stage publishes the AssetSummary below as "asset".
 #pragma once
 
 #include <cstdint>
@@ -9,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "fabric/fabric.hpp"
 #include "bake/pipeline/driver.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::pipeline {
 
@@ -60,10 +61,11 @@ struct BakeResult {
   AssetSummary asset;
 };
 
-// Checks the output path first (so a bad path fails before any work), then runs the pipeline.
-// Throws clothbake::Error: Input for bad inputs and unwritable outputs, Usage for unknown stage
-// names, Internal for pipeline bugs. On any error nothing is written at the output path.
-BakeResult bake(const BakeRequest& request);
+// Checks the output path first (so a bad path fails before any work), then runs `stages`, which
+// must include a stage producing "asset" (the write stage). Throws clothbake::Error: Input for bad
+// inputs and unwritable outputs, Usage for unknown stage names, Internal for pipeline bugs. On any
+// error nothing is written at the output path.
+BakeResult bake(const BakeRequest& request, const std::vector<Stage>& stages);
 
 // The --report / --json document: per-stage wall time, CPU time and peak memory, totals,
 // thread count, and the asset's size, hash and section list.

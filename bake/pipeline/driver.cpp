@@ -12,12 +12,10 @@
 namespace clothbake::pipeline {
 
 RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
-                       const RunOptions& options, const std::vector<Stage>* stages) {
-  const std::vector<Stage> registry = stages ? std::vector<Stage>{} : registered_stages();
-  const std::vector<Stage>& all = stages ? *stages : registry;
+                       const RunOptions& options, const std::vector<Stage>& stages) {
   const auto seeded_names = seeded.names();
   const std::vector<const Stage*> plan =
-      plan_stages(all, picked, std::set<std::string>(seeded_names.begin(), seeded_names.end()));
+      plan_stages(stages, picked, std::set<std::string>(seeded_names.begin(), seeded_names.end()));
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (options.threads > 0)

@@ -18,11 +18,11 @@ struct RunResult {
   Artifacts artifacts;          // the seeded artifacts and everything the stages produced
 };
 
-// Plans (plan_stages) and runs the stages: `picked` (empty: all), with `seeded` artifacts
+// Plans (plan_stages) and runs `stages`: the `picked` ones (empty: all), with `seeded` artifacts
 // available from the start. options.threads > 0 caps TBB's parallelism for the whole run
 // (tbb::global_control). Errors thrown by a stage propagate unchanged; a stage that does not
-// produce a declared output is an Error(Internal). `stages` defaults to the registry.
+// produce a declared output is an Error(Internal). A bake passes stages::bake_stages().
 RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
-                       const RunOptions& options, const std::vector<Stage>* stages = nullptr);
+                       const RunOptions& options, const std::vector<Stage>& stages);
 
 }  // namespace clothbake::pipeline

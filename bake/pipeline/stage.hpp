@@ -1,21 +1,7 @@
-// Pipeline stages: pure functions from named input artifacts to named output artifacts, and the
-// self-registering registry that the bake driver reads (docs/pipeline.md).
-//
-// Adding a stage from another folder (no edit of bake/pipeline needed):
-//   // bake/raycast/parallax_stage.cpp
-//   #include "bake/pipeline/stage.hpp"
-//   CLOTHBAKE_REGISTER_STAGE(parallax) {
-//     clothbake::pipeline::Stage s;
-//     s.description = "parallax offsets per view direction";
-//     s.inputs = {"fabric"};
-//     s.outputs = {"section/parallax", "metadata/parallax"};
-//     s.run = [](clothbake::pipeline::StageContext& ctx) { ... ctx.output(...); };
-//     return s;
-//   }
-// and attach that .cpp to your library as an INTERFACE source so that it is compiled into every
-// executable that links the library (a static library would otherwise drop the unreferenced
-// registering object):
-//   target_sources(clothbake_raycast INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/parallax_stage.cpp)
+// Pipeline stages: pure functions from named input artifacts to named output artifacts, which the
+// driver (driver.hpp) runs in dependency order (docs/pipeline.md). The bake's own stages are
+// defined in bake/stages/ and listed there in run order (bake/stages/stages.hpp); this folder
+// knows none of them.
 //
 // Conventions: artifacts named "section/<stage>" hold std::vector<formats::Section> and end up in
 // the asset; "metadata/<stage>" hold nlohmann::json stored under "parameters"."<stage>" in the
@@ -46,32 +32,6 @@ struct Stage {
   bool always = false;
   std::function<void(StageContext&)> run;
 };
-
-// Adds a stage; returns true so that it can initialise a namespace-scope constant.
-bool register_stage(Stage stage);
-// Every registered stage, sorted by name.
-std::vector<Stage> registered_stages();
-
-// Registers a stage at static initialisation; the body builds and returns the Stage (its name
-// is filled in from the macro argument):
-//   CLOTHBAKE_REGISTER_STAGE(parallax) {
-//     clothbake::pipeline::Stage s;
-//     s.description = "...";
-//     s.inputs = {"fabric"};
-//     s.outputs = {"section/parallax"};
-//     s.run = run_parallax;
-//     return s;
-//   }
-#define CLOTHBAKE_REGISTER_STAGE(stage_name)                                    \
-  static ::clothbake::pipeline::Stage clothbake_define_stage_##stage_name();    \
-  namespace {                                                                   \
-  const bool clothbake_stage_registered_##stage_name = [] {                     \
-    ::clothbake::pipeline::Stage stage = clothbake_define_stage_##stage_name(); \
-    stage.name = #stage_name;                                                   \
-    return ::clothbake::pipeline::register_stage(std::move(stage));             \
-  }();                                                                          \
-  }                                                                             \
-  static ::clothbake::pipeline::Stage clothbake_define_stage_##stage_name()
 
 // Measurements of one finished stage.
 struct StageReport {

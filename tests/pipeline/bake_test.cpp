@@ -1,4 +1,4 @@
-// In-process bakes through the registered core stages with a programmatic fabric: the asset is
+// In-process bakes through the fabric and write stages with a programmatic fabric: the asset is
 // valid and holds the fabric, bytes are identical for any thread count and run to run, the report
 // has the documented fields, and a failing bake writes nothing.
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 #include <iterator>
 
 #include "bake/pipeline/bake.hpp"
+#include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -19,6 +20,13 @@ namespace {
 
 using namespace clothbake;
 namespace fs = std::filesystem;
+
+// The stages that encode the fabric and write it (no ray casting, tables or compression): what
+// these tests bake, quickly, with "all stages".
+std::vector<pipeline::Stage> fabric_and_write_stages() {
+  return {stages::load_fabric_stage(), stages::fabric_records_stage(), stages::feature_maps_stage(),
+          stages::write_stage()};
+}
 
 class Bake : public ::testing::Test {
  protected:
@@ -38,7 +46,7 @@ class Bake : public ::testing::Test {
     request.output_path = (dir_ / name).string();
     request.run.threads = threads;
     request.stages = std::move(stages);
-    return pipeline::bake(request);
+    return pipeline::bake(request, fabric_and_write_stages());
   }
   std::string read(const std::string& name) {
     std::ifstream in(dir_ / name, std::ios::binary);
@@ -101,7 +109,7 @@ TEST_F(Bake, ReportHasTheDocumentedFields) {
   request.fabric = test_support::make_test_fabric(32);
   request.output_path = (dir_ / "r.cbk").string();
   request.run.threads = 2;
-  const auto result = pipeline::bake(request);
+  const auto result = pipeline::bake(request, fabric_and_write_stages());
   const nlohmann::json report = pipeline::bake_report_json(request, result);
   EXPECT_EQ(report["threads"], 2);
   ASSERT_EQ(report["stages"].size(), 3u);
@@ -121,7 +129,7 @@ TEST_F(Bake, RecordedTimingsAreOptIn) {
   request.fabric = test_support::make_test_fabric(8);
   request.output_path = (dir_ / "timed.cbk").string();
   request.run.record_timings = true;
-  pipeline::bake(request);
+  pipeline::bake(request, fabric_and_write_stages());
   reader::Asset asset;
   ASSERT_TRUE(asset.open_file(request.output_path.c_str()).ok());
   std::string_view text;
@@ -139,7 +147,7 @@ TEST_F(Bake, BadFabricWritesNothingAndKeepsThePreviousAsset) {
   request.fabric->maps.height[9] = std::numeric_limits<float>::quiet_NaN();
   request.output_path = (dir_ / "keep.cbk").string();
   try {
-    pipeline::bake(request);
+    pipeline::bake(request, fabric_and_write_stages());
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ExitCode::Input);
@@ -155,7 +163,7 @@ TEST_F(Bake, BadOutputFailsBeforeAnyWork) {
   request.fabric_path = "/nonexistent/fabric.toml";  // never read: the output is checked first
   request.output_path = dir_.string();
   try {
-    pipeline::bake(request);
+    pipeline::bake(request, fabric_and_write_stages());
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ExitCode::Input);

@@ -192,6 +192,26 @@ TEST_F(Cli, StageSelectionAndListing) {
   EXPECT_GE(nlohmann::json::parse(r.out)["stages"].size(), 4u);
 }
 
+TEST_F(Cli, ListStagesPrintsTheRunOrder) {
+  Outcome r = run({"bake", "--list-stages", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json listed = nlohmann::json::parse(r.out);
+  std::vector<std::string> names;
+  for (const auto& s : listed["stages"])
+    names.push_back(s["name"]);
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"load_fabric", "fabric_records", "feature_maps", "parallax",
+                                      "visibility", "cluster", "tables", "compress", "write"}));
+  // The same order as the stages of a bake's metadata (the order they ran in).
+  r = run({"bake", "@fabric.toml", "-o", "@order.cbk", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  std::vector<std::string> ran;
+  for (const auto& s : report["stages"])
+    ran.push_back(s["name"]);
+  EXPECT_EQ(ran, names);
+}
+
 TEST_F(Cli, BadOutputs) {
   // A directory.
   Outcome r = run({"bake", "@fabric.toml", "-o", "@io"});

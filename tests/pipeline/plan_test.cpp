@@ -110,7 +110,7 @@ TEST(Driver, RunsStagesAndCollectsPrefixedArtifacts) {
   const auto stages = diamond();
   Artifacts seeded;
   seeded.put("path", 10);
-  const RunResult result = run_pipeline({}, std::move(seeded), {}, &stages);
+  const RunResult result = run_pipeline({}, std::move(seeded), {}, stages);
   // fabric = 11; a -> 12 (section/a, metadata/a); b -> 12; c -> 13; write = 11 + 12+12+13 + 12 + 1.
   EXPECT_EQ(result.artifacts.get<int>("section/c"), 13);
   EXPECT_EQ(result.artifacts.get<int>("asset"), 11 + 12 + 12 + 13 + 12 + 1);
@@ -134,7 +134,7 @@ TEST(Driver, UndeclaredReadsAndWritesAndMissingOutputsAreInternalErrors) {
     Artifacts seeded;
     seeded.put("secret", 1);
     try {
-      run_pipeline({}, std::move(seeded), {}, &stages);
+      run_pipeline({}, std::move(seeded), {}, stages);
       FAIL() << s.name;
     } catch (const Error& e) {
       EXPECT_EQ(e.code(), ExitCode::Internal);
@@ -147,7 +147,7 @@ TEST(Driver, ThreadLimitIsApplied) {
   std::vector<Stage> stages{make("only", {}, {"x"})};
   RunOptions options;
   options.threads = 1;
-  EXPECT_EQ(run_pipeline({}, {}, options, &stages).threads, 1);
+  EXPECT_EQ(run_pipeline({}, {}, options, stages).threads, 1);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/driver.hpp"
+#include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -31,13 +32,11 @@ Section u32_section(reader::SectionType type, uint32_t instance, uint32_t first,
   return formats::make_array_section<uint32_t>(type, instance, values, {count});
 }
 
-// The registered write and fabric_records stages plus test stages: "big" produces
+// The write and fabric_records stages plus test stages: "big" produces
 // section/big (two raw-table sections), "small" section/small (one compressed-table section),
 // and "replace" (optional) supersedes/replace = `superseded`.
 std::vector<Stage> stages_with(bool with_replace, std::vector<std::string> superseded) {
-  std::vector<Stage> stages;
-  for (const Stage& s : pipeline::registered_stages())
-    if (s.name == "write" || s.name == "fabric_records") stages.push_back(s);
+  std::vector<Stage> list = {stages::fabric_records_stage(), stages::write_stage()};
   Stage big;
   big.name = "big";
   big.outputs = {"section/big"};
@@ -47,7 +46,7 @@ std::vector<Stage> stages_with(bool with_replace, std::vector<std::string> super
     v.push_back(u32_section(reader::SectionType::RadianceRawTables, 1, 7, 10));
     ctx.output("section/big", std::move(v));
   };
-  stages.push_back(big);
+  list.push_back(big);
   Stage small;
   small.name = "small";
   small.outputs = {"section/small"};
@@ -56,16 +55,16 @@ std::vector<Stage> stages_with(bool with_replace, std::vector<std::string> super
     v.push_back(u32_section(reader::SectionType::RadianceCompressedTables, 0, 5, 4));
     ctx.output("section/small", std::move(v));
   };
-  stages.push_back(small);
+  list.push_back(small);
   if (with_replace) {
     Stage replace;
     replace.name = "replace";
     replace.inputs = {"section/big"};  // like compress: it reads what it supersedes
     replace.outputs = {"supersedes/replace"};
     replace.run = [superseded](StageContext& ctx) { ctx.output("supersedes/replace", superseded); };
-    stages.push_back(replace);
+    list.push_back(replace);
   }
-  return stages;
+  return list;
 }
 
 class WriteStage : public ::testing::Test {
@@ -86,7 +85,7 @@ class WriteStage : public ::testing::Test {
     seeded.put("fabric", test_support::make_test_fabric(4));
     const std::string path = (dir_ / "a.cbk").string();
     seeded.put("output", pipeline::OutputRequest{path, false});
-    pipeline::run_pipeline({}, std::move(seeded), {}, &stages);
+    pipeline::run_pipeline({}, std::move(seeded), {}, stages);
     reader::Asset asset;
     EXPECT_TRUE(asset.open_file(path.c_str(), {reader::Verify::Checksums}).ok());
     std::vector<std::pair<uint32_t, uint32_t>> out;
@@ -192,13 +191,13 @@ TEST(BakeSeeds, SeedsAreMergedAndMayNotShadowTheBakesOwnArtifacts) {
   request.output_path = (dir / "s.cbk").string();
   request.stages = {"fabric_records"};
   request.seeds.put("some_stage_options", 42);  // read by no stage: harmless
-  const auto result = pipeline::bake(request);
+  const auto result = pipeline::bake(request, stages::bake_stages());
   EXPECT_EQ(result.run.artifacts.get<int>("some_stage_options"), 42);
   pipeline::BakeRequest clash = request;
   clash.seeds = {};
   clash.seeds.put("output", pipeline::OutputRequest{"elsewhere.cbk", false});
   try {
-    pipeline::bake(clash);
+    pipeline::bake(clash, stages::bake_stages());
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ExitCode::Internal);

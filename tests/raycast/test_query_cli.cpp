@@ -11,6 +11,7 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/stages/stages.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "tests/support/run_cli.hpp"
@@ -41,10 +42,10 @@ class QueryCli : public ::testing::Test {
     request.fabric = fabric;
     request.output_path = asset();
     request.stages = {"parallax", "visibility"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     request.output_path = bare();
     request.stages = {"feature_maps"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     fs::copy_file(asset(), corrupt());
     // Flip a byte in the last section's payload (its checksum no longer matches).
     std::fstream f(corrupt(), std::ios::in | std::ios::out | std::ios::binary);

@@ -15,6 +15,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/raycast/raycast_sections.hpp"
+#include "bake/stages/stages.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -397,7 +398,7 @@ TEST(RaycastStages, BakeWritesQueryableSectionsIdenticallyForAnyThreadCount) {
     request.output_path = (dir / (threads == 1 ? "t1.cbk" : "t2.cbk")).string();
     request.stages = {"parallax", "visibility"};
     request.run.threads = threads;
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     std::ifstream in(request.output_path, std::ios::binary);
     bytes.emplace_back(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }

@@ -20,6 +20,7 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/stages/stages.hpp"
 #include "common/image_io/image_io.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
@@ -52,13 +53,13 @@ class ExportRadiance : public ::testing::Test {
     request.fabric = fabric;
     request.output_path = asset();
     request.stages = {"compress"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     request.output_path = raw_asset();
     request.stages = {"tables"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     request.output_path = bare();
     request.stages = {"feature_maps"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     bytes_ = new std::vector<std::byte>(read_bytes(asset()));
     raw_bytes_ = new std::vector<std::byte>(read_bytes(raw_asset()));
   }

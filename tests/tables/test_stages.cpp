@@ -8,6 +8,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
+#include "bake/stages/stages.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
@@ -18,10 +19,7 @@ using namespace clothbake;
 namespace {
 
 std::vector<pipeline::Stage> my_stages() {
-  std::vector<pipeline::Stage> out;
-  for (auto& s : pipeline::registered_stages())
-    if (s.name == "cluster" || s.name == "tables") out.push_back(s);
-  return out;
+  return {stages::cluster_stage(), stages::tables_stage()};
 }
 
 pipeline::Artifacts seeded(double roughness) {
@@ -59,8 +57,8 @@ TEST(TablesStages, ProduceReadableSectionsDeterministically) {
   pipeline::RunOptions one, two;
   one.threads = 1;
   two.threads = 2;
-  const auto r1 = pipeline::run_pipeline({"tables"}, seeded(0.3), one, &stages);
-  const auto r2 = pipeline::run_pipeline({"tables"}, seeded(0.3), two, &stages);
+  const auto r1 = pipeline::run_pipeline({"tables"}, seeded(0.3), one, stages);
+  const auto r2 = pipeline::run_pipeline({"tables"}, seeded(0.3), two, stages);
   const auto b1 = asset_bytes(r1), b2 = asset_bytes(r2);
   EXPECT_TRUE(b1 == b2);
   reader::Asset asset;
@@ -81,7 +79,7 @@ TEST(TablesStages, ProduceReadableSectionsDeterministically) {
   EXPECT_EQ(cmeta["clusters"], 4);
   EXPECT_GT(cmeta["explained_fraction"].get<double>(), 0.99);  // four exact visibility types
   // A satin-like roughness against 8^2 bins: recorded as unresolved, with the bins it needs.
-  const auto narrow = pipeline::run_pipeline({"tables"}, seeded(0.05), two, &stages);
+  const auto narrow = pipeline::run_pipeline({"tables"}, seeded(0.05), two, stages);
   const auto& nmeta = narrow.artifacts.get<nlohmann::json>("metadata/tables");
   EXPECT_EQ(nmeta["resolved"], false);
   EXPECT_EQ(nmeta["radiance_dirs_needed"], 26);

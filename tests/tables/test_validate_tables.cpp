@@ -16,6 +16,7 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/stages/stages.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/compressed_layout.hpp"
 #include "formats/reader/parallax_sections.hpp"
@@ -117,11 +118,11 @@ class ValidateTables : public ::testing::Test {
     request.fabric = fabric;
     request.output_path = (dir / "packed.cbk").string();
     request.stages = {};  // everything: compressed tables, raw ones dropped
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     packed_ = new std::vector<formats::Section>(sections_of(read_bytes(request.output_path)));
     request.output_path = (dir / "raw.cbk").string();
     request.stages = {"tables", "parallax"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     raw_ = new std::vector<formats::Section>(sections_of(read_bytes(request.output_path)));
     fs::remove_all(dir);
   }

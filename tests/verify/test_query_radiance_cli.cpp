@@ -19,6 +19,7 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/stages/stages.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "tests/support/run_cli.hpp"
@@ -71,13 +72,13 @@ class QueryRadianceCli : public ::testing::Test {
     request.fabric = fabric;
     request.output_path = packed();
     request.stages = {"compress"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     request.output_path = raw_only();
     request.stages = {"tables"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
     request.output_path = bare();
     request.stages = {"feature_maps"};
-    pipeline::bake(request);
+    pipeline::bake(request, stages::bake_stages());
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);

@@ -1,36 +1,8 @@
 #include <algorithm>
-#include <mutex>
 
 #include "bake/pipeline/stage.hpp"
 
 namespace clothbake::pipeline {
-namespace {
-
-std::vector<Stage>& registry() {
-  static std::vector<Stage> stages;
-  return stages;
-}
-std::mutex& registry_mutex() {
-  static std::mutex m;
-  return m;
-}
-
-}  // namespace
-
-bool register_stage(Stage stage) {
-  std::lock_guard lock(registry_mutex());
-  registry().push_back(std::move(stage));
-  return true;
-}
-
-std::vector<Stage> registered_stages() {
-  std::lock_guard lock(registry_mutex());
-  auto stages = registry();
-  std::stable_sort(stages.begin(), stages.end(),
-                   [](const Stage& a, const Stage& b) { return a.name < b.name; });
-  return stages;
-}
-
 StageContext::StageContext(const Stage& stage, const Artifacts& available, Artifacts& produced,
                            const RunOptions& options, const std::vector<std::string>& order,
                            const std::vector<StageReport>& completed,

@@ -1,20 +1,19 @@
-// The `cluster` pipeline stage (paper Sec. 4.2): K-means on the per-texel visibility ASGs of the
+// The `cluster` stage (paper Sec. 4.2): K-means on the per-texel visibility ASGs of the
 // `visibility` stage -> label map and per-cluster mean visibility (sections cluster_labels and
 // cluster_mean_visibility), plus the artifact "clusters" (cluster::VisibilityClusters) for the
 // tables stage. Settings: [bake] clusters, seed, visibility_dirs (the mean-visibility grid).
-//
-// Attached as an INTERFACE source of clothbake_cluster (cluster/CMakeLists.txt) so that the
-// registration is compiled into every executable that links the library (docs/pipeline.md).
 #include <nlohmann/json.hpp>
 
-#include "fabric/fabric.hpp"
-#include "bake/pipeline/stage.hpp"
+#include "bake/stages/stages.hpp"
 #include "cluster/cluster_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
+#include "fabric/fabric.hpp"
 #include "model/asg.hpp"
 
-namespace clothbake::cluster {
+namespace clothbake::stages {
 namespace {
+
+using namespace cluster;  // the algorithm library this stage drives
 
 void run_cluster(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
@@ -32,14 +31,16 @@ void run_cluster(pipeline::StageContext& ctx) {
 }
 
 }  // namespace
-}  // namespace clothbake::cluster
 
-CLOTHBAKE_REGISTER_STAGE(cluster) {
-  clothbake::pipeline::Stage s;
+pipeline::Stage cluster_stage() {
+  pipeline::Stage s;
+  s.name = "cluster";
   s.description =
       "visibility clusters: K-means on the ASG lobes, label map, mean visibility (Sec. 4.2)";
   s.inputs = {"fabric", "visibility/asg_params"};
   s.outputs = {"clusters", "section/clusters", "metadata/clusters"};
-  s.run = clothbake::cluster::run_cluster;
+  s.run = run_cluster;
   return s;
 }
+
+}  // namespace clothbake::stages

@@ -1,18 +1,17 @@
-// The `parallax` pipeline stage (paper Sec. 3.2, 5.2): the fabric's height map in, the parallax
+// The `parallax` stage (paper Sec. 3.2, 5.2): the fabric's height map in, the parallax
 // table, its per-direction SATs and their parameters out (bake/raycast/parallax.hpp,
 // formats/reader/parallax_sections.hpp). Settings: [bake] parallax_dirs and parallax_min_cos.
-//
-// Attached as an INTERFACE source of clothbake_raycast (CMakeLists.txt), so that the registration
-// is compiled into every executable that links the library (docs/pipeline.md).
 #include <nlohmann/json.hpp>
 
-#include "fabric/fabric.hpp"
-#include "bake/pipeline/stage.hpp"
 #include "bake/raycast/parallax.hpp"
 #include "bake/raycast/raycast_sections.hpp"
+#include "bake/stages/stages.hpp"
+#include "fabric/fabric.hpp"
 
-namespace clothbake::raycast {
+namespace clothbake::stages {
 namespace {
+
+using namespace raycast;  // the algorithm library this stage drives
 
 void run_parallax(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
@@ -43,13 +42,15 @@ void run_parallax(pipeline::StageContext& ctx) {
 }
 
 }  // namespace
-}  // namespace clothbake::raycast
 
-CLOTHBAKE_REGISTER_STAGE(parallax) {
-  clothbake::pipeline::Stage s;
+pipeline::Stage parallax_stage() {
+  pipeline::Stage s;
+  s.name = "parallax";
   s.description = "parallax depth per texel and view direction, and its SATs (Sec. 3.2, 5.2)";
   s.inputs = {"fabric"};
   s.outputs = {"section/parallax", "metadata/parallax"};
-  s.run = clothbake::raycast::run_parallax;
+  s.run = run_parallax;
   return s;
 }
+
+}  // namespace clothbake::stages

@@ -1,24 +1,23 @@
-// The `tables` pipeline stage (paper Sec. 4.3): the raw Integral-Radiance tables of every lobe the
+// The `tables` stage (paper Sec. 4.3): the raw Integral-Radiance tables of every lobe the
 // fabric needs (specular always; the gap table when some texel has I(x) < 1), per visibility
 // cluster and half-vector bin, as exact fixed-point SATs (sections radiance_tables; layout in
 // formats/reader/radiance_layout.hpp). Settings: [bake] radiance_dirs. Warns when the bins cannot
 // resolve the narrowest lobe (2-sigma rule) and says which radiance_dirs would.
-//
-// Attached as an INTERFACE source of clothbake_tables (from cluster/CMakeLists.txt, which is
-// configured after the pipeline and the cluster library exist).
 #include <chrono>
 #include <nlohmann/json.hpp>
 
-#include "fabric/fabric.hpp"
-#include "bake/pipeline/stage.hpp"
+#include "bake/stages/stages.hpp"
 #include "bake/tables/fixed_point_sat.hpp"
 #include "bake/tables/half_vector_bins.hpp"
 #include "bake/tables/radiance_fill.hpp"
 #include "bake/tables/radiance_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
+#include "fabric/fabric.hpp"
 
-namespace clothbake::tables {
+namespace clothbake::stages {
 namespace {
+
+using namespace tables;  // the algorithm library this stage drives
 
 void run_tables(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
@@ -69,13 +68,15 @@ void run_tables(pipeline::StageContext& ctx) {
 }
 
 }  // namespace
-}  // namespace clothbake::tables
 
-CLOTHBAKE_REGISTER_STAGE(tables) {
-  clothbake::pipeline::Stage s;
+pipeline::Stage tables_stage() {
+  pipeline::Stage s;
+  s.name = "tables";
   s.description = "Integral-Radiance tables per lobe, cluster and half-vector bin (Sec. 4.3)";
   s.inputs = {"fabric", "clusters"};
   s.outputs = {"section/tables", "metadata/tables"};
-  s.run = clothbake::tables::run_tables;
+  s.run = run_tables;
   return s;
 }
+
+}  // namespace clothbake::stages

@@ -1,36 +1,27 @@
-// The stages of the first bake (issue 4): load_fabric -> fabric_records, feature_maps -> write.
-//
-// This file is an INTERFACE source of clothbake_pipeline (see CMakeLists.txt and stage.hpp): it is
-// compiled into every executable that links the library, so its registrations are never dropped.
+// The `write` stage (always): collects every "section/*", "metadata/*" and "supersedes/*"
+// artifact of the stages that ran, adds the metadata section (provenance, stage order, each
+// stage's parameters) and writes the asset atomically through formats/writer; publishes the
+// asset's summary ("asset", pipeline::AssetSummary) for the bake report.
 #include <map>
 
-#include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
-#include "bake/pipeline/stage.hpp"
+#include "bake/stages/stages.hpp"
+#include "common/error.hpp"
 #include "common/version.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
-#include "fabric/fabric_sections.hpp"
 
-namespace clothbake::pipeline::core_stages {
+namespace clothbake::stages {
 namespace {
 
 using formats::Section;
-
-void load_fabric_stage(StageContext& ctx) {
-  ctx.output("fabric", load_fabric(ctx.input<std::string>("fabric_path")));
-}
-
-void fabric_records_stage(StageContext& ctx) {
-  ctx.output("section/fabric_records",
-             fabric_record_sections(ctx.input<Fabric>("fabric")));
-}
-
-void feature_maps_stage(StageContext& ctx) {
-  ctx.output("section/feature_maps",
-             feature_map_sections(ctx.input<Fabric>("fabric").maps));
-}
+using pipeline::AssetSummary;
+using pipeline::hex64;
+using pipeline::OutputRequest;
+using pipeline::SectionSummary;
+using pipeline::StageContext;
 
 // Metadata: provenance and parameters, deterministic unless timings are asked for.
 nlohmann::json metadata(StageContext& ctx) {
@@ -73,7 +64,7 @@ std::map<std::string, std::string> superseded_sections(StageContext& ctx) {
   return out;
 }
 
-void write_stage(StageContext& ctx) {
+void run_write(StageContext& ctx) {
   const auto& request = ctx.input<OutputRequest>("output");
   const auto superseded = superseded_sections(ctx);
   // References to the sections the stages hold (no copy of the payloads: the raw tables alone can
@@ -127,46 +118,17 @@ void write_stage(StageContext& ctx) {
 }
 
 }  // namespace
-}  // namespace clothbake::pipeline::core_stages
 
-using namespace clothbake::pipeline::core_stages;
-using clothbake::pipeline::Stage;
-
-CLOTHBAKE_REGISTER_STAGE(load_fabric) {
-  Stage s;
-  s.description = "read and validate the fabric description";
-  s.inputs = {"fabric_path"};
-  s.outputs = {"fabric"};
-  s.run = load_fabric_stage;
-  return s;
-}
-
-CLOTHBAKE_REGISTER_STAGE(fabric_records) {
-  Stage s;
-  s.description = "fabric info and yarn material records";
-  s.inputs = {"fabric"};
-  s.outputs = {"section/fabric_records"};
-  s.always = true;
-  s.run = fabric_records_stage;
-  return s;
-}
-
-CLOTHBAKE_REGISTER_STAGE(feature_maps) {
-  Stage s;
-  s.description = "per-texel feature maps (height, tangent, normal, gap, yarn id, albedo)";
-  s.inputs = {"fabric"};
-  s.outputs = {"section/feature_maps"};
-  s.run = feature_maps_stage;
-  return s;
-}
-
-CLOTHBAKE_REGISTER_STAGE(write) {
-  Stage s;
+pipeline::Stage write_stage() {
+  pipeline::Stage s;
+  s.name = "write";
   s.description = "write the asset atomically (temporary file, fsync, rename)";
   s.inputs = {"fabric", "output"};
   s.collects = {"section/", "metadata/", "supersedes/"};
   s.outputs = {"asset"};
   s.always = true;
-  s.run = write_stage;
+  s.run = run_write;
   return s;
 }
+
+}  // namespace clothbake::stages

@@ -1,20 +1,19 @@
-// The `visibility` pipeline stage (paper Sec. 3.1, 4.2): the fabric's height map in, one ASG per
+// The `visibility` stage (paper Sec. 3.1, 4.2): the fabric's height map in, one ASG per
 // texel with its fit error out (bake/raycast/visibility.hpp,
 // formats/reader/visibility_sections.hpp), plus the decoded lobes as the artifact
 // "visibility/asg_params" (std::vector<model::AsgParams<float>>, texel order) for the visibility
 // clustering. Settings: [bake] visibility_dirs.
-//
-// Attached as an INTERFACE source of clothbake_raycast (CMakeLists.txt), so that the registration
-// is compiled into every executable that links the library (docs/pipeline.md).
 #include <nlohmann/json.hpp>
 
-#include "fabric/fabric.hpp"
-#include "bake/pipeline/stage.hpp"
 #include "bake/raycast/raycast_sections.hpp"
 #include "bake/raycast/visibility.hpp"
+#include "bake/stages/stages.hpp"
+#include "fabric/fabric.hpp"
 
-namespace clothbake::raycast {
+namespace clothbake::stages {
 namespace {
+
+using namespace raycast;  // the algorithm library this stage drives
 
 void run_visibility(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
@@ -44,13 +43,15 @@ void run_visibility(pipeline::StageContext& ctx) {
 }
 
 }  // namespace
-}  // namespace clothbake::raycast
 
-CLOTHBAKE_REGISTER_STAGE(visibility) {
-  clothbake::pipeline::Stage s;
+pipeline::Stage visibility_stage() {
+  pipeline::Stage s;
+  s.name = "visibility";
   s.description = "per-texel visibility sampled by ray casting, fitted by one ASG (Sec. 3.1, 4.2)";
   s.inputs = {"fabric"};
   s.outputs = {"section/visibility", "metadata/visibility", "visibility/asg_params"};
-  s.run = clothbake::raycast::run_visibility;
+  s.run = run_visibility;
   return s;
 }
+
+}  // namespace clothbake::stages

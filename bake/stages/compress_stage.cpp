@@ -1,4 +1,4 @@
-// The `compress` pipeline stage (paper Sec. 4.4): the raw Integral-Radiance table sections of the
+// The `compress` stage (paper Sec. 4.4): the raw Integral-Radiance table sections of the
 // `tables` stage and the label map of the `cluster` stage (artifact "clusters") in, C-PCA
 // compressed sections out (compress/compressed_set.hpp), one kind after the other, with the
 // fabric's [bake] settings overridden by the bake command's request (artifact
@@ -7,14 +7,10 @@
 // Unless the raw tables are kept, the stage also publishes "supersedes/compress" =
 // {"section/tables"} when it produced compressed tables: the write stage then leaves the raw
 // tables out of the asset (docs/pipeline.md, "Superseded sections"; docs/compression.md, "Bake").
-//
-// Attached as an INTERFACE source of clothbake_compress (see CMakeLists.txt) so that the
-// registration is compiled into every executable that links the library.
 #include <chrono>
 #include <nlohmann/json.hpp>
 
-#include "fabric/fabric.hpp"
-#include "bake/pipeline/stage.hpp"
+#include "bake/stages/stages.hpp"
 #include "bake/tables/radiance_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
@@ -22,10 +18,13 @@
 #include "compress/compress_settings.hpp"
 #include "compress/compressed_set.hpp"
 #include "compress/directional_texels.hpp"
+#include "fabric/fabric.hpp"
 #include "formats/writer/asset_writer.hpp"
 
-namespace clothbake::compress {
+namespace clothbake::stages {
 namespace {
+
+using namespace compress;  // the algorithm library this stage drives
 
 void run_compress(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
@@ -42,7 +41,7 @@ void run_compress(pipeline::StageContext& ctx) {
   if (!settings.enabled) {
     ctx.output("section/compress", std::move(out));
     ctx.output("metadata/compress", meta);
-    ctx.output(kSupersedesArtifact, std::vector<std::string>{});
+    ctx.output(kCompressSupersedesArtifact, std::vector<std::string>{});
     return;
   }
   const auto& raw = ctx.input<std::vector<formats::Section>>("section/tables");
@@ -91,19 +90,21 @@ void run_compress(pipeline::StageContext& ctx) {
   meta["keep_raw"] = !drop_raw;
   ctx.output("section/compress", std::move(out));
   ctx.output("metadata/compress", meta);
-  ctx.output(kSupersedesArtifact,
+  ctx.output(kCompressSupersedesArtifact,
              drop_raw ? std::vector<std::string>{"section/tables"} : std::vector<std::string>{});
 }
 
 }  // namespace
-}  // namespace clothbake::compress
 
-CLOTHBAKE_REGISTER_STAGE(compress) {
-  clothbake::pipeline::Stage s;
+pipeline::Stage compress_stage() {
+  pipeline::Stage s;
+  s.name = "compress";
   s.description = "C-PCA compression of the Integral-Radiance tables (paper Sec. 4.4)";
   s.inputs = {"fabric", "section/tables", "clusters"};
-  s.outputs = {"section/compress", "metadata/compress", clothbake::compress::kSupersedesArtifact};
-  s.collects = {clothbake::compress::kCompressSettingsArtifact};
-  s.run = clothbake::compress::run_compress;
+  s.outputs = {"section/compress", "metadata/compress", kCompressSupersedesArtifact};
+  s.collects = {kCompressSettingsArtifact};
+  s.run = run_compress;
   return s;
 }
+
+}  // namespace clothbake::stages
