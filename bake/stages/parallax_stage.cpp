@@ -1,12 +1,12 @@
 // The `parallax` stage (paper Sec. 3.2, 5.2): the fabric's height map in, the parallax
-// table, its per-direction SATs and their parameters out (bake/raycast/parallax.hpp,
+// table, its per-direction SATs and their parameters out (raycast/parallax.hpp,
 // formats/reader/parallax_sections.hpp). Settings: [bake] parallax_dirs and parallax_min_cos.
 #include <nlohmann/json.hpp>
 
-#include "bake/raycast/parallax.hpp"
-#include "bake/raycast/raycast_sections.hpp"
 #include "bake/stages/stages.hpp"
 #include "fabric/fabric.hpp"
+#include "raycast/parallax.hpp"
+#include "raycast/raycast_sections.hpp"
 
 namespace clothbake::stages {
 namespace {

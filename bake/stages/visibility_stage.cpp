@@ -1,14 +1,14 @@
 // The `visibility` stage (paper Sec. 3.1, 4.2): the fabric's height map in, one ASG per
-// texel with its fit error out (bake/raycast/visibility.hpp,
+// texel with its fit error out (raycast/visibility.hpp,
 // formats/reader/visibility_sections.hpp), plus the decoded lobes as the artifact
 // "visibility/asg_params" (std::vector<model::AsgParams<float>>, texel order) for the visibility
 // clustering. Settings: [bake] visibility_dirs.
 #include <nlohmann/json.hpp>
 
-#include "bake/raycast/raycast_sections.hpp"
-#include "bake/raycast/visibility.hpp"
 #include "bake/stages/stages.hpp"
 #include "fabric/fabric.hpp"
+#include "raycast/raycast_sections.hpp"
+#include "raycast/visibility.hpp"
 
 namespace clothbake::stages {
 namespace {

@@ -5,7 +5,7 @@
 //
 // For each fabric (default: the example plain, twill and satin), samples the visibility of every
 // texel on the 32 x 32 hemisphere grid and fits it four ways:
-//   bake     : the production fit (bake/raycast/asg_fit.hpp, default options);
+//   bake     : the production fit (raycast/asg_fit.hpp, default options);
 //   long     : the same starts with 64 Levenberg-Marquardt steps instead of 8;
 //   restarts : plus 24 random starts, each refined by 64 steps, best kept (an estimate of the best
 //              single lobe this model can reach);
@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/raycast/asg_fit.hpp"
-#include "bake/raycast/visibility.hpp"
+#include "raycast/asg_fit.hpp"
+#include "raycast/visibility.hpp"
 #include "model/directions.hpp"
 
 using namespace clothbake;

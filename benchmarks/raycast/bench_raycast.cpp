@@ -8,8 +8,8 @@
 #include <chrono>
 #include <map>
 
-#include "bake/raycast/parallax.hpp"
-#include "bake/raycast/visibility.hpp"
+#include "raycast/parallax.hpp"
+#include "raycast/visibility.hpp"
 #include "common/diagnostics.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
 

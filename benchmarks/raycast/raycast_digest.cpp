@@ -13,8 +13,8 @@
 #include <cstdlib>
 #include <vector>
 
-#include "bake/raycast/parallax.hpp"
-#include "bake/raycast/visibility.hpp"
+#include "raycast/parallax.hpp"
+#include "raycast/visibility.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
 
 namespace {

@@ -1,4 +1,4 @@
-// The ASG model (model/asg.hpp) and the per-texel ASG fit (bake/raycast/asg_fit.hpp).
+// The ASG model (model/asg.hpp) and the per-texel ASG fit (raycast/asg_fit.hpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "bake/raycast/asg_fit.hpp"
+#include "raycast/asg_fit.hpp"
 #include "model/asg.hpp"
 #include "model/directions.hpp"
 

@@ -1,4 +1,4 @@
-// Parallax tables (bake/raycast/parallax.hpp): closed forms on a flat map and a step, the exact
+// Parallax tables (raycast/parallax.hpp): closed forms on a flat map and a step, the exact
 // 1-D reference on a sine, brute force on isolated spikes, tall fields, thread-count determinism,
 // quantisation bound, SATs, bad settings.
 #include <gtest/gtest.h>
@@ -8,11 +8,11 @@
 #include <cmath>
 #include <random>
 
-#include "bake/raycast/heightfield_scene.hpp"
-#include "bake/raycast/parallax.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/directions.hpp"
+#include "raycast/heightfield_scene.hpp"
+#include "raycast/parallax.hpp"
 #include "tests/raycast/reference.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
 

@@ -1,12 +1,12 @@
-// The periodic height field in Embree (bake/raycast/heightfield_scene.hpp) against independent
+// The periodic height field in Embree (raycast/heightfield_scene.hpp) against independent
 // reference ray casts: a flat plane in closed form, 1-D profiles exactly, 2-D fields by brute
 // force; rays that cross many tiles (segments) for several neighbourhood sizes.
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "bake/raycast/heightfield_scene.hpp"
 #include "common/error.hpp"
+#include "raycast/heightfield_scene.hpp"
 #include "tests/raycast/reference.hpp"
 
 using namespace clothbake;

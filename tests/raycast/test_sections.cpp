@@ -14,12 +14,12 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
-#include "bake/raycast/raycast_sections.hpp"
 #include "bake/stages/stages.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
+#include "raycast/raycast_sections.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
 
 using namespace clothbake;

@@ -1,4 +1,4 @@
-// Visibility sampling and the per-texel ASG fit (bake/raycast/visibility.hpp): the whole sky on a
+// Visibility sampling and the per-texel ASG fit (raycast/visibility.hpp): the whole sky on a
 // flat map, the horizon of a step in closed form, the exact 1-D reference on a sine, vertical
 // walls, warnings, thread-count determinism; and the CGAL cross-check of Embree's hits.
 #include <gtest/gtest.h>
@@ -7,11 +7,11 @@
 #include <cmath>
 #include <cstring>
 
-#include "bake/raycast/cgal_check.hpp"
-#include "bake/raycast/visibility.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/directions.hpp"
+#include "raycast/visibility.hpp"
+#include "tests/raycast/cgal_check.hpp"
 #include "tests/raycast/reference.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
 

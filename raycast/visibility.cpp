@@ -1,4 +1,4 @@
-#include "bake/raycast/visibility.hpp"
+#include "raycast/visibility.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,13 +12,13 @@
 #include <limits>
 #include <string>
 
-#include "bake/raycast/asg_fit.hpp"
-#include "bake/raycast/height_range.hpp"
-#include "bake/raycast/heightfield_scene.hpp"
-#include "bake/raycast/texel_blocks.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/directions.hpp"
+#include "raycast/asg_fit.hpp"
+#include "raycast/height_range.hpp"
+#include "raycast/heightfield_scene.hpp"
+#include "raycast/texel_blocks.hpp"
 
 namespace clothbake::raycast {
 

@@ -1,4 +1,4 @@
-#include "bake/raycast/raycast_sections.hpp"
+#include "raycast/raycast_sections.hpp"
 
 #include <cstring>
 

@@ -1,4 +1,4 @@
-#include "bake/raycast/heightfield_scene.hpp"
+#include "raycast/heightfield_scene.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -68,7 +68,7 @@ void validate_visibility_settings(const VisibilitySettings& settings);
 VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings,
                                     const std::function<void(double)>& progress = {});
 
-// Fits one ASG per texel (bake/raycast/asg_fit.hpp), packs it, and records the RMS error of the
+// Fits one ASG per texel (raycast/asg_fit.hpp), packs it, and records the RMS error of the
 // packed lobe. Warns once, naming the count and the worst texel, when texels exceed
 // settings.fit_warn_rms.
 VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const VisibilitySettings& settings,

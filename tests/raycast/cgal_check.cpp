@@ -1,4 +1,4 @@
-#include "bake/raycast/cgal_check.hpp"
+#include "tests/raycast/cgal_check.hpp"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -11,9 +11,9 @@
 #include <random>
 #include <sstream>
 
-#include "bake/raycast/heightfield_scene.hpp"
 #include "common/error.hpp"
 #include "model/directions.hpp"
+#include "raycast/heightfield_scene.hpp"
 
 namespace clothbake::raycast {
 namespace {

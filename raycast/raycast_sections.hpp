@@ -4,10 +4,10 @@
 
 #include <vector>
 
-#include "bake/raycast/parallax.hpp"
-#include "bake/raycast/visibility.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/asg.hpp"
+#include "raycast/parallax.hpp"
+#include "raycast/visibility.hpp"
 
 namespace clothbake::raycast {
 

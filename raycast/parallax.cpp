@@ -1,4 +1,4 @@
-#include "bake/raycast/parallax.hpp"
+#include "raycast/parallax.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -9,12 +9,12 @@
 #include <limits>
 #include <string>
 
-#include "bake/raycast/height_range.hpp"
-#include "bake/raycast/heightfield_scene.hpp"
-#include "bake/raycast/texel_blocks.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/directions.hpp"
+#include "raycast/height_range.hpp"
+#include "raycast/heightfield_scene.hpp"
+#include "raycast/texel_blocks.hpp"
 
 namespace clothbake::raycast {
 namespace {

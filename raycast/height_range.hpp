@@ -7,8 +7,8 @@
 #include <limits>
 #include <string>
 
-#include "fabric/fabric.hpp"
 #include "common/error.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::raycast {
 

@@ -1,4 +1,4 @@
-#include "bake/raycast/asg_fit.hpp"
+#include "raycast/asg_fit.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
