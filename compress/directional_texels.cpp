@@ -7,10 +7,10 @@
 #include <cmath>
 #include <string>
 
-#include "bake/tables/half_vector_bins.hpp"
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "common/error.hpp"
+#include "tables/half_vector_bins.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 namespace clothbake::compress {
 namespace {

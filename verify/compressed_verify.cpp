@@ -12,14 +12,14 @@
 #include <span>
 #include <sstream>
 
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
-#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress/directional_texels.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
+#include "model/splitmix64.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 #include "verify/footprint_sampling.hpp"
 
 namespace clothbake::verify {

@@ -10,13 +10,13 @@
 #include <set>
 #include <sstream>
 
-#include "bake/tables/half_vector_bins.hpp"
-#include "bake/tables/radiance_fill.hpp"
 #include "common/error.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/open_asset.hpp"
 #include "model/sggx.hpp"
+#include "tables/half_vector_bins.hpp"
+#include "tables/radiance_fill.hpp"
 #include "verify/footprint_sampling.hpp"
 
 namespace clothbake::verify {

@@ -31,13 +31,13 @@
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
 #include "bake/stages/stages.hpp"
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "compress/compression_report.hpp"
 #include "formats/writer/asset_writer.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 namespace clothbake::cli {
 namespace {

@@ -11,7 +11,6 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/stages.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -20,6 +19,7 @@
 #include "compress/directional_texels.hpp"
 #include "fabric/fabric.hpp"
 #include "formats/writer/asset_writer.hpp"
+#include "tables/radiance_sections.hpp"
 
 namespace clothbake::stages {
 namespace {

@@ -7,12 +7,12 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/stages.hpp"
-#include "bake/tables/fixed_point_sat.hpp"
-#include "bake/tables/half_vector_bins.hpp"
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "fabric/fabric.hpp"
+#include "tables/fixed_point_sat.hpp"
+#include "tables/half_vector_bins.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 namespace clothbake::stages {
 namespace {

@@ -15,14 +15,14 @@
 #include <string>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
-#include "model/splitmix64.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/compressed_set.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
+#include "model/splitmix64.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 namespace clothbake::compress {
 namespace {

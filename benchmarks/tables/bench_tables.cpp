@@ -1,4 +1,4 @@
-// Integral-Radiance tables (bake/tables, formats/reader/radiance_*): fill throughput (SGGX D
+// Integral-Radiance tables (tables/, formats/reader/radiance_*): fill throughput (SGGX D
 // evaluations per second), fixed-point SAT build, and raw footprint queries per second.
 //   build-*/bin/bench_tables                          (all)
 //   build-*/bin/bench_tables --benchmark_filter=Fill  (the 256^2 x 32^2 x 8 clusters fill)
@@ -11,13 +11,13 @@
 #include <random>
 #include <vector>
 
-#include "bake/tables/fixed_point_sat.hpp"
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
+#include "tables/fixed_point_sat.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

@@ -23,8 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "bake/tables/fixed_point_sat.hpp"
-#include "bake/tables/radiance_fill.hpp"
+#include "tables/fixed_point_sat.hpp"
+#include "tables/radiance_fill.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

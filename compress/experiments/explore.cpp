@@ -6,10 +6,10 @@
 #include <cstring>
 #include <random>
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/tables/half_vector_bins.hpp"
-#include "bake/tables/radiance_fill.hpp"
 #include "cluster/kmeans.hpp"
 #include "compress/randomized_svd.hpp"
+#include "tables/half_vector_bins.hpp"
+#include "tables/radiance_fill.hpp"
 
 using namespace clothbake;
 using Clock = std::chrono::steady_clock;

@@ -11,14 +11,14 @@ static double cpu() {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "cluster/kmeans.hpp"
 #include "compress/compressed_set.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 using namespace clothbake;
 using Clock = std::chrono::steady_clock;

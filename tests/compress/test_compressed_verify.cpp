@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/tables/radiance_fill.hpp"
 #include "common/error.hpp"
 #include "compress_test_util.hpp"
+#include "tables/radiance_fill.hpp"
 #include "verify/compressed_verify.hpp"
 
 namespace clothbake::compress {

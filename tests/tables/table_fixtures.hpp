@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "bake/tables/radiance_fill.hpp"
+#include "tables/radiance_fill.hpp"
 
 namespace clothbake::tables_testing {
 using namespace clothbake::tables;

@@ -1,4 +1,4 @@
-// Exact fixed-point SATs (bake/tables/fixed_point_sat.hpp): integer exactness, the quantisation
+// Exact fixed-point SATs (tables/fixed_point_sat.hpp): integer exactness, the quantisation
 // bound for every rectangle, element-width selection, totals within range.
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "bake/tables/fixed_point_sat.hpp"
 #include "common/error.hpp"
+#include "tables/fixed_point_sat.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

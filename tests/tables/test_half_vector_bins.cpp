@@ -1,11 +1,11 @@
-// Half-vector bin quadrature and the 2-sigma rule (bake/tables/half_vector_bins.hpp).
+// Half-vector bin quadrature and the 2-sigma rule (tables/half_vector_bins.hpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "bake/tables/half_vector_bins.hpp"
 #include "common/error.hpp"
 #include "model/directions.hpp"
+#include "tables/half_vector_bins.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

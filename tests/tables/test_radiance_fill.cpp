@@ -1,4 +1,4 @@
-// The Integral-Radiance table fill (bake/tables/radiance_fill.hpp): masks by cluster, bin averages
+// The Integral-Radiance table fill (tables/radiance_fill.hpp): masks by cluster, bin averages
 // against closed forms and fine quadrature, stored kinds and clusters, determinism, errors.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -6,11 +6,11 @@
 #include <cmath>
 #include <vector>
 
-#include "bake/tables/radiance_fill.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/sggx.hpp"
 #include "table_fixtures.hpp"
+#include "tables/radiance_fill.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

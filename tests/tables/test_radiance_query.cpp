@@ -9,13 +9,13 @@
 #include <random>
 #include <vector>
 
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
 #include "table_fixtures.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

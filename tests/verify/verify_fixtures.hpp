@@ -6,11 +6,11 @@
 #include <vector>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/tables/radiance_fill.hpp"
-#include "bake/tables/radiance_sections.hpp"
 #include "cluster/cluster_sections.hpp"
-#include "formats/writer/asset_writer.hpp"
 #include "fabric/fabric_sections.hpp"
+#include "formats/writer/asset_writer.hpp"
+#include "tables/radiance_fill.hpp"
+#include "tables/radiance_sections.hpp"
 
 namespace clothbake::verify_testing {
 

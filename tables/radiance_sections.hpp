@@ -5,8 +5,8 @@
 #include <span>
 #include <vector>
 
-#include "bake/tables/radiance_fill.hpp"
 #include "formats/writer/asset_writer.hpp"
+#include "tables/radiance_fill.hpp"
 
 namespace clothbake::tables {
 

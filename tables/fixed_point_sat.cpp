@@ -1,5 +1,5 @@
 // Exact fixed-point SAT construction (fixed_point_sat.hpp).
-#include "bake/tables/fixed_point_sat.hpp"
+#include "tables/fixed_point_sat.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "fabric/fabric.hpp"
-#include "bake/tables/half_vector_bins.hpp"
 #include "formats/reader/radiance_layout.hpp"
+#include "tables/half_vector_bins.hpp"
 
 namespace clothbake::tables {
 

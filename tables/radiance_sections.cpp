@@ -1,5 +1,5 @@
 // Raw Integral-Radiance table sections (radiance_sections.hpp).
-#include "bake/tables/radiance_sections.hpp"
+#include "tables/radiance_sections.hpp"
 
 #include <cstring>
 

@@ -1,5 +1,5 @@
 // Bin-averaged Integral-Radiance table fill with exact fixed-point SATs (radiance_fill.hpp).
-#include "bake/tables/radiance_fill.hpp"
+#include "tables/radiance_fill.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -9,11 +9,11 @@
 #include <cstring>
 #include <sstream>
 
-#include "bake/tables/fixed_point_sat.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/sggx.hpp"
 #include "model/sggx_batch.hpp"
+#include "tables/fixed_point_sat.hpp"
 
 namespace clothbake::tables {
 namespace {

@@ -1,5 +1,5 @@
 // Half-vector bins, their quadrature and the 2-sigma rule (half_vector_bins.hpp).
-#include "bake/tables/half_vector_bins.hpp"
+#include "tables/half_vector_bins.hpp"
 
 #include <algorithm>
 #include <cmath>
