@@ -13,10 +13,10 @@
 #include <sstream>
 
 #include "bake/cli/command.hpp"
-#include "bake/sheen/sheen_fit.hpp"
-#include "bake/sheen/sheen_table_writer.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
+#include "sheen/sheen_fit.hpp"
+#include "sheen/sheen_table_writer.hpp"
 
 namespace clothbake::cli {
 namespace {

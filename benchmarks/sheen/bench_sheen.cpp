@@ -1,15 +1,15 @@
 // Speed of the sheen layer: what a renderer pays per shading call (model/sheen.hpp) and what the
-// fit pays (bake/sheen: one simulated path, one LTC objective evaluation). Figures in
+// fit pays (sheen/: one simulated path, one LTC objective evaluation). Figures in
 // docs/performance.md and docs/sheen.md.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <vector>
 
-#include "bake/sheen/ltc_fit.hpp"
-#include "bake/sheen/rng.hpp"
-#include "bake/sheen/sheen_layer.hpp"
 #include "model/sheen.hpp"
+#include "sheen/ltc_fit.hpp"
+#include "sheen/rng.hpp"
+#include "sheen/sheen_layer.hpp"
 
 namespace {
 

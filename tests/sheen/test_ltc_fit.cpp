@@ -1,12 +1,12 @@
-// The LTC lobe fit (bake/sheen/ltc_fit.hpp): its quadrature is a probability distribution, and it
+// The LTC lobe fit (sheen/ltc_fit.hpp): its quadrature is a probability distribution, and it
 // recovers known lobes from exact bin probabilities and from sampled histograms.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "bake/sheen/ltc_fit.hpp"
-#include "bake/sheen/rng.hpp"
 #include "model/sheen.hpp"
+#include "sheen/ltc_fit.hpp"
+#include "sheen/rng.hpp"
 
 using namespace clothbake::sheen;
 using clothbake::model::SheenLtc;

@@ -1,10 +1,10 @@
-// Nelder-Mead (bake/sheen/nelder_mead.hpp) on functions with known minima.
+// Nelder-Mead (sheen/nelder_mead.hpp) on functions with known minima.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
-#include "bake/sheen/nelder_mead.hpp"
+#include "sheen/nelder_mead.hpp"
 
 using clothbake::sheen::nelder_mead;
 using clothbake::sheen::NelderMeadOptions;

@@ -1,4 +1,4 @@
-// The fibre-like SGGX distribution of the sheen layer (bake/sheen/sggx_fibre.hpp): normalisation
+// The fibre-like SGGX distribution of the sheen layer (sheen/sggx_fibre.hpp): normalisation
 // of D and of the phase function by quadrature, and its samplers against the closed forms by
 // chi-square.
 #include <gtest/gtest.h>
@@ -7,8 +7,8 @@
 #include <functional>
 #include <vector>
 
-#include "bake/sheen/rng.hpp"
-#include "bake/sheen/sggx_fibre.hpp"
+#include "sheen/rng.hpp"
+#include "sheen/sggx_fibre.hpp"
 #include "sheen_test_util.hpp"
 
 using namespace clothbake::sheen;

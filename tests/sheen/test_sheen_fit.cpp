@@ -1,4 +1,4 @@
-// The table fit behind `clothbake fit-sheen` (bake/sheen/sheen_fit.hpp, sheen_table_writer.hpp):
+// The table fit behind `clothbake fit-sheen` (sheen/sheen_fit.hpp, sheen_table_writer.hpp):
 // determinism across thread counts, the header format, reproduction of the committed table's
 // albedos, atomic writing, and the CLI's error handling.
 #include <gtest/gtest.h>
@@ -12,10 +12,10 @@
 #include <sstream>
 #include <string>
 
-#include "bake/sheen/sheen_fit.hpp"
-#include "bake/sheen/sheen_table_writer.hpp"
 #include "common/error.hpp"
 #include "model/sheen_table.hpp"
+#include "sheen/sheen_fit.hpp"
+#include "sheen/sheen_table_writer.hpp"
 #include "tests/support/run_cli.hpp"
 
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-// The Monte Carlo simulation of the sheen layer (bake/sheen/sheen_layer.hpp) against analytic
+// The Monte Carlo simulation of the sheen layer (sheen/sheen_layer.hpp) against analytic
 // single-scattering results, the exact R = 0 at roughness 0, and its bookkeeping.
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "bake/sheen/sheen_layer.hpp"
 #include "model/spongecake.hpp"
+#include "sheen/sheen_layer.hpp"
 #include "sheen_test_util.hpp"
 
 using namespace clothbake::sheen;

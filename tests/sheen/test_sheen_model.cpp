@@ -8,10 +8,10 @@
 #include <limits>
 #include <vector>
 
-#include "bake/sheen/ltc_fit.hpp"
-#include "bake/sheen/rng.hpp"
-#include "bake/sheen/sheen_layer.hpp"
 #include "model/sheen.hpp"
+#include "sheen/ltc_fit.hpp"
+#include "sheen/rng.hpp"
+#include "sheen/sheen_layer.hpp"
 #include "sheen_test_util.hpp"
 
 namespace model = clothbake::model;
@@ -206,7 +206,7 @@ TEST(SheenTable, PoleRowIsSymmetric) {
     EXPECT_EQ(table::kTable[j][table::kCosCount - 1][1], 0.0f) << j;
 }
 
-// Roughness 0 reflects nothing: R = 0 exactly on that row (bake/sheen/sheen_layer.cpp).
+// Roughness 0 reflects nothing: R = 0 exactly on that row (sheen/sheen_layer.cpp).
 TEST(SheenTable, RoughnessZeroRowHasZeroAlbedo) {
   for (int i = 0; i < table::kCosCount; ++i)
     EXPECT_EQ(table::kTable[0][i][2], 0.0f) << i;

@@ -14,7 +14,7 @@
 #include <array>
 #include <vector>
 
-#include "bake/sheen/sheen_layer.hpp"
+#include "sheen/sheen_layer.hpp"
 
 namespace clothbake::sheen {
 

@@ -1,4 +1,4 @@
-#include "bake/sheen/sheen_table_writer.hpp"
+#include "sheen/sheen_table_writer.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>

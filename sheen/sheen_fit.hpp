@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "bake/sheen/sheen_layer.hpp"
+#include "sheen/sheen_layer.hpp"
 
 namespace clothbake::sheen {
 

@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "bake/sheen/sggx_fibre.hpp"
+#include "sheen/sggx_fibre.hpp"
 
 namespace clothbake::sheen {
 

@@ -1,4 +1,4 @@
-#include "bake/sheen/nelder_mead.hpp"
+#include "sheen/nelder_mead.hpp"
 
 #include <algorithm>
 #include <cmath>

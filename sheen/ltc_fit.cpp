@@ -1,10 +1,10 @@
-#include "bake/sheen/ltc_fit.hpp"
+#include "sheen/ltc_fit.hpp"
 
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "bake/sheen/nelder_mead.hpp"
+#include "sheen/nelder_mead.hpp"
 
 namespace clothbake::sheen {
 namespace {

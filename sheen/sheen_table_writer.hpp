@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "bake/sheen/sheen_fit.hpp"
+#include "sheen/sheen_fit.hpp"
 
 namespace clothbake::sheen {
 

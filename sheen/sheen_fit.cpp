@@ -1,4 +1,4 @@
-#include "bake/sheen/sheen_fit.hpp"
+#include "sheen/sheen_fit.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -9,7 +9,7 @@
 #include <chrono>
 #include <stdexcept>
 
-#include "bake/sheen/ltc_fit.hpp"
+#include "sheen/ltc_fit.hpp"
 
 namespace clothbake::sheen {
 

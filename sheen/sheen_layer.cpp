@@ -12,7 +12,7 @@
 // Difference from the published fitting code: it stops after 16 bounces and classifies the last
 // direction; here paths are followed until they leave the slab (the cap max_order is never reached
 // in practice and truncated paths are reported, not counted as reflected).
-#include "bake/sheen/sheen_layer.hpp"
+#include "sheen/sheen_layer.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -20,7 +20,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "bake/sheen/rng.hpp"
+#include "sheen/rng.hpp"
 
 namespace clothbake::sheen {
 
