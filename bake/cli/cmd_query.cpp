@@ -6,7 +6,7 @@
 //   clothbake query ASSET radiance   --lobe L [--cluster C] --h x,y,z --rect x0,y0,x1,y1
 //                                    [--tables auto|raw|compressed] [--json]
 //
-// The radiance kind is verify::radiance_query (verify/radiance_query_command.hpp): F_c(rect, h) of
+// The radiance kind is radiance_query (bake/cli/radiance_query_command.hpp): F_c(rect, h) of
 // the lobe's Integral-Radiance table from the raw or the compressed tables (the answer says which).
 //
 // Exit codes: 1 bad arguments (naming the option), 2 missing file or missing section, 3 invalid
@@ -21,11 +21,11 @@
 #include <vector>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/radiance_query_command.hpp"
 #include "common/error.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/writer/open_asset.hpp"
-#include "verify/radiance_query_command.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -213,24 +213,24 @@ int query_radiance(const QueryOptions& o) {
     throw CLI::ValidationError("--dir", "radiance queries take the half vector as --h, not --dir");
   if (!o.texel.empty())
     throw CLI::ValidationError("--texel", "radiance queries take a footprint --rect, not --texel");
-  verify::RadianceQueryArgs args;
+  RadianceQueryArgs args;
   args.lobe = o.lobe;
   args.cluster = o.cluster;
   const std::vector<double> h = parse_numbers(o.h, 3, false, "--h");
   args.h = {h[0], h[1], h[2]};
   const std::vector<double> rect = parse_numbers(o.rect, 4, false, "--rect");
   args.rect = {rect[0], rect[1], rect[2], rect[3]};
-  args.source = o.tables == "raw"          ? verify::TableSource::Raw
-                : o.tables == "compressed" ? verify::TableSource::Compressed
-                                           : verify::TableSource::Auto;
+  args.source = o.tables == "raw"          ? TableSource::Raw
+                : o.tables == "compressed" ? TableSource::Compressed
+                                           : TableSource::Auto;
   const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
-  nlohmann::json answer = verify::radiance_query(asset, args);
+  nlohmann::json answer = radiance_query(asset, args);
   if (o.json) {
     answer["asset"] = o.asset;
     answer["query"] = "radiance";
     print_json(answer);
   } else {
-    std::fputs(verify::radiance_query_text(answer).c_str(), stdout);
+    std::fputs(radiance_query_text(answer).c_str(), stdout);
   }
   return 0;
 }

@@ -1,5 +1,5 @@
 // `clothbake query ASSET radiance` (radiance_query_command.hpp).
-#include "verify/radiance_query_command.hpp"
+#include "bake/cli/radiance_query_command.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -9,7 +9,7 @@
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/open_asset.hpp"
 
-namespace clothbake::verify {
+namespace clothbake::cli {
 
 nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArgs& args) {
   static const char* const kLobes[] = {"specular_reflection", "specular_transmission",
@@ -130,4 +130,4 @@ std::string radiance_query_text(const nlohmann::json& a) {
   return out.str();
 }
 
-}  // namespace clothbake::verify
+}  // namespace clothbake::cli

@@ -1,11 +1,11 @@
-// The `radiance` kind of `clothbake query` (verify/radiance_query_command.hpp): answers equal the
+// The `radiance` kind of `clothbake query` (bake/cli/radiance_query_command.hpp): answers equal the
 // reader's, lobes map to their tables, bad arguments are usage errors naming the option.
 #include <gtest/gtest.h>
 
+#include "bake/cli/radiance_query_command.hpp"
 #include "common/error.hpp"
 #include "formats/reader/radiance_tables.hpp"
-#include "verify/radiance_query_command.hpp"
-#include "verify_fixtures.hpp"
+#include "tests/verify/verify_fixtures.hpp"
 
 using namespace clothbake;
 
@@ -43,11 +43,11 @@ ExitCode code_of(const std::function<void()>& fn) {
 
 TEST(RadianceQueryCommand, AnswersEqualTheReaderAndLobesShareTables) {
   auto a = plain_asset(true);
-  verify::RadianceQueryArgs args;
+  cli::RadianceQueryArgs args;
   args.lobe = "specular_reflection";
   args.h = {0.3, -0.2, 0.8};
   args.rect = {-3.5, 2.25, 20.0, 9.0};
-  const auto all = verify::radiance_query(a->asset, args);
+  const auto all = cli::radiance_query(a->asset, args);
   reader::RawRadianceTables t;
   ASSERT_TRUE(t.open(a->asset, reader::RadianceTableKind::Specular).ok());
   double f[3];
@@ -59,28 +59,28 @@ TEST(RadianceQueryCommand, AnswersEqualTheReaderAndLobesShareTables) {
   EXPECT_DOUBLE_EQ(all["area_texels"].get<double>(), 23.5 * 6.75);
   // Transmission reads the same table (its own half vector is the caller's business).
   args.lobe = "specular_transmission";
-  EXPECT_EQ(verify::radiance_query(a->asset, args)["total"], all["total"]);
+  EXPECT_EQ(cli::radiance_query(a->asset, args)["total"], all["total"]);
   // One cluster.
   args.cluster = 1;
-  const auto one = verify::radiance_query(a->asset, args);
+  const auto one = cli::radiance_query(a->asset, args);
   ASSERT_EQ(one["clusters"].size(), 1u);
   EXPECT_DOUBLE_EQ(one["total"].get<double>(), f[1]);
   // Delta transmission reads the gap table; h does not matter there.
   args.lobe = "delta_transmission";
   args.cluster.reset();
-  const auto gap = verify::radiance_query(a->asset, args);
+  const auto gap = cli::radiance_query(a->asset, args);
   EXPECT_EQ(gap["table"], "gap");
   args.h = {0, 0, -1};
-  EXPECT_EQ(verify::radiance_query(a->asset, args)["total"], gap["total"]);
-  EXPECT_FALSE(verify::radiance_query_text(gap).empty());
+  EXPECT_EQ(cli::radiance_query(a->asset, args)["total"], gap["total"]);
+  EXPECT_FALSE(cli::radiance_query_text(gap).empty());
 }
 
 TEST(RadianceQueryCommand, BadArgumentsAreUsageErrors) {
   auto a = plain_asset(false);
-  verify::RadianceQueryArgs args;
+  cli::RadianceQueryArgs args;
   args.lobe = "specular_reflection";
-  auto run = [&](verify::RadianceQueryArgs x) {
-    return code_of([&] { verify::radiance_query(a->asset, x); });
+  auto run = [&](cli::RadianceQueryArgs x) {
+    return code_of([&] { cli::radiance_query(a->asset, x); });
   };
   EXPECT_EQ(run(args), ExitCode::Ok);
   auto bad = args;

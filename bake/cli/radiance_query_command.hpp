@@ -18,7 +18,7 @@
 
 #include "formats/reader/asset.hpp"
 
-namespace clothbake::verify {
+namespace clothbake::cli {
 
 // Which stored representation answers: raw fixed-point SATs or C-PCA compressed tables. Auto takes
 // the raw tables when the asset keeps them (exact) and the compressed ones otherwise.
@@ -43,4 +43,4 @@ nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArg
 // A short human-readable rendering of radiance_query's JSON.
 std::string radiance_query_text(const nlohmann::json& answer);
 
-}  // namespace clothbake::verify
+}  // namespace clothbake::cli
