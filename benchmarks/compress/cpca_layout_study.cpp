@@ -1,13 +1,22 @@
-// Scratch measurements for choosing the C-PCA layout (not part of the product).
-#include <tbb/global_control.h>
+// Study behind the C-PCA layout (docs/compression.md, "Layout"): on one fabric's specular tables
+// with stand-in visibility clusters (k-means on folded tangent and yarn), the per-cluster spectra
+// of the texel layout (centred energy left at each rank) and the footprint errors of a rank-r
+// reconstruction, or with "sat", the same for the paper's whole-SAT layout (raw and normalised).
+//
+//   cpca_layout_study FABRIC.toml [RESOLUTION [BINS [sat]]]    (defaults 256, 32)
+//
+// Not part of the product; random footprints come from the project's SplitMix64 (seed 7).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
-#include <random>
+#include <string>
+
 #include "bake/inputs/fabric_load.hpp"
 #include "cluster/kmeans.hpp"
 #include "compress/randomized_svd.hpp"
+#include "model/splitmix64.hpp"
 #include "tables/half_vector_bins.hpp"
 #include "tables/radiance_fill.hpp"
 
@@ -17,10 +26,26 @@ static double secs(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
+// A whole-string integer in [lo, hi], or exit 1 naming the argument.
+static int int_argument(const char* text, const char* name, int lo, int hi) {
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || v < lo || v > hi) {
+    std::fprintf(stderr, "cpca_layout_study: %s must be an integer in [%d, %d], got '%s'\n", name,
+                 lo, hi, text);
+    std::exit(1);
+  }
+  return int(v);
+}
+
 int main(int argc, char** argv) {
+  if (argc < 2 || argc > 5 || (argc == 5 && std::strcmp(argv[4], "sat") != 0)) {
+    std::fprintf(stderr, "usage: cpca_layout_study FABRIC.toml [RESOLUTION [BINS [sat]]]\n");
+    return 1;
+  }
   const char* path = argv[1];
-  int res = argc > 2 ? atoi(argv[2]) : 256;
-  int nbins = argc > 3 ? atoi(argv[3]) : 32;
+  int res = argc > 2 ? int_argument(argv[2], "RESOLUTION", 8, 1024) : 256;
+  int nbins = argc > 3 ? int_argument(argv[3], "BINS", 1, 256) : 32;
   LoadOptions lo;
   lo.resolution = res;
   auto loaded = load_fabric_description(path, lo);
@@ -128,13 +153,13 @@ int main(int argc, char** argv) {
             v += double(Cf(tb, j)) * Vf(i, j);
           return scl[tb] * v + off[tb] + (norm ? mval[tb] * x * y : 0.0);
         };
-        std::mt19937_64 rng(7);
+        model::SplitMix64 rng(7);
         std::printf("sat norm=%d rank %d (svd %.1fs):", norm, r, tsvd);
         for (int size : {1, 2, 4, 8, 16, 64}) {
           double se = 0, sf = 0;
           for (int q = 0; q < 3000; ++q) {
-            int x0 = rng() % (n - size + 1), y0 = rng() % (n - size + 1), b = rng() % B,
-                c = rng() % C;
+            int x0 = int(rng.below(n - size + 1)), y0 = int(rng.below(n - size + 1)),
+                b = int(rng.below(B)), c = int(rng.below(C));
             int tb = c * B + b;
             double F = 0;
             for (int y = y0; y < y0 + size; ++y)
@@ -196,7 +221,7 @@ int main(int argc, char** argv) {
     bases[c] = svd.basis;
   }
   // footprint errors for texel-layout rank r per cluster
-  std::mt19937_64 rng(7);
+  model::SplitMix64 rng(7);
   for (int r : {4, 8, 16, 32}) {
     // reconstruct
     std::vector<float> Y(texels * B);
@@ -216,7 +241,8 @@ int main(int argc, char** argv) {
     for (int size : {1, 2, 4, 8, 16, 64}) {
       double se = 0, sf = 0, se_all = 0, sf_all = 0;
       for (int q = 0; q < 3000; ++q) {
-        int x0 = rng() % n, y0 = rng() % n, b = rng() % B, c = rng() % km.clusters;
+        int x0 = int(rng.below(n)), y0 = int(rng.below(n)), b = int(rng.below(B)),
+            c = int(rng.below(km.clusters));
         double F = 0, G = 0, Fa = 0, Ga = 0;
         for (int y = y0; y < y0 + size; ++y)
           for (int x = x0; x < x0 + size; ++x) {

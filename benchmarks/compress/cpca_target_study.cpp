@@ -1,15 +1,21 @@
-// Scratch: end-to-end compression of one fabric's specular tables + reader queries vs direct sums.
+// Study behind the target-mode defaults (docs/compression.md, "Defaults"): one fabric's specular
+// tables with stand-in visibility clusters (k-means on folded tangent and yarn), compressed end to
+// end with K C-PCA clusters per visibility cluster, rank cap R and target error E; then footprint
+// errors of the reader's compressed queries against direct sums of the raw values, and query
+// throughput (compressed, and with "raw" also the raw tables).
+//
+//   cpca_target_study FABRIC.toml RESOLUTION K R E [POWER_ITERATIONS [raw]]
+//
+// Not part of the product; random footprints and half vectors come from the project's SplitMix64
+// (seed 3).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
-#include <random>
-static double cpu() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+#include <string>
+
 #include "bake/inputs/fabric_load.hpp"
 #include "cluster/kmeans.hpp"
 #include "compress/compressed_set.hpp"
@@ -17,8 +23,41 @@ static double cpu() {
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
+#include "model/splitmix64.hpp"
 #include "tables/radiance_fill.hpp"
 #include "tables/radiance_sections.hpp"
+
+static double cpu() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+[[noreturn]] static void usage(const char* why) {
+  std::fprintf(stderr,
+               "cpca_target_study: %s\nusage: cpca_target_study FABRIC.toml RESOLUTION K R E "
+               "[POWER_ITERATIONS [raw]]\n",
+               why);
+  std::exit(1);
+}
+
+// A whole-string number in [lo, hi], or exit 1 naming the argument.
+static double number_argument(const char* text, const char* name, double lo, double hi) {
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !(v >= lo && v <= hi)) {
+    std::fprintf(stderr, "cpca_target_study: %s must be in [%g, %g], got '%s'\n", name, lo, hi,
+                 text);
+    std::exit(1);
+  }
+  return v;
+}
+
+static int int_argument(const char* text, const char* name, int lo, int hi) {
+  const double v = number_argument(text, name, lo, hi);
+  if (v != std::floor(v)) usage((std::string(name) + " must be an integer").c_str());
+  return int(v);
+}
 
 using namespace clothbake;
 using Clock = std::chrono::steady_clock;
@@ -27,8 +66,10 @@ static double secs(Clock::time_point t) {
 }
 
 int main(int argc, char** argv) {
+  if (argc < 6 || argc > 8) usage("wrong number of arguments");
+  if (argc == 8 && std::strcmp(argv[7], "raw") != 0) usage("the last argument must be 'raw'");
   LoadOptions lo;
-  lo.resolution = atoi(argv[2]);
+  lo.resolution = int_argument(argv[2], "RESOLUTION", 8, 1024);
   auto loaded = load_fabric_description(argv[1], lo);
   Fabric& f = loaded.fabric;
   const int n = f.maps.resolution;
@@ -53,10 +94,10 @@ int main(int argc, char** argv) {
   auto data = compress::directional_texels(reader::RadianceTableKind::Specular, in.view, 32);
   std::printf("fill %.2fs\n", secs(t0));
   compress::CpcaOptions o;
-  o.clusters_per_stratum = atoi(argv[3]);
-  o.rank = atoi(argv[4]);
-  o.target_error = atof(argv[5]);
-  if (argc > 6) o.power_iterations = atoi(argv[6]);
+  o.clusters_per_stratum = int_argument(argv[3], "K", 1, compress::kMaxCpcaClustersPerStratum);
+  o.rank = int_argument(argv[4], "R", 0, compress::kMaxCpcaRank);
+  o.target_error = number_argument(argv[5], "E", 0.0, 1.0);
+  if (argc > 6) o.power_iterations = int_argument(argv[6], "POWER_ITERATIONS", 0, 16);
   t0 = Clock::now();
   timespec pc0;
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &pc0);
@@ -87,17 +128,17 @@ int main(int argc, char** argv) {
   }
   std::printf("reader open %.3fs, decoded %.1f MB\n", secs(t0), tabs.decoded_bytes() / 1e6);
   // footprint errors vs direct double sums of the raw values, random h
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> U(0, 1);
+  model::SplitMix64 rng(3);
+  auto U = [&rng] { return rng.uniform(); };
   const int B = data.bins(), C = data.cluster_count;
   for (int size : {1, 2, 4, 8, 16, 64, 256}) {
     double se = 0, sf = 0, se1 = 0, sf1 = 0;
     int Q = size >= 64 ? 100 : 1000;
     for (int q = 0; q < Q; ++q) {
-      double x0 = U(rng) * n, y0 = U(rng) * n;
+      double x0 = U() * n, y0 = U() * n;
       int X0 = int(x0), Y0 = int(y0);
       reader::Footprint fp{double(X0), double(Y0), double(X0 + size), double(Y0 + size)};
-      double phi = 2 * M_PI * U(rng), ct = U(rng), st2 = std::sqrt(1 - ct * ct);
+      double phi = 2 * M_PI * U(), ct = U(), st2 = std::sqrt(1 - ct * ct);
       double h[3] = {st2 * std::cos(phi), st2 * std::sin(phi), ct};
       reader::BinWeights bw;
       reader::radiance_bin_weights(32, h, &bw);
@@ -128,9 +169,9 @@ int main(int argc, char** argv) {
   std::vector<reader::Footprint> fps(100000);
   std::vector<std::array<double, 3>> hs(100000);
   for (int i = 0; i < 100000; ++i) {
-    double x0 = U(rng) * n, y0 = U(rng) * n, w = 1 + U(rng) * 8;
+    double x0 = U() * n, y0 = U() * n, w = 1 + U() * 8;
     fps[i] = {x0, y0, x0 + w, y0 + w};
-    double phi = 2 * M_PI * U(rng), ct = U(rng), st2 = std::sqrt(1 - ct * ct);
+    double phi = 2 * M_PI * U(), ct = U(), st2 = std::sqrt(1 - ct * ct);
     hs[i] = {st2 * std::cos(phi), st2 * std::sin(phi), ct};
   }
   std::vector<double> out(C);
@@ -143,7 +184,7 @@ int main(int argc, char** argv) {
   }
   std::printf("query_all: %.2f M/s wall, %.2f M/s cpu (%g)\n", 0.1 / secs(t0), 0.1 / (cpu() - c0),
               sink);
-  if (argc > 7) {
+  if (argc == 8) {
     tables::RadianceOptions ro;
     ro.bins_per_side = 32;
     auto set = tables::build_specular_tables(in.view, ro);
