@@ -1,4 +1,5 @@
-# All third-party dependencies, from Debian packages (scripts/setup installs them).
+# All third-party dependencies, from Debian packages (scripts/setup installs them). Only what some
+# target links: FLANN and zstd were required here once and never linked (docs/architecture.md).
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(TBB REQUIRED)
@@ -10,13 +11,12 @@ find_package(CLI11 REQUIRED)
 find_package(OpenEXR REQUIRED)
 find_package(OpenImageIO REQUIRED)
 find_package(embree 3 REQUIRED)
-find_package(CGAL REQUIRED)
-find_package(flann REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(XXHASH REQUIRED IMPORTED_TARGET libxxhash)
-pkg_check_modules(ZSTD REQUIRED IMPORTED_TARGET libzstd)
+# Test-only: GoogleTest, and CGAL for the exact cross-check of Embree's hits (tests/raycast).
 if(CLOTHBAKE_BUILD_TESTS)
   find_package(GTest REQUIRED)
+  find_package(CGAL REQUIRED)
 endif()
 if(CLOTHBAKE_BUILD_BENCHMARKS)
   find_package(benchmark REQUIRED)

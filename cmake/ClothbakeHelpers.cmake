@@ -1,13 +1,3 @@
-# add_subdirectory() for each listed folder that has a CMakeLists.txt, so that a component can be
-# added by creating its folder, without editing the parent.
-macro(clothbake_add_subdirs_if_present)
-  foreach(_dir ${ARGN})
-    if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${_dir}/CMakeLists.txt)
-      add_subdirectory(${_dir})
-    endif()
-  endforeach()
-endmacro()
-
 # Every child folder of the current one that has a CMakeLists.txt, in sorted order.
 macro(clothbake_add_all_subdirs)
   file(GLOB _children LIST_DIRECTORIES true RELATIVE ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/*)
