@@ -3,27 +3,19 @@
 
 #include <cmath>
 
+#include "formats/reader/detail/open_sections.hpp"
 #include "model/directions.hpp"
 
 namespace clothbake::reader {
 
 Status VisibilityClusterView::open(const Asset& asset) noexcept {
   *this = VisibilityClusterView();
-  SectionInfo labels_s, mean_s;
-  Status s = asset.find(SectionType::ClusterLabels, 0, &labels_s);
-  if (s.ok()) s = asset.find(SectionType::ClusterMeanVisibility, 0, &mean_s);
-  if (s.code() == ErrorCode::NotFound)
-    return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "this asset has no visibility clusters (cluster_labels and "
-                         "cluster_mean_visibility)");
-  if (!s.ok()) return s;
-  if (labels_s.version != 1 || mean_s.version != 1)
-    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "cluster sections: payload version must be 1");
   ArrayView<uint8_t> labels;
   ArrayView<float> mean;
-  s = asset.view_of(labels_s, &labels);
-  if (s.ok()) s = asset.view_of(mean_s, &mean);
+  Status s = detail::view_required_pair(
+      asset, {SectionType::ClusterLabels, 0}, {SectionType::ClusterMeanVisibility, 0},
+      "this asset has no visibility clusters (cluster_labels and cluster_mean_visibility)",
+      "cluster sections: payload version must be 1", &labels, &mean);
   if (!s.ok()) return s;
   if (labels.rank != 2 || labels.dims[0] != labels.dims[1] || labels.dims[0] == 0)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,

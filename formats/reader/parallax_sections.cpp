@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "formats/reader/detail/open_sections.hpp"
 #include "model/directions.hpp"
 
 namespace clothbake::reader {
@@ -20,20 +21,13 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 
 Status ParallaxView::open(const Asset& asset) noexcept {
   *this = ParallaxView();
-  SectionInfo info_s, codes_s;
-  Status s = asset.find(SectionType::ParallaxTable, kParallaxInfoInstance, &info_s);
-  if (s.ok()) s = asset.find(SectionType::ParallaxTable, kParallaxCodesInstance, &codes_s);
-  if (s.code() == ErrorCode::NotFound)
-    return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "this asset has no parallax table (parallax instances 0 and 1)");
-  if (!s.ok()) return s;
-  if (info_s.version != 1 || codes_s.version != 1)
-    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "parallax: payload version must be 1 (this reader knows version 1)");
   ArrayView<uint8_t> info_bytes;
   ArrayView<uint16_t> codes;
-  s = asset.view_of(info_s, &info_bytes);
-  if (s.ok()) s = asset.view_of(codes_s, &codes);
+  Status s = detail::view_required_pair(
+      asset, {SectionType::ParallaxTable, kParallaxInfoInstance},
+      {SectionType::ParallaxTable, kParallaxCodesInstance},
+      "this asset has no parallax table (parallax instances 0 and 1)",
+      "parallax: payload version must be 1 (this reader knows version 1)", &info_bytes, &codes);
   if (!s.ok()) return s;
   if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
       info_bytes.dims[1] != sizeof(ParallaxInfoRecord))
@@ -59,16 +53,13 @@ Status ParallaxView::open(const Asset& asset) noexcept {
                          "parallax instance 1 must be u16 {%llu, %llu, %llu} (directions, N, N)",
                          static_cast<unsigned long long>(d), static_cast<unsigned long long>(n),
                          static_cast<unsigned long long>(n));
-  SectionInfo sat_s;
-  s = asset.find(SectionType::ParallaxSat, 0, &sat_s);
   const uint32_t* sat = nullptr;
-  if (s.ok()) {
-    if (sat_s.version != 1)
-      return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                           "parallax_sat: payload version must be 1");
-    ArrayView<uint32_t> sat_view;
-    s = asset.view_of(sat_s, &sat_view);
-    if (!s.ok()) return s;
+  ArrayView<uint32_t> sat_view;
+  bool have_sat = false;
+  s = detail::view_optional(asset, {SectionType::ParallaxSat, 0},
+                            "parallax_sat: payload version must be 1", &sat_view, &have_sat);
+  if (!s.ok()) return s;
+  if (have_sat) {
     if (sat_view.rank != 3 || sat_view.dims[0] != d || sat_view.dims[1] != n ||
         sat_view.dims[2] != n)
       return Status::error(ErrorCode::WrongType, Check::SectionLayout,
@@ -77,8 +68,6 @@ Status ParallaxView::open(const Asset& asset) noexcept {
                            static_cast<unsigned long long>(d), static_cast<unsigned long long>(n),
                            static_cast<unsigned long long>(n));
     sat = sat_view.data;
-  } else if (s.code() != ErrorCode::NotFound) {
-    return s;
   }
   info_ = info;
   codes_ = codes.data;

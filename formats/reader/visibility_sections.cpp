@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 
+#include "formats/reader/detail/open_sections.hpp"
+
 namespace clothbake::reader {
 namespace {
 
@@ -17,20 +19,14 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 
 Status VisibilityAsgView::open(const Asset& asset) noexcept {
   *this = VisibilityAsgView();
-  SectionInfo info_s, records_s;
-  Status s = asset.find(SectionType::VisibilityAsg, kVisibilityInfoInstance, &info_s);
-  if (s.ok()) s = asset.find(SectionType::VisibilityAsg, kVisibilityRecordsInstance, &records_s);
-  if (s.code() == ErrorCode::NotFound)
-    return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "this asset has no visibility ASGs (visibility_asg instances 0 and 1)");
-  if (!s.ok()) return s;
-  if (info_s.version != 1 || records_s.version != 1)
-    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "visibility_asg: payload version must be 1 (this reader knows version 1)");
   ArrayView<uint8_t> info_bytes;
   ArrayView<uint16_t> records;
-  s = asset.view_of(info_s, &info_bytes);
-  if (s.ok()) s = asset.view_of(records_s, &records);
+  Status s = detail::view_required_pair(
+      asset, {SectionType::VisibilityAsg, kVisibilityInfoInstance},
+      {SectionType::VisibilityAsg, kVisibilityRecordsInstance},
+      "this asset has no visibility ASGs (visibility_asg instances 0 and 1)",
+      "visibility_asg: payload version must be 1 (this reader knows version 1)", &info_bytes,
+      &records);
   if (!s.ok()) return s;
   if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
       info_bytes.dims[1] != sizeof(VisibilityInfoRecord))
@@ -62,16 +58,13 @@ Status VisibilityAsgView::open(const Asset& asset) noexcept {
                          "visibility_asg instance 1 must be u16 {%u, %u, 6} (one AsgRecord per "
                          "texel)",
                          unsigned(n), unsigned(n));
-  SectionInfo error_s;
   const float* fit_error = nullptr;
-  s = asset.find(SectionType::AsgFitError, 0, &error_s);
-  if (s.ok()) {
-    if (error_s.version != 1)
-      return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                           "asg_fit_error: payload version must be 1");
-    ArrayView<float> errors;
-    s = asset.view_of(error_s, &errors);
-    if (!s.ok()) return s;
+  ArrayView<float> errors;
+  bool have_errors = false;
+  s = detail::view_optional(asset, {SectionType::AsgFitError, 0},
+                            "asg_fit_error: payload version must be 1", &errors, &have_errors);
+  if (!s.ok()) return s;
+  if (have_errors) {
     if (errors.rank != 2 || errors.dims[0] != n || errors.dims[1] != n)
       return Status::error(ErrorCode::WrongType, Check::SectionLayout,
                            "asg_fit_error must be f32 {%u, %u}", unsigned(n), unsigned(n));
@@ -82,8 +75,6 @@ Status VisibilityAsgView::open(const Asset& asset) noexcept {
                              static_cast<unsigned long long>(t % n),
                              static_cast<unsigned long long>(t / n), double(errors[t]));
     fit_error = errors.data;
-  } else if (s.code() != ErrorCode::NotFound) {
-    return s;
   }
   info_ = info;
   records_ = records.data;
