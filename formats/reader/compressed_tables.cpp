@@ -468,16 +468,4 @@ bool CompressedRadianceTables::try_query_all(const Footprint& rect, const double
   return wide_ ? query_impl<int64_t>(rect, h, -1, out) : query_impl<int32_t>(rect, h, -1, out);
 }
 
-Status CompressedRadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
-                                       double* out) const noexcept {
-  if (try_query(rect, h, cluster, out)) return {};
-  return diagnose(rect, h, &cluster, out);
-}
-
-Status CompressedRadianceTables::query_all(const Footprint& rect, const double h[3],
-                                           double* out) const noexcept {
-  if (try_query_all(rect, h, out)) return {};
-  return diagnose(rect, h, nullptr, out);
-}
-
 }  // namespace clothbake::reader

@@ -45,9 +45,6 @@ class CompressedRadianceTables final : public RadianceTables {
   uint32_t resolution() const noexcept override { return n_; }
   uint32_t bins_per_side() const noexcept override { return bins_per_side_; }
   uint32_t cluster_count() const noexcept override { return cluster_count_; }
-  Status query(const Footprint& rect, const double h[3], uint32_t cluster,
-               double* out) const noexcept override;
-  Status query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
   bool try_query(const Footprint& rect, const double h[3], uint32_t cluster,
                  double* out) const noexcept override;
   bool try_query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;

@@ -122,6 +122,18 @@ Status radiance_bin_weights(uint32_t bins_per_side, const double h[3], BinWeight
                        "half vector must not be the zero vector");
 }
 
+Status RadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
+                             double* out) const noexcept {
+  if (try_query(rect, h, cluster, out)) return {};
+  return diagnose(rect, h, &cluster, out);
+}
+
+Status RadianceTables::query_all(const Footprint& rect, const double h[3],
+                                 double* out) const noexcept {
+  if (try_query_all(rect, h, out)) return {};
+  return diagnose(rect, h, nullptr, out);
+}
+
 Status RadianceTables::diagnose(const Footprint& rect, const double h[3], const uint32_t* cluster,
                                 const double* out) const noexcept {
   if (resolution() == 0)

@@ -81,28 +81,25 @@ class RadianceTables {
   // answer 0.
   virtual uint32_t cluster_count() const noexcept = 0;
 
-  // F_c(rect, h) for one cluster c < cluster_count(). Errors: InvalidArgument naming the bad
-  // argument (rect, h, cluster, null output) or "not open".
-  virtual Status query(const Footprint& rect, const double h[3], uint32_t cluster,
-                       double* out) const noexcept = 0;
-  // F_c(rect, h) for every cluster at once (out has cluster_count() entries).
-  virtual Status query_all(const Footprint& rect, const double h[3],
-                           double* out) const noexcept = 0;
-
-  // The hot path: the same answers, false (out unspecified) instead of a Status on error, so that
-  // a renderer does not pay for building messages (a Status carries a 320-byte buffer). The
-  // defaults forward to query()/query_all(); representations override them with a direct path.
+  // The hot path, which each representation implements: F_c(rect, h) for one cluster
+  // c < cluster_count() (try_query) or for every cluster at once (try_query_all; out has
+  // cluster_count() entries); false (out unspecified) on any bad argument, so that a renderer does
+  // not pay for building messages (a Status carries a 320-byte buffer).
   virtual bool try_query(const Footprint& rect, const double h[3], uint32_t cluster,
-                         double* out) const noexcept {
-    return out != nullptr && query(rect, h, cluster, out).ok();
-  }
-  virtual bool try_query_all(const Footprint& rect, const double h[3], double* out) const noexcept {
-    return out != nullptr && query_all(rect, h, out).ok();
-  }
+                         double* out) const noexcept = 0;
+  virtual bool try_query_all(const Footprint& rect, const double h[3],
+                             double* out) const noexcept = 0;
 
- protected:
-  // For implementations whose fast path failed: the InvalidArgument Status that says why
-  // (tables not open, null output, cluster out of range when `cluster` is given, bad rect or h).
+  // The same answers with a Status that says what was wrong: InvalidArgument naming the bad
+  // argument (rect, h, cluster, null output) or "not open". One implementation for every
+  // representation: the fast path, and only when it fails, the diagnosis.
+  Status query(const Footprint& rect, const double h[3], uint32_t cluster,
+               double* out) const noexcept;
+  Status query_all(const Footprint& rect, const double h[3], double* out) const noexcept;
+
+ private:
+  // Why the fast path failed: the InvalidArgument Status (tables not open, null output, cluster
+  // out of range when `cluster` is given, bad rect or h).
   Status diagnose(const Footprint& rect, const double h[3], const uint32_t* cluster,
                   const double* out) const noexcept;
 };

@@ -425,16 +425,4 @@ bool RawRadianceTables::try_query_all(const Footprint& rect, const double h[3],
                              : query_impl<uint64_t>(rect, h, -1, out);
 }
 
-Status RawRadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
-                                double* out) const noexcept {
-  if (try_query(rect, h, cluster, out)) return {};
-  return diagnose(rect, h, &cluster, out);
-}
-
-Status RawRadianceTables::query_all(const Footprint& rect, const double h[3],
-                                    double* out) const noexcept {
-  if (try_query_all(rect, h, out)) return {};
-  return diagnose(rect, h, nullptr, out);
-}
-
 }  // namespace clothbake::reader

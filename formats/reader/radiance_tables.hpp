@@ -33,9 +33,6 @@ class RawRadianceTables final : public RadianceTables {
   bool try_query(const Footprint& rect, const double h[3], uint32_t cluster,
                  double* out) const noexcept override;
   bool try_query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
-  Status query(const Footprint& rect, const double h[3], uint32_t cluster,
-               double* out) const noexcept override;
-  Status query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
 
   const RadianceTableInfoRecord& info() const noexcept { return *info_; }
   uint32_t stored_clusters() const noexcept { return columns_; }
