@@ -3,7 +3,14 @@
 //
 // Contract (the whole reader library):
 //  - C++17, standard library only; no exceptions leave the API (every entry point is noexcept and
-//    returns a Status); no heap allocation, so a hostile file cannot cause a huge allocation.
+//    returns a Status).
+//  - Heap allocation in exactly one place: CompressedRadianceTables::open (compressed_tables.hpp)
+//    decodes the compressed tables into SATs, basis and cell map it owns (new (std::nothrow), sized
+//    from shapes it has checked; a failed allocation is ErrorCode::Unsupported, not a throw), and
+//    validate_asset reaches it when it checks compressed tables. Everything else (Asset, the
+//    section views, raw-table queries, Status) allocates nothing: open_file maps the file (mmap)
+//    and views point into it, so a hostile file cannot cause a huge allocation except as the
+//    decoded size of compressed tables that passed every shape check.
 //  - Safe on untrusted bytes: open() checks the header, the table and every offset and size
 //    (overflow-safe) before anything is dereferenced; a bad file yields a Status with a stable
 //    check ID, never a crash or an out-of-bounds read.
