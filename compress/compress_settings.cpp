@@ -2,10 +2,9 @@
 #include "compress/compress_settings.hpp"
 
 #include <cstdio>
-#include <regex>
 
-#include "fabric/fabric.hpp"
 #include "common/error.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::compress {
 
@@ -87,28 +86,6 @@ CompressSettings resolve_compress_settings(const BakeSettings& bake,
   // --keep-raw alone does not switch on what the fabric switched off ([bake] compress = false
   // already keeps the raw tables).
   if (request.keep_raw) s.keep_raw = true;
-  return s;
-}
-
-CompressSettings parse_compress_shape(const std::string& text, const std::string& option) {
-  static const std::regex shape(R"(\s*(\d{1,3})\s*,\s*(\d{1,3})\s*)");
-  std::smatch m;
-  if (!std::regex_match(text, m, shape))
-    throw Error(ExitCode::Usage, option +
-                                     " expects K,R (C-PCA clusters per visibility cluster and "
-                                     "rank, e.g. 1,24), got '" +
-                                     text + "'");
-  CompressSettings s;
-  s.fixed = true;
-  s.clusters = std::stoi(m[1].str());
-  s.rank = std::stoi(m[2].str());
-  if (s.clusters < 1 || s.clusters > kMaxCpcaClustersPerStratum)
-    throw Error(ExitCode::Usage, option + ": K must be in [1, " +
-                                     std::to_string(kMaxCpcaClustersPerStratum) + "], got " +
-                                     m[1].str());
-  if (s.rank < 0 || s.rank > kMaxCpcaRank)
-    throw Error(ExitCode::Usage, option + ": R must be in [0, " + std::to_string(kMaxCpcaRank) +
-                                     "], got " + m[2].str());
   return s;
 }
 

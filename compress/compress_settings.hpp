@@ -2,7 +2,7 @@
 // fixed C-PCA shape (--compress k,r) or a target error (--max-error E) for which the stage picks
 // the ranks itself. docs/compression.md explains the defaults (measured on the example fabrics).
 //
-// C++20. parse_* throw clothbake::Error(Usage) naming the option on bad text.
+// C++20. check_compress_request throws clothbake::Error(Usage) naming the options.
 #pragma once
 
 #include <cstdint>
@@ -63,8 +63,5 @@ void check_compress_request(const CompressRequest& request);
 // --max-error keeps the fabric's compress_clusters (or 1) and caps ranks at kDefaultRankCap.
 CompressSettings resolve_compress_settings(const BakeSettings& bake,
                                            const CompressRequest& request);
-
-// "k,r" (e.g. "4,10") -> fixed settings. Throws Error(Usage) naming `option` otherwise.
-CompressSettings parse_compress_shape(const std::string& text, const std::string& option);
 
 }  // namespace clothbake::compress

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
 #include "bake/stages/stages.hpp"
@@ -47,16 +48,39 @@ std::string default_max_error_text() {
   return text.str();
 }
 
+// --compress K,R: C-PCA clusters per visibility cluster K in [1, kMaxCpcaClustersPerStratum] and
+// rank R in [0, kMaxCpcaRank]. Throws Error(Usage) naming --compress.
+std::pair<int, int> compress_shape(const std::string& text) {
+  std::vector<double> v;
+  try {
+    v = parse_number_list(text, "--compress", {.expected = "K,R", .count = 2, .integers = true});
+  } catch (const CLI::ValidationError&) {  // the established message, which scripts may match
+    throw Error(ExitCode::Usage,
+                "--compress expects K,R (C-PCA clusters per visibility cluster and rank, e.g. "
+                "1,24), got '" +
+                    text + "'");
+  }
+  const int clusters = int(v[0]), rank = int(v[1]);
+  if (v[0] < 1 || v[0] > compress::kMaxCpcaClustersPerStratum)
+    throw Error(ExitCode::Usage, "--compress: K must be in [1, " +
+                                     std::to_string(compress::kMaxCpcaClustersPerStratum) +
+                                     "], got " + std::to_string(clusters));
+  if (v[1] < 0 || v[1] > compress::kMaxCpcaRank)
+    throw Error(ExitCode::Usage, "--compress: R must be in [0, " +
+                                     std::to_string(compress::kMaxCpcaRank) + "], got " +
+                                     std::to_string(rank));
+  return {clusters, rank};
+}
+
 // The compression request of the command line, checked (Error(Usage) naming the options).
 compress::CompressRequest compress_request(const BakeOptions& o) {
   compress::CompressRequest r;
   r.disable = o.no_compress;
   r.keep_raw = o.keep_raw;
   if (!o.compress_shape.empty()) {
-    const compress::CompressSettings shape =
-        compress::parse_compress_shape(o.compress_shape, "--compress");
-    r.clusters = shape.clusters;
-    r.rank = shape.rank;
+    const auto [clusters, rank] = compress_shape(o.compress_shape);
+    r.clusters = clusters;
+    r.rank = rank;
   }
   if (o.max_error_option && o.max_error_option->count() > 0) r.max_error = o.max_error;
   compress::check_compress_request(r);
@@ -111,7 +135,7 @@ Action setup_bake(CLI::App& app) {
   app.add_flag("--quiet", o->quiet, "no progress bar and no informational messages");
   app.add_option("--report", o->report,
                  "write a JSON report: per-stage wall/CPU time and peak memory, asset sections");
-  app.add_flag("--json", o->json, "print the report on stdout");
+  add_json_flag(app, o->json, "print the report on stdout");
   app.add_flag("--force", o->force, "replace an existing output file that is not an asset");
   app.add_flag("--record-timings", o->record_timings,
                "store stage timings in the asset metadata (makes the bytes differ run to run)");

@@ -21,6 +21,7 @@
 #include <system_error>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
@@ -78,14 +79,11 @@ Rgb<double> parse_color(const std::string& text, const std::string& option) {
   return {v[0], v[1], v[2]};
 }
 
-Vec3d parse_direction(const std::string& text, const std::string& option) {
-  const auto v = parse_vec3(text, option);
+// A direction option, normalised (the BSDF takes unit vectors).
+Vec3d unit_direction(const std::string& text, const std::string& option) {
+  const auto v = parse_direction(text, option);
   const Vec3d d{v[0], v[1], v[2]};
-  const double len = model::length(d);
-  if (!std::isfinite(len) || !(len > 0))
-    throw CLI::ValidationError(
-        option, fmt::format("'{}' is not a direction: it must be finite and non-zero", text));
-  return d / len;
+  return d / model::length(d);
 }
 
 const char* option_of_field(const std::string& field) {
@@ -211,7 +209,7 @@ Action setup_bsdf(CLI::App& app) {
   app.add_option("--hemisphere", o->hemisphere,
                  "slice hemisphere: upper, lower or auto (the side where the lobe lives)")
       ->check(CLI::IsMember({"upper", "lower", "auto"}));
-  app.add_flag("--json", o->json, "print the values as JSON on stdout");
+  add_json_flag(app, o->json, "print the values as JSON on stdout");
   return [o] {
     model::TexelParams<double> p;
     {
@@ -231,9 +229,9 @@ Action setup_bsdf(CLI::App& app) {
       throw CLI::ValidationError("--visibility", "must be in [0, 1]");
     const model::ParamsProblem problem = model::validate_texel_params(p);
     if (!problem.ok()) throw CLI::ValidationError(option_of_field(problem.field), problem.message);
-    const Vec3d wi = parse_direction(o->wi, "--wi");
+    const Vec3d wi = unit_direction(o->wi, "--wi");
     std::optional<Vec3d> wo;
-    if (!o->wo.empty()) wo = parse_direction(o->wo, "--wo");
+    if (!o->wo.empty()) wo = unit_direction(o->wo, "--wo");
     const bool slicing = !o->slice.empty();
     if (slicing) {
       model::Lobe lobe = model::Lobe::SpecularReflection;

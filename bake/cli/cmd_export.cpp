@@ -16,6 +16,7 @@
 #include <memory>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "common/diagnostics.hpp"
 #include "common/image_io/image_io.hpp"
 #include "formats/reader/asset.hpp"
@@ -204,7 +205,7 @@ Image radiance_image(const Asset& asset, const std::string& asset_path, bool com
 
 Action setup_export(CLI::App& app) {
   auto o = std::make_shared<ExportOptions>();
-  app.add_option("ASSET", o->asset, "asset file (.cbk)")->required();
+  add_asset_argument(app, o->asset);
   app.add_option("--section", o->section, "section name (see `clothbake info`) or type id")
       ->required();
   app.add_option("--instance", o->instance, "instance of the section (default 0)");

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "sheen/sheen_fit.hpp"
@@ -32,16 +33,13 @@ struct FitSheenOptions {
 
 // "C,R" -> two integers; throws CLI::ValidationError naming the option.
 std::pair<int, int> parse_resolution(const std::string& text) {
-  std::string s = text;
-  for (char& ch : s)
-    if (ch == ',') ch = ' ';
-  std::istringstream in(s);
-  long long c = 0, r = 0;
-  std::string rest;
-  if (!(in >> c >> r) || (in >> rest) || c < 2 || r < 2 || c > 1024 || r > 1024)
-    throw CLI::ValidationError(
-        "--resolution", "expected COS,ROUGH with two integers in [2, 1024], got '" + text + "'");
-  return {int(c), int(r)};
+  const auto v = parse_number_list(text, "--resolution",
+                                   {.expected = "COS,ROUGH with two integers in [2, 1024]",
+                                    .count = 2,
+                                    .integers = true,
+                                    .min = 2,
+                                    .max = 1024});
+  return {int(v[0]), int(v[1])};
 }
 
 nlohmann::json fit_json(const sheen::SheenTableFit& fit, const std::string& output) {
@@ -104,7 +102,7 @@ Action setup_fit_sheen(CLI::App& app) {
   app.add_option("--threads", o->threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
-  app.add_flag("--json", o->json, "print the fit report as one JSON document on stdout");
+  add_json_flag(app, o->json, "print the fit report as one JSON document on stdout");
   return [o] {
     const auto [cos_count, roughness_count] = parse_resolution(o->resolution);
     if (!o->output.empty()) {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/writer/open_asset.hpp"
 
@@ -139,8 +140,8 @@ void print_text(const nlohmann::json& doc) {
 Action setup_info(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  app.add_option("ASSET", *path, "asset file (.cbk)")->required();
-  app.add_flag("--json", *json, "print one JSON document on stdout");
+  add_asset_argument(app, *path);
+  add_json_flag(app, *json);
   return [path, json] {
     const Asset asset = formats::open_asset(*path, Verify::Structure);
     const nlohmann::json doc = info_json(*path, asset);

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_report.hpp"
 #include "bake/inputs/map_stats.hpp"
@@ -21,7 +22,7 @@ struct InspectOptions {
 Action setup_inspect(CLI::App& app) {
   auto options = std::make_shared<InspectOptions>();
   app.add_option("FABRIC", options->fabric, "fabric description (TOML)")->required();
-  app.add_flag("--json", options->json, "print one JSON document on stdout");
+  add_json_flag(app, options->json);
   return [options] {
     take_warnings();  // only this fabric's warnings belong in the report
     LoadedFabric loaded = load_fabric_description(options->fabric);

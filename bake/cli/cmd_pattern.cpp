@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_report.hpp"
 #include "bake/inputs/fabric_write.hpp"
@@ -42,8 +43,8 @@ Action setup_pattern(CLI::App& app) {
       ->check(CLI::Range(kMinResolution, kMaxResolution));
   app.add_option("-o,--output", o->output, "output directory (created; other files in it are kept)")
       ->required();
-  app.add_flag("--json", o->json,
-               "print the weave matrix, yarn colours and written files as JSON on stdout");
+  add_json_flag(app, o->json,
+                "print the weave matrix, yarn colours and written files as JSON on stdout");
   return [o] {
     int sources = int(!o->weave_name.empty()) + int(!o->wif.empty()) + int(!o->fabric.empty());
     if (sources != 1)

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/cli/radiance_query_command.hpp"
 #include "common/error.hpp"
 #include "formats/reader/parallax_sections.hpp"
@@ -43,41 +44,9 @@ struct QueryOptions {
   bool json = false;
 };
 
-// "a,b,..." into exactly `count` numbers; integers if `integers`. Throws CLI::ValidationError.
-std::vector<double> parse_numbers(const std::string& text, std::size_t count, bool integers,
-                                  const std::string& option) {
-  std::string s = text;
-  for (char& ch : s)
-    if (ch == ',') ch = ' ';
-  std::istringstream in(s);
-  std::vector<double> v;
-  std::string token;
-  while (in >> token) {
-    std::size_t used = 0;
-    double value = 0;
-    try {
-      value = integers ? double(std::stoll(token, &used)) : std::stod(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != token.size() || !std::isfinite(value))
-      throw CLI::ValidationError(
-          option, "'" + token + "' is not " + (integers ? "an integer" : "a finite number"));
-    v.push_back(value);
-  }
-  if (v.size() != count)
-    throw CLI::ValidationError(option, "expected " + std::to_string(count) +
-                                           " comma-separated numbers, got '" + text + "'");
-  return v;
-}
-
-std::array<double, 3> parse_direction(const std::string& text) {
-  std::array<double, 3> d = parse_vec3(text, "--dir");
-  if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2]) ||
-      !(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 0))
-    throw CLI::ValidationError("--dir", "the direction must be finite and non-zero");
-  return d;
-}
+const NumberListRule kTexel{
+    .expected = "two comma-separated integers i,j", .count = 2, .integers = true};
+const NumberListRule kRect{.expected = "four comma-separated numbers x0,y0,x1,y1", .count = 4};
 
 nlohmann::json vec(const double* v, int n) {
   nlohmann::json a = nlohmann::json::array();
@@ -99,11 +68,11 @@ int query_parallax(const QueryOptions& o) {
     throw CLI::ValidationError("--texel",
                                "parallax queries need exactly one of --texel i,j and "
                                "--rect x0,y0,x1,y1");
-  const std::array<double, 3> dir = parse_direction(o.dir);
+  const std::array<double, 3> dir = parse_direction(o.dir, "--dir");
   std::vector<double> texel, rect;
-  if (!o.texel.empty()) texel = parse_numbers(o.texel, 2, true, "--texel");
+  if (!o.texel.empty()) texel = parse_number_list(o.texel, "--texel", kTexel);
   if (!o.rect.empty()) {
-    rect = parse_numbers(o.rect, 4, false, "--rect");
+    rect = parse_number_list(o.rect, "--rect", kRect);
     if (rect[2] < rect[0] || rect[3] < rect[1])
       throw CLI::ValidationError("--rect", "x1 must be >= x0 and y1 >= y0");
   }
@@ -162,8 +131,8 @@ int query_visibility(const QueryOptions& o) {
   if (o.texel.empty()) throw CLI::ValidationError("--texel", "visibility queries need --texel i,j");
   if (!o.rect.empty())
     throw CLI::ValidationError("--rect", "visibility queries are per texel: use --texel");
-  const std::array<double, 3> dir = parse_direction(o.dir);
-  const std::vector<double> texel = parse_numbers(o.texel, 2, true, "--texel");
+  const std::array<double, 3> dir = parse_direction(o.dir, "--dir");
+  const std::vector<double> texel = parse_number_list(o.texel, "--texel", kTexel);
   const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
   reader::VisibilityAsgView view;
   fail_on(view.open(asset), o.asset);
@@ -216,9 +185,8 @@ int query_radiance(const QueryOptions& o) {
   RadianceQueryArgs args;
   args.lobe = o.lobe;
   args.cluster = o.cluster;
-  const std::vector<double> h = parse_numbers(o.h, 3, false, "--h");
-  args.h = {h[0], h[1], h[2]};
-  const std::vector<double> rect = parse_numbers(o.rect, 4, false, "--rect");
+  args.h = parse_vec3(o.h, "--h");
+  const std::vector<double> rect = parse_number_list(o.rect, "--rect", kRect);
   args.rect = {rect[0], rect[1], rect[2], rect[3]};
   args.source = o.tables == "raw"          ? TableSource::Raw
                 : o.tables == "compressed" ? TableSource::Compressed
@@ -249,7 +217,7 @@ const bool registered = register_command(
     {"query", "answer per-texel and footprint queries on an asset (parallax, visibility, radiance)",
      [](CLI::App& app) -> Action {
        auto o = std::make_shared<QueryOptions>();
-       app.add_option("ASSET", o->asset, "asset file (.cbk)")->required();
+       add_asset_argument(app, o->asset);
        app.add_option("KIND", o->kind, "what to query: parallax, visibility or radiance")
            ->required()
            ->check(CLI::IsMember({"parallax", "visibility", "radiance"}));
@@ -269,7 +237,7 @@ const bool registered = register_command(
                       "radiance: which tables answer: auto (raw if kept, else compressed), raw, "
                       "compressed")
            ->check(CLI::IsMember({"auto", "raw", "compressed"}));
-       app.add_flag("--json", o->json, "print the answer as JSON on stdout");
+       add_json_flag(app, o->json, "print the answer as JSON on stdout");
        return [o] { return run_query(*o); };
      }});
 

@@ -25,8 +25,10 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <type_traits>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
@@ -53,21 +55,17 @@ struct ReportCliOptions {
   bool no_sat = false, no_raw = false, no_plots = false, json = false;
 };
 
+// --clusters, --ranks (whole numbers) and --targets: positive numbers, comma-separated.
 template <class T>
-std::vector<T> parse_list(const std::string& text, const std::string& option) {
-  std::vector<T> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    std::istringstream one(item);
-    T v{};
-    if (!(one >> v) || !(one >> std::ws).eof() || !(v > T(0)))
-      throw CLI::ValidationError(
-          option, "expects a comma-separated list of positive numbers, got '" + text + "'");
-    out.push_back(v);
-  }
-  if (out.empty()) throw CLI::ValidationError(option, "expects at least one value");
-  return out;
+std::vector<T> positive_list(const std::string& text, const std::string& option) {
+  const bool integers = std::is_integral_v<T>;
+  const std::vector<double> values =
+      parse_number_list(text, option,
+                        {.expected = integers ? "a comma-separated list of positive integers"
+                                              : "a comma-separated list of positive numbers",
+                         .integers = integers,
+                         .positive = true});
+  return std::vector<T>(values.begin(), values.end());
 }
 
 // Visibility labels of `fabric`: the bake's own visibility and cluster stages (without the
@@ -131,12 +129,12 @@ Action setup_report(CLI::App& app) {
   app.add_flag("--no-sat", o->no_sat, "skip the paper's whole-SAT layout");
   app.add_flag("--no-raw", o->no_raw, "skip the raw tables (built in memory: 2 GiB at 256^2)");
   app.add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
-  app.add_flag("--json", o->json, "print the rows as JSON on stdout");
+  add_json_flag(app, o->json, "print the rows as JSON on stdout");
   return [o] {
     compress::ReportOptions options;
-    options.clusters = parse_list<int>(o->clusters, "--clusters");
-    options.ranks = parse_list<int>(o->ranks, "--ranks");
-    options.targets = parse_list<double>(o->targets, "--targets");
+    options.clusters = positive_list<int>(o->clusters, "--clusters");
+    options.ranks = positive_list<int>(o->ranks, "--ranks");
+    options.targets = positive_list<double>(o->targets, "--targets");
     options.samples = o->samples;
     options.sat = !o->no_sat;
     options.raw = !o->no_raw;

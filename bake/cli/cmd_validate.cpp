@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "common/diagnostics.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/open_asset.hpp"
@@ -45,8 +46,8 @@ void check_metadata_json(const Asset& asset, std::vector<Finding>& findings) {
 Action setup_validate(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  app.add_option("ASSET", *path, "asset file (.cbk)")->required();
-  app.add_flag("--json", *json, "print one JSON document on stdout");
+  add_asset_argument(app, *path);
+  add_json_flag(app, *json);
   return [path, json] {
     std::vector<Finding> findings;
     Asset asset;

@@ -21,6 +21,7 @@
 #include <optional>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -52,10 +53,10 @@ struct VerifyOptions {
 
 Action setup_verify(CLI::App& app) {
   auto o = std::make_shared<VerifyOptions>();
-  app.add_option("ASSET", o->asset, "asset to verify (.cbk)")->required();
+  add_asset_argument(app, o->asset, "asset to verify (.cbk)");
   app.add_option("--fabric", o->fabric, "the fabric description the asset was baked from")
       ->required();
-  app.add_flag("--json", o->json, "print the report as JSON on stdout");
+  add_json_flag(app, o->json, "print the report as JSON on stdout");
   app.add_option("--seed", o->seed, "seed of the footprint sampling (default 1)");
   app.add_option("--max-rel-error", o->max_rel_error,
                  "raw tables: largest SAT-vs-direct-sum relative error accepted (default 1e-5)")

@@ -30,8 +30,6 @@ std::vector<Command> registered_commands();
 // Prints JSON on stdout (pretty, 2-space indent, trailing newline): the machine output of --json.
 void print_json(const nlohmann::json& value);
 
-// Parses "x,y,z" (whitespace allowed) into three doubles; throws CLI::ValidationError naming the
-// option.
-std::array<double, 3> parse_vec3(const std::string& text, const std::string& option_name);
+// Option groups (--json, ASSET) and value parsers shared by the commands: options.hpp.
 
 }  // namespace clothbake::cli

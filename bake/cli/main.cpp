@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
-#include <sstream>
 
 #include "bake/cli/command.hpp"
 #include "common/diagnostics.hpp"
@@ -33,19 +32,6 @@ std::vector<Command> registered_commands() {
 void print_json(const nlohmann::json& value) {
   std::cout << value.dump(2) << '\n';
   std::cout.flush();
-}
-
-std::array<double, 3> parse_vec3(const std::string& text, const std::string& option_name) {
-  std::array<double, 3> v{};
-  std::string s = text;
-  for (char& ch : s)
-    if (ch == ',') ch = ' ';
-  std::istringstream in(s);
-  std::string rest;
-  if (!(in >> v[0] >> v[1] >> v[2]) || (in >> rest))
-    throw CLI::ValidationError(option_name,
-                               "expected three comma-separated numbers x,y,z, got '" + text + "'");
-  return v;
 }
 
 }  // namespace clothbake::cli

@@ -1,0 +1,45 @@
+// Option groups and value parsers shared by the clothbake subcommands, so that every command
+// spells --json and ASSET the same way and parses "a,b,c" lists and directions with the same
+// rules and messages. Parsers throw CLI::ValidationError naming the option (exit code 1).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace clothbake::cli {
+
+// --json: print the command's answer as one JSON document on stdout (print_json). `help` says
+// what the document holds.
+CLI::Option* add_json_flag(CLI::App& app, bool& json,
+                           const std::string& help = "print one JSON document on stdout");
+
+// ASSET: the asset a command reads (required positional argument).
+CLI::Option* add_asset_argument(CLI::App& app, std::string& path,
+                                const std::string& help = "asset file (.cbk)");
+
+// What a number list must look like.
+struct NumberListRule {
+  std::string expected;              // for the message "expected EXPECTED, got 'TEXT'"
+  std::size_t count = 0;             // exactly this many numbers; 0: at least one
+  bool integers = false;             // whole numbers only
+  bool positive = false;             // every number > 0
+  double min = -1e308, max = 1e308;  // every number in [min, max]
+};
+
+// "a,b,c": numbers separated by commas and/or whitespace, each finite and the whole item (no
+// trailing characters), checked against `rule`. Throws CLI::ValidationError(option,
+// "expected RULE.expected, got 'TEXT'") otherwise.
+std::vector<double> parse_number_list(const std::string& text, const std::string& option,
+                                      const NumberListRule& rule);
+
+// "x,y,z": three finite numbers (not normalised).
+std::array<double, 3> parse_vec3(const std::string& text, const std::string& option);
+
+// "x,y,z": a direction: three finite numbers, not all zero (not normalised; the caller decides
+// whether the length matters). Throws CLI::ValidationError naming the option otherwise.
+std::array<double, 3> parse_direction(const std::string& text, const std::string& option);
+
+}  // namespace clothbake::cli
