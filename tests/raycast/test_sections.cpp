@@ -171,7 +171,7 @@ TEST(ParallaxSections, FootprintMeansMatchBruteForce) {
     reader::ParallaxSample s;
     ASSERT_TRUE(view.footprint_depth({x0, y0, x0 + w, y0 + h}, v, &s).ok());
     // Brute-force footprint means of the bins the reader's direction lookup weights (a bin
-    // centre gets almost all of the weight; the lookup itself is tested in tests/directions).
+    // centre gets almost all of the weight; the lookup itself is tested in tests/model).
     const model::BinBilinear<double> bw = grid.bilinear(o);
     double expected = 0;
     for (int i = 0; i < 4; ++i)

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "bake/inputs/fabric_toml.hpp"
-#include "test_support.hpp"
+#include "tests/bake/inputs/test_support.hpp"
 
 namespace clothbake::inputs {
 namespace {

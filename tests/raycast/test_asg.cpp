@@ -6,9 +6,9 @@
 #include <random>
 #include <vector>
 
-#include "raycast/asg_fit.hpp"
 #include "model/asg.hpp"
 #include "model/directions.hpp"
+#include "raycast/asg_fit.hpp"
 
 using clothbake::model::Asg;
 using clothbake::model::AsgParams;

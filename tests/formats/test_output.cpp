@@ -14,10 +14,10 @@
 #include <thread>
 
 #include "common/error.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
-#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {

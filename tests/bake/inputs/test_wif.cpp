@@ -17,7 +17,7 @@ using namespace clothbake::weave;
 namespace {
 
 const std::string kExamples = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/wif/";
-const std::string kData = std::string(CLOTHBAKE_SOURCE_DIR) + "/tests/weave/data/";
+const std::string kData = std::string(CLOTHBAKE_SOURCE_DIR) + "/tests/bake/inputs/data/";
 
 // A 4-shaft straight draw; `body` adds the weaving, weft and lift sections.
 std::string draft(const std::string& body, const std::string& warp = "[WARP]\nThreads=4\n") {

@@ -10,7 +10,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/wif.hpp"
 #include "common/diagnostics.hpp"
-#include "test_support.hpp"
+#include "tests/bake/inputs/test_support.hpp"
 
 namespace clothbake {
 namespace {

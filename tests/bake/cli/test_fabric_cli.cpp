@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "test_support.hpp"
+#include "tests/bake/inputs/test_support.hpp"
 #include "tests/support/run_cli.hpp"
 
 namespace clothbake {

@@ -8,7 +8,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_write.hpp"
 #include "common/diagnostics.hpp"
-#include "test_support.hpp"
+#include "tests/bake/inputs/test_support.hpp"
 
 namespace clothbake {
 namespace {

@@ -8,7 +8,7 @@
 #include "bake/inputs/map_image.hpp"
 #include "bake/inputs/map_normals.hpp"
 #include "bake/inputs/map_stats.hpp"
-#include "test_support.hpp"
+#include "tests/bake/inputs/test_support.hpp"
 
 namespace clothbake::inputs {
 namespace {

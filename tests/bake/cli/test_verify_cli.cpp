@@ -14,7 +14,7 @@
 
 #include "formats/writer/atomic_file.hpp"
 #include "tests/support/run_cli.hpp"
-#include "verify_fixtures.hpp"
+#include "tests/verify/verify_fixtures.hpp"
 
 namespace fs = std::filesystem;
 using namespace clothbake;

@@ -9,11 +9,11 @@
 #include <numeric>
 
 #include "common/error.hpp"
+#include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
-#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {

@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <cstring>
 
+#include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
-#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {
