@@ -10,8 +10,8 @@
 #include <string>
 
 #include "cluster/nearest_centre.hpp"
-#include "model/splitmix64.hpp"
 #include "common/error.hpp"
+#include "model/splitmix64.hpp"
 
 namespace clothbake::cluster {
 

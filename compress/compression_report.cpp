@@ -8,13 +8,13 @@
 #include <functional>
 #include <sstream>
 
-#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress/compressed_set.hpp"
 #include "compress/sat_pca.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
+#include "model/splitmix64.hpp"
 
 namespace clothbake::compress {
 namespace {

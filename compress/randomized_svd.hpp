@@ -7,11 +7,11 @@
 // costs m n^2 (40-55 s for 8192^2 on this machine) and a full eigensolver minutes; the randomized
 // range finder costs (2 q + 2) passes over the data with r + p columns, i.e. a few GEMMs.
 //
-// Determinism: the Gaussian test matrix comes from SplitMix64 (model/splitmix64.hpp) and Box-Muller,
-// specified bit for bit; products run over fixed blocks of kSvdBlockRows rows (TBB, disjoint
-// outputs), partial sums of A^T Q are added in block order, and Eigen's cache-blocking sizes are
-// pinned (pin_eigen_blocking) so that GEMM sums in the same order on every machine. Same inputs,
-// same bits, whatever the thread count.
+// Determinism: the Gaussian test matrix comes from SplitMix64 (model/splitmix64.hpp) and
+// Box-Muller, specified bit for bit; products run over fixed blocks of kSvdBlockRows rows (TBB,
+// disjoint outputs), partial sums of A^T Q are added in block order, and Eigen's cache-blocking
+// sizes are pinned (pin_eigen_blocking) so that GEMM sums in the same order on every machine. Same
+// inputs, same bits, whatever the thread count.
 //
 // C++20. Safe for any finite input (all-zero data, rank larger than min(m, n), one row); inputs
 // with NaN/Inf are the caller's error (compress checks its tables before).

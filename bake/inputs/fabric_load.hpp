@@ -12,8 +12,8 @@
 #include <optional>
 #include <string>
 
-#include "fabric/fabric.hpp"
 #include "bake/inputs/weave_maps.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake {
 

@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
-#include "fabric/fabric.hpp"
 #include "common/image_io/image_io.hpp"
+#include "fabric/fabric.hpp"
 
 namespace clothbake::inputs {
 

@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "fabric/fabric.hpp"
 #include "bake/inputs/weave.hpp"
+#include "fabric/fabric.hpp"
 #include "model/vec.hpp"
 
 namespace clothbake::weave {

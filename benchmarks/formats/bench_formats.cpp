@@ -9,12 +9,12 @@
 #include <map>
 #include <random>
 
+#include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/reader/xxh64.hpp"
 #include "formats/writer/asset_writer.hpp"
-#include "fabric/fabric_sections.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace {

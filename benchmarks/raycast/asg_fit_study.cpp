@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "bake/inputs/fabric_load.hpp"
+#include "model/directions.hpp"
 #include "raycast/asg_fit.hpp"
 #include "raycast/visibility.hpp"
-#include "model/directions.hpp"
 
 using namespace clothbake;
 

@@ -8,9 +8,9 @@
 #include <chrono>
 #include <map>
 
+#include "common/diagnostics.hpp"
 #include "raycast/parallax.hpp"
 #include "raycast/visibility.hpp"
-#include "common/diagnostics.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
 
 namespace {

@@ -16,8 +16,8 @@ struct Image {
   int height = 0;
   int channels = 0;
   std::vector<float> pixels;
-  std::string source_format;  // e.g. "openexr", "png", "tiff"; empty for in-memory images
-  int source_bits = 0;        // bits per channel in the file (8, 16, 32)
+  std::string source_format;     // e.g. "openexr", "png", "tiff"; empty for in-memory images
+  int source_bits = 0;           // bits per channel in the file (8, 16, 32)
   bool source_is_float = false;  // the file stores floating-point (half/float) pixels
 
   Image() = default;

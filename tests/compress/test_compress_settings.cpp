@@ -4,9 +4,9 @@
 
 #include <string>
 
-#include "fabric/fabric.hpp"
 #include "common/error.hpp"
 #include "compress/compress_settings.hpp"
+#include "fabric/fabric.hpp"
 
 namespace {
 

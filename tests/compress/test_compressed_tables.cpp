@@ -5,9 +5,9 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress_test_util.hpp"
+#include "model/splitmix64.hpp"
 
 namespace clothbake::compress {
 namespace {

@@ -5,9 +5,9 @@
 
 #include <cmath>
 
-#include "model/splitmix64.hpp"
 #include "common/error.hpp"
 #include "compress/cpca.hpp"
+#include "model/splitmix64.hpp"
 
 namespace clothbake::compress {
 namespace {

@@ -6,8 +6,8 @@
 
 #include <vector>
 
-#include "formats/writer/asset_writer.hpp"
 #include "fabric/fabric_sections.hpp"
+#include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
 
 namespace clothbake::test_support {
