@@ -11,8 +11,7 @@
 //                         the paper's operating point marked (scripts/plot_compression.py,
 //                         python3-matplotlib, run as a subprocess on the CSV; a failure to plot
 //                         is a warning, the CSV stays).
-// Visibility clusters come from the bake's own stages (visibility, cluster) when the executable
-// has them, else from a documented stand-in (yarn x tangent hemisphere, a warning says so).
+// Visibility clusters come from the bake's own stages (visibility, cluster).
 // Files are written to a temporary directory next to DIR and moved into place at the end.
 // Exit codes: 0, 1 usage, 2 bad fabric or unwritable output.
 #include <fmt/format.h>

@@ -11,7 +11,7 @@
 
 namespace clothbake::pipeline {
 
-// `picked` empty means every registered stage whose outputs are not already `seeded`.
+// `picked` empty means every stage of `stages` whose outputs are not already `seeded`.
 // Throws Error(Usage) for an unknown stage name (listing the known ones); Error(Internal) when
 // two stages produce the same artifact, an input has no producer, or the dependencies form a
 // cycle (naming the stages on it).

@@ -166,7 +166,7 @@ TEST_F(Cli, BakeInfoValidateExport) {
 }
 
 TEST_F(Cli, BytesIdenticalForThreads1And2AndRunToRun) {
-  // Every registered stage (the default), on a small tile: the promise covers the whole bake.
+  // Every stage (the default), on a small tile: the promise covers the whole bake.
   std::ofstream(dir_ / "small.toml") << "name = \"small\"\n[weave]\nname = \"twill2/1\"\n"
                                         "[[yarn]]\nname = \"warp\"\n[[yarn]]\nname = \"weft\"\n"
                                         "[bake]\nresolution = 16\n";
