@@ -14,7 +14,7 @@
 #include <string>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "cluster/kmeans.hpp"
+#include "benchmarks/compress/stand_in_clusters.hpp"
 #include "compress/randomized_svd.hpp"
 #include "model/splitmix64.hpp"
 #include "tables/half_vector_bins.hpp"
@@ -52,22 +52,8 @@ int main(int argc, char** argv) {
   Fabric& f = loaded.fabric;
   const int n = f.maps.resolution;
   const std::size_t texels = std::size_t(n) * n;
-  // Stand-in visibility labels: k-means on (folded tangent, yarn).
-  std::vector<float> feat(texels * 4);
-  for (std::size_t t = 0; t < texels; ++t) {
-    auto tg = f.maps.tangent[t];
-    float s = tg[0] + tg[1] < 0 ? -1.f : 1.f;
-    feat[t * 4 + 0] = s * tg[0];
-    feat[t * 4 + 1] = s * tg[1];
-    feat[t * 4 + 2] = s * tg[2];
-    feat[t * 4 + 3] = f.maps.yarn_id[t];
-  }
-  cluster::KMeansOptions ko;
-  ko.clusters = 8;
-  auto km = cluster::kmeans({feat.data(), texels, 4}, ko);
-  std::vector<uint8_t> labels(texels);
-  for (std::size_t t = 0; t < texels; ++t)
-    labels[t] = uint8_t(km.labels[t]);
+  const studies::StandInClusters km = studies::stand_in_clusters(f.maps);
+  const std::vector<uint8_t>& labels = km.labels;
   auto in = tables::radiance_inputs(f, labels, km.clusters);
   double minr = tables::min_roughness_in_use(in.view);
   int s = tables::default_samples_per_side(nbins, minr);

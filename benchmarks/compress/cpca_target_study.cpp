@@ -17,7 +17,7 @@
 #include <string>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "cluster/kmeans.hpp"
+#include "benchmarks/compress/stand_in_clusters.hpp"
 #include "compress/compressed_set.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
@@ -70,34 +70,21 @@ int main(int argc, char** argv) {
   if (argc == 8 && std::strcmp(argv[7], "raw") != 0) usage("the last argument must be 'raw'");
   LoadOptions lo;
   lo.resolution = int_argument(argv[2], "RESOLUTION", 8, 1024);
-  auto loaded = load_fabric_description(argv[1], lo);
-  Fabric& f = loaded.fabric;
-  const int n = f.maps.resolution;
-  const std::size_t texels = std::size_t(n) * n;
-  std::vector<float> feat(texels * 4);
-  for (std::size_t t = 0; t < texels; ++t) {
-    auto tg = f.maps.tangent[t];
-    float s = tg[0] + tg[1] < 0 ? -1.f : 1.f;
-    feat[t * 4 + 0] = s * tg[0];
-    feat[t * 4 + 1] = s * tg[1];
-    feat[t * 4 + 2] = s * tg[2];
-    feat[t * 4 + 3] = f.maps.yarn_id[t];
-  }
-  cluster::KMeansOptions ko;
-  ko.clusters = 8;
-  auto km = cluster::kmeans({feat.data(), texels, 4}, ko);
-  std::vector<uint8_t> labels(texels);
-  for (std::size_t t = 0; t < texels; ++t)
-    labels[t] = uint8_t(km.labels[t]);
-  auto in = tables::radiance_inputs(f, labels, km.clusters);
-  auto t0 = Clock::now();
-  auto data = compress::directional_texels(reader::RadianceTableKind::Specular, in.view, 32);
-  std::printf("fill %.2fs\n", secs(t0));
+  // Every argument is checked before the (slow) fill.
   compress::CpcaOptions o;
   o.clusters_per_stratum = int_argument(argv[3], "K", 1, compress::kMaxCpcaClustersPerStratum);
   o.rank = int_argument(argv[4], "R", 0, compress::kMaxCpcaRank);
   o.target_error = number_argument(argv[5], "E", 0.0, 1.0);
   if (argc > 6) o.power_iterations = int_argument(argv[6], "POWER_ITERATIONS", 0, 16);
+  auto loaded = load_fabric_description(argv[1], lo);
+  Fabric& f = loaded.fabric;
+  const int n = f.maps.resolution;
+  const studies::StandInClusters km = studies::stand_in_clusters(f.maps);
+  const std::vector<uint8_t>& labels = km.labels;
+  auto in = tables::radiance_inputs(f, labels, km.clusters);
+  auto t0 = Clock::now();
+  auto data = compress::directional_texels(reader::RadianceTableKind::Specular, in.view, 32);
+  std::printf("fill %.2fs\n", secs(t0));
   t0 = Clock::now();
   timespec pc0;
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &pc0);
