@@ -304,6 +304,28 @@ double CompressedRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t 
   return v;
 }
 
+double CompressedRadianceTables::texel_value(const BinWeights& weights, uint32_t x, uint32_t y,
+                                             int* cluster) const noexcept {
+  if (cluster != nullptr) *cluster = -1;
+  const uint32_t bins = bins_per_side_ * bins_per_side_;
+  if (!is_open() || x >= n_ || y >= n_ || weights.count > 4) return 0.0;
+  for (uint32_t k = 0; k < weights.count; ++k)
+    if (weights.bin[k] >= bins) return 0.0;
+  const int c = cluster_of_texel(x, y);
+  if (cluster != nullptr) *cluster = c;
+  if (c < 0) return 0.0;
+  double v = 0.0;
+  for (uint32_t i = image_begin_[c]; i < image_begin_[c + 1]; ++i) {
+    const int64_t w = weight(i, x, y);
+    if (w == 0) continue;
+    double basis = 0.0;
+    for (uint32_t k = 0; k < weights.count; ++k)
+      basis += weights.weight[k] * double(basis_[uint64_t(weights.bin[k]) * images_ + i]);
+    v += double(w) * basis;
+  }
+  return v;
+}
+
 int CompressedRadianceTables::decode_texel(uint32_t x, uint32_t y, float* out) const noexcept {
   if (!is_open() || out == nullptr || x >= n_ || y >= n_) return -1;
   const uint32_t bins = bins_per_side_ * bins_per_side_;

@@ -64,6 +64,12 @@ class CompressedRadianceTables final : public RadianceTables {
   // Decompressed value of one texel in one bin (x, y < N, bin < bins): the table value T[c][bin]
   // of the texel's cluster c (0 when it has none).
   double texel_value(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
+  // The texel's value interpolated over the bins of `weights` (what a footprint query with the
+  // same weights integrates; each image weight is read once), and its cluster (-1 without a cell,
+  // value 0) in *cluster when not null. O(rank x bins of weights). x, y < N, weights from
+  // make_bin_weights(bins_per_side(), ...); anything else gives 0 and cluster -1.
+  double texel_value(const BinWeights& weights, uint32_t x, uint32_t y,
+                     int* cluster) const noexcept;
   // Every bin of one texel at once (out: bins floats, zeros for a texel without a cell); returns
   // the texel's cluster or -1. O(bins x (1 + rank)): for full decompression (verify, export).
   int decode_texel(uint32_t x, uint32_t y, float* out) const noexcept;

@@ -1,0 +1,36 @@
+// Per-texel parameters and table values of an open evaluator (eval_data.hpp).
+#include "eval/eval_data.hpp"
+
+namespace clothbake::eval {
+
+model::TexelParams<double> EvalData::texel_params(uint64_t t) const {
+  model::TexelParams<double> p;
+  const YarnShading& yarn = yarns[maps.yarn_id[t]];
+  const float* tangent = maps.tangent.data + 3 * t;
+  const float* colour = maps.albedo.data + 3 * t;
+  const Rgb c(colour[0], colour[1], colour[2]);
+  p.tangent = model::Vec3d(tangent[0], tangent[1], tangent[2]);
+  p.roughness = yarn.roughness;
+  p.optical_thickness = yarn.optical_thickness;
+  p.specular_albedo = yarn.specular_albedo * c;
+  p.diffuse_reflectance = yarn.diffuse_reflectance * c;
+  p.diffuse_transmittance = yarn.diffuse_transmittance * c;
+  p.gap = maps.gap[t];
+  p.sheen_color = sheen_color;
+  p.sheen_roughness = sheen_roughness;
+  return p;
+}
+
+double TableSource::texel_value(const reader::BinWeights& weights, uint32_t x, uint32_t y,
+                                uint32_t label, int* cluster) const noexcept {
+  if (is_compressed()) return compressed.texel_value(weights, x, y, cluster);
+  const int column = raw.column_of_cluster(label);
+  *cluster = column < 0 ? -1 : int(label);
+  if (column < 0) return 0.0;
+  double v = 0.0;
+  for (uint32_t k = 0; k < weights.count; ++k)
+    v += weights.weight[k] * raw.texel_value(weights.bin[k], x, y, uint32_t(column));
+  return v;
+}
+
+}  // namespace clothbake::eval

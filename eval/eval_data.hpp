@@ -1,0 +1,70 @@
+// What an open Evaluator holds: the reader views of the asset, the per-yarn shading constants and
+// the derived footprint sums; shared by the method implementations (eval/*.cpp). Internal to the
+// evaluator library (not installed as API; its layout may change).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "eval/evaluator.hpp"
+#include "eval/footprint_sums.hpp"
+#include "formats/reader/cluster_sections.hpp"
+#include "formats/reader/compressed_tables.hpp"
+#include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/parallax_sections.hpp"
+#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader/visibility_sections.hpp"
+#include "model/cloth_bsdf.hpp"
+
+namespace clothbake::eval {
+
+// The yarn record's Sec. 3 parameters as the BSDF takes them (the per-texel colour multiplies the
+// three albedos, docs/evaluator.md "Texel parameters").
+struct YarnShading {
+  double roughness = 0.3;
+  double optical_thickness = 2.0;
+  Rgb specular_albedo, diffuse_reflectance, diffuse_transmittance;
+};
+
+// One kind of Integral-Radiance tables, raw or compressed (exactly one of the two is open).
+struct TableSource {
+  reader::RawRadianceTables raw;
+  reader::CompressedRadianceTables compressed;
+  const reader::RadianceTables* tables = nullptr;  // &raw or &compressed, null when absent
+
+  bool present() const { return tables != nullptr; }
+  bool is_compressed() const { return tables == &compressed; }
+  // T(q, h) of texel (x, y) (x, y < N) interpolated over the bins of `weights`, and the cluster
+  // whose table holds it (-1: none; the value is then 0). `label` is the texel's label-map cluster,
+  // which is the raw tables' column (their columns hold a texel only under its label).
+  double texel_value(const reader::BinWeights& weights, uint32_t x, uint32_t y, uint32_t label,
+                     int* cluster) const noexcept;
+};
+
+struct EvalData {
+  EvalOptions options;
+  uint32_t n = 0;  // resolution of every per-texel section
+  reader::FeatureMapsView maps;
+  std::vector<YarnShading> yarns;
+  model::Rgb<double> sheen_color;
+  double sheen_roughness = 0.5;
+  reader::ParallaxView parallax;
+  reader::VisibilityAsgView visibility;
+  reader::VisibilityClusterView clusters;
+  TableSource specular, gap;
+  FootprintSums sums;
+
+  uint32_t cluster_count() const { return clusters.cluster_count(); }
+  uint64_t texel(int64_t x, int64_t y) const {
+    const int64_t nn = int64_t(n);
+    int64_t xm = x % nn, ym = y % nn;
+    if (xm < 0) xm += nn;
+    if (ym < 0) ym += nn;
+    return uint64_t(ym) * n + uint64_t(xm);
+  }
+  // The BSDF parameters of texel t (index y * N + x): its tangent and yarn, the colour times the
+  // yarn's albedos, its gap value and the fabric's sheen.
+  model::TexelParams<double> texel_params(uint64_t t) const;
+};
+
+}  // namespace clothbake::eval

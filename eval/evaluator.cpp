@@ -1,0 +1,281 @@
+// Evaluator: opening an asset for evaluation and dispatching estimates (evaluator.hpp).
+#include "eval/evaluator.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <new>
+
+#include "eval/eval_data.hpp"
+#include "eval/exact_sum.hpp"
+#include "eval/methods.hpp"
+
+namespace clothbake::eval {
+namespace {
+
+using reader::Check;
+using reader::ErrorCode;
+
+// Largest derived footprint sums open() builds (bounds (N + 1)^2 x 11 C doubles).
+constexpr uint64_t kMaxDerivedBytes = uint64_t(1) << 30;
+
+const char* const kMethodNames[kMethodCount] = {"multiscale", "multiscale-paper", "brute",
+                                                "reference"};
+
+// Opens one kind of Integral-Radiance tables as `choice` asks. Absent tables leave source empty and
+// return Ok unless `choice` names a representation explicitly.
+Status open_tables(const reader::Asset& asset, reader::RadianceTableKind kind, TableChoice choice,
+                   TableSource* source) {
+  source->tables = nullptr;
+  if (choice != TableChoice::Raw) {
+    Status s = source->compressed.open(asset, kind);
+    if (s.ok()) {
+      source->tables = &source->compressed;
+      return {};
+    }
+    if (s.code() != ErrorCode::NotFound || choice == TableChoice::Compressed) return s;
+  }
+  Status s = source->raw.open(asset, kind);
+  if (s.ok()) {
+    source->tables = &source->raw;
+    return {};
+  }
+  if (s.code() == ErrorCode::NotFound && choice == TableChoice::Auto) return {};
+  return s;
+}
+
+Status cross_section(const char* what, uint32_t got, uint32_t want) {
+  return Status::error(ErrorCode::Malformed, Check::CrossSection,
+                       "%s is %u, the feature maps' resolution or the clusters' count is %u", what,
+                       unsigned(got), unsigned(want));
+}
+
+}  // namespace
+
+const char* method_name(Method method) noexcept {
+  const int m = int(method);
+  return m >= 0 && m < kMethodCount ? kMethodNames[m] : "unknown";
+}
+
+bool parse_method(const char* name, Method* out) noexcept {
+  if (name == nullptr) return false;
+  for (int m = 0; m < kMethodCount; ++m)
+    if (std::strcmp(name, kMethodNames[m]) == 0) {
+      *out = Method(m);
+      return true;
+    }
+  return false;
+}
+
+Evaluator::Evaluator() noexcept = default;
+Evaluator::~Evaluator() = default;
+Evaluator::Evaluator(Evaluator&&) noexcept = default;
+Evaluator& Evaluator::operator=(Evaluator&&) noexcept = default;
+
+uint32_t Evaluator::resolution() const noexcept {
+  return data_ ? data_->n : 0;
+}
+uint32_t Evaluator::cluster_count() const noexcept {
+  return data_ ? data_->cluster_count() : 0;
+}
+const char* Evaluator::table_source() const noexcept {
+  if (!data_ || !data_->specular.present()) return "none";
+  return data_->specular.is_compressed() ? "compressed" : "raw";
+}
+uint64_t Evaluator::derived_bytes() const noexcept {
+  return data_ ? data_->sums.bytes() : 0;
+}
+
+Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) noexcept {
+  data_.reset();
+  if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "direct_max_side must be finite and >= 0");
+  std::unique_ptr<EvalData> d(new (std::nothrow) EvalData);
+  if (!d) return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate");
+  d->options = options;
+
+  Status s = reader::read_feature_maps(asset, &d->maps);
+  if (!s.ok()) return s;
+  d->n = d->maps.resolution;
+  const reader::FabricInfoRecord* fabric = nullptr;
+  s = reader::read_fabric_info(asset, &fabric);
+  if (!s.ok()) return s;
+  reader::ArrayView<reader::YarnMaterialRecord> yarns;
+  s = reader::read_yarn_materials(asset, &yarns);
+  if (!s.ok()) return s;
+  if (yarns.size == 0)
+    return Status::error(ErrorCode::Malformed, Check::YarnIdRange, "the asset has no yarn records");
+  try {
+    d->yarns.resize(yarns.size);
+  } catch (const std::bad_alloc&) {
+    return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate the yarn table");
+  }
+  for (uint64_t k = 0; k < yarns.size; ++k) {
+    const reader::YarnMaterialRecord& r = yarns[k];
+    YarnShading& y = d->yarns[k];
+    y.roughness = r.roughness;
+    y.optical_thickness = r.optical_thickness;
+    y.specular_albedo = Rgb(r.specular_albedo[0], r.specular_albedo[1], r.specular_albedo[2]);
+    y.diffuse_reflectance =
+        Rgb(r.diffuse_reflectance[0], r.diffuse_reflectance[1], r.diffuse_reflectance[2]);
+    y.diffuse_transmittance =
+        Rgb(r.diffuse_transmittance[0], r.diffuse_transmittance[1], r.diffuse_transmittance[2]);
+  }
+  for (uint64_t t = 0; t < d->maps.yarn_id.size; ++t)
+    if (d->maps.yarn_id[t] >= yarns.size)
+      return Status::error(ErrorCode::Malformed, Check::YarnIdRange,
+                           "texel (%u, %u) has yarn id %u but the asset has %u yarn records",
+                           unsigned(t % d->n), unsigned(t / d->n), unsigned(d->maps.yarn_id[t]),
+                           unsigned(yarns.size));
+  d->sheen_color = Rgb(fabric->sheen_color[0], fabric->sheen_color[1], fabric->sheen_color[2]);
+  d->sheen_roughness = fabric->sheen_roughness;
+
+  s = d->parallax.open(asset);
+  if (!s.ok()) return s;
+  if (!d->parallax.has_sat())
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no parallax_sat section (the evaluator needs the "
+                         "footprint-averaged offsets)");
+  s = d->visibility.open(asset);
+  if (!s.ok()) return s;
+  s = d->clusters.open(asset);
+  if (!s.ok()) return s;
+  if (d->parallax.resolution() != d->n) return cross_section("parallax resolution", d->parallax.resolution(), d->n);
+  if (d->visibility.resolution() != d->n)
+    return cross_section("visibility resolution", d->visibility.resolution(), d->n);
+  if (d->clusters.resolution() != d->n)
+    return cross_section("cluster label resolution", d->clusters.resolution(), d->n);
+
+  const uint32_t clusters = d->cluster_count();
+  s = open_tables(asset, reader::RadianceTableKind::Specular, options.tables, &d->specular);
+  if (!s.ok()) return s;
+  const TableChoice gap_choice =
+      d->specular.present() ? (d->specular.is_compressed() ? TableChoice::Compressed : TableChoice::Raw)
+                            : options.tables;
+  s = open_tables(asset, reader::RadianceTableKind::Gap, gap_choice, &d->gap);
+  if (s.code() == ErrorCode::NotFound) {
+    d->gap.tables = nullptr;  // no gap tables in this representation: the footprint sums stand in
+    s = {};
+  }
+  if (!s.ok()) return s;
+  for (const TableSource* source : {&d->specular, &d->gap}) {
+    if (!source->present()) continue;
+    if (source->tables->resolution() != d->n)
+      return cross_section("Integral-Radiance table resolution", source->tables->resolution(), d->n);
+    if (source->tables->cluster_count() != clusters)
+      return cross_section("Integral-Radiance cluster count", source->tables->cluster_count(),
+                           clusters);
+  }
+
+  const SumChannels layout{clusters};
+  if (uint64_t(d->n + 1) * (d->n + 1) * layout.count() * sizeof(double) > kMaxDerivedBytes)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "the footprint sums of %u x %u texels and %u clusters exceed %llu bytes",
+                         unsigned(d->n), unsigned(d->n), unsigned(clusters),
+                         static_cast<unsigned long long>(kMaxDerivedBytes));
+  const EvalData& data = *d;
+  const bool built = d->sums.build(d->n, layout, [&](uint64_t t, double* out) {
+    for (uint32_t c = 0; c < layout.count(); ++c)
+      out[c] = 0.0;
+    const uint32_t label = data.clusters.label(int64_t(t % data.n), int64_t(t / data.n));
+    const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
+    const float* colour = data.maps.albedo.data + 3 * t;
+    const Rgb c(colour[0], colour[1], colour[2]);
+    const double gap = data.maps.gap[t];
+    const Rgb k = yarn.specular_albedo * c;
+    const Rgb rd = (yarn.diffuse_reflectance * c) * gap;
+    const Rgb td = (yarn.diffuse_transmittance * c) * gap;
+    for (int ch = 0; ch < 3; ++ch) {
+      out[layout.albedo() + 3 * label + ch] = k[ch];
+      out[layout.diffuse_r() + 3 * label + ch] = rd[ch];
+      out[layout.diffuse_t() + 3 * label + ch] = td[ch];
+    }
+    out[layout.area() + label] = 1.0;
+    out[layout.gap() + label] = 1.0 - gap;
+  });
+  if (!built)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "cannot allocate the footprint sums");
+  data_ = std::move(d);
+  return {};
+}
+
+namespace {
+
+Status check_arguments(const EvalData* data, const Footprint& footprint, LobeMask lobes,
+                       const Estimate* out) {
+  if (data == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "evaluator is not open");
+  if (out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "estimate: null output");
+  if (lobes == 0 || (lobes & ~kAllLobes) != 0)
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "lobe mask 0x%x is empty or has unknown bits", unsigned(lobes));
+  reader::FootprintPlan plan;
+  if (reader::make_footprint_plan(footprint, data->n, &plan)) return {};
+  return reader::plan_footprint(footprint, data->n, &plan);
+}
+
+void sum_value(Estimate* out) {
+  out->value = Rgb();
+  for (const Rgb& lobe : out->lobes)
+    out->value += lobe;
+}
+
+}  // namespace
+
+Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const double wo[3],
+                           Method method, uint32_t spp, Rng& rng, LobeMask lobes,
+                           Estimate* out) const noexcept {
+  Status s = check_arguments(data_.get(), footprint, lobes, out);
+  if (!s.ok()) return s;
+  if (spp == 0 && method != Method::Reference)
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "spp must be at least 1 for method %s", method_name(method));
+  if (unsigned(method) >= unsigned(kMethodCount))
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown method");
+  const bool multiscale = method == Method::Multiscale || method == Method::MultiscalePaper;
+  if (multiscale && !data_->specular.present())
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "method %s needs Integral-Radiance tables; this asset has none%s",
+                         method_name(method),
+                         data_->options.tables == TableChoice::Auto ? "" : " of the kind asked for");
+  ShadingFrame frame;
+  if (!make_frame(*data_, wi, wo, lobes, &frame, &s)) return s;
+  *out = Estimate{};
+
+  const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
+  const double direct_side = data_->options.direct_max_side;
+  if (!(w > 0.0 && h > 0.0) ||
+      (multiscale && w < direct_side && h < direct_side)) {
+    out->counters.direct = true;
+    s = exact_average(*data_, frame, footprint, 0, out);
+  } else if (method == Method::Reference) {
+    s = exact_average(*data_, frame, footprint, 0, out);
+  } else if (method == Method::Brute) {
+    brute_force(*data_, frame, footprint, spp, rng, out);
+  } else {
+    s = control_variates(*data_, frame, footprint, spp, rng, method == Method::MultiscalePaper, out);
+  }
+  if (!s.ok()) return s;
+  sum_value(out);
+  return {};
+}
+
+Status Evaluator::reference_supersampled(const Footprint& footprint, const double wi[3],
+                                         const double wo[3], uint32_t supersampling,
+                                         LobeMask lobes, Estimate* out) const noexcept {
+  Status s = check_arguments(data_.get(), footprint, lobes, out);
+  if (!s.ok()) return s;
+  if (supersampling == 0)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "supersampling must be >= 1");
+  ShadingFrame frame;
+  if (!make_frame(*data_, wi, wo, lobes, &frame, &s)) return s;
+  *out = Estimate{};
+  s = exact_average(*data_, frame, footprint, supersampling, out);
+  if (!s.ok()) return s;
+  sum_value(out);
+  return {};
+}
+
+}  // namespace clothbake::eval

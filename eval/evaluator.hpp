@@ -1,0 +1,157 @@
+// The multi-scale evaluator (paper Sec. 4, Eq. 5-11): the average of the cloth BSDF over a pixel
+// footprint, as a renderer needs it per shading point, by four methods that estimate the same
+// integral (docs/evaluator.md has every formula and the reasoning behind each choice).
+//
+//   value(P, i, o) = (1/|P|) integral over P of f^(x'(p), i, o) V(x'(p), i) |i_z| dp       (Eq. 5)
+//
+// P is a footprint rectangle in texel units (any size and position; the tile wraps), x'(p) is Eq. 2
+// applied to p with the parallax depth r of the texel containing p, and every other factor (the
+// BSDF parameters of Eq. 4, the ASG visibility V) is that of the texel containing x'. The delta
+// transmission lobe is a Dirac term: it contributes its footprint-averaged weight exactly when
+// i = -o, and 0 otherwise.
+//
+// Methods (Method):
+//   Multiscale      clustered control variates used without approximation: the SAT base term plus
+//                   a Monte Carlo residual whose control variate integrates exactly to the base, so
+//                   the estimate is unbiased (docs/evaluator.md, "Unbiased multi-scale").
+//   MultiscalePaper Eq. 8-10 as printed: one parallax shift per footprint, k-bar and G-bar at the
+//                   footprint, residual D (V - v_c) (biased where those approximations fail).
+//   Brute           the paper's "w/o multi-scale": stratified samples p in P, per-sample parallax,
+//                   the full f^ V |i_z| at x'(p).
+//   Reference       the exact integral under the piecewise-constant texel model the asset stores
+//                   (an exact partition of P into pieces on which the integrand is constant); the
+//                   ground truth of every error the project reports.
+// Footprints whose both sides are below EvalOptions::direct_max_side texels are answered by the
+// reference's exact sum in every method (no tables, no noise).
+//
+// Contract: C++17, standard library only, over the reader library and model/. open() allocates the
+// derived footprint sums (docs/evaluator.md, "Memory") and never throws: allocation failure is a
+// Status. estimate() does not allocate except in the Reference method for footprints of more than
+// 64 texels (a dense weight map of N x N doubles), is noexcept, thread-safe (const), and safe for
+// any argument values (bad ones give InvalidArgument). The Asset must outlive the Evaluator.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "formats/reader/asset.hpp"
+#include "formats/reader/radiance_query.hpp"
+#include "formats/reader/status.hpp"
+#include "model/cloth_bsdf.hpp"
+#include "model/rgb.hpp"
+
+namespace clothbake::eval {
+
+using Rgb = model::Rgb<double>;
+using reader::Footprint;
+using reader::Status;
+
+enum class Method : uint8_t { Multiscale, MultiscalePaper, Brute, Reference };
+inline constexpr int kMethodCount = 4;
+
+// "multiscale", "multiscale-paper", "brute", "reference".
+const char* method_name(Method method) noexcept;
+// Inverse of method_name; false for anything else.
+bool parse_method(const char* name, Method* out) noexcept;
+
+// A set of lobes of Eq. 4 (bit = model::Lobe value).
+using LobeMask = uint32_t;
+inline constexpr LobeMask kAllLobes = (1u << model::kLobeCount) - 1;
+constexpr LobeMask lobe_bit(model::Lobe lobe) {
+  return 1u << unsigned(lobe);
+}
+
+// Which Integral-Radiance tables the multi-scale methods read.
+enum class TableChoice : uint8_t {
+  Auto,        // the compressed tables when the asset has them, else the raw ones
+  Raw,         // the raw fixed-point SATs (NotFound if absent)
+  Compressed,  // the C-PCA compressed tables (NotFound if absent)
+};
+
+struct EvalOptions {
+  TableChoice tables = TableChoice::Auto;
+  // Footprints with both sides below this many texels skip the tables and are summed exactly
+  // (`clothbake verify` reports the smallest side at which the compressed tables meet their error
+  // target; 1 texel on the example fabrics). 0 disables the direct path.
+  double direct_max_side = 1.0;
+};
+
+// A deterministic random source: SplitMix64 (Steele, Lea and Flood 2014), bit for bit the same on
+// every platform, so that a seed gives the same estimates everywhere.
+class Rng {
+ public:
+  explicit Rng(uint64_t seed = 0) noexcept : state_(seed) {}
+  uint64_t next() noexcept {
+    uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+  // Uniform in [0, 1) with 53 random bits.
+  double uniform() noexcept { return double(next() >> 11) * 0x1.0p-53; }
+
+ private:
+  uint64_t state_;
+};
+
+// What one estimate cost.
+struct Counters {
+  uint32_t samples = 0;        // Monte Carlo samples drawn over the footprint
+  uint32_t texel_evals = 0;    // per-texel BSDF evaluations (f^ V at one texel)
+  uint32_t table_queries = 0;  // footprint queries on SATs (radiance, parallax, footprint sums)
+  bool direct = false;         // answered by the exact sum (footprint below direct_max_side)
+};
+
+struct Estimate {
+  Rgb value;                     // the footprint average of Eq. 5 over the lobes asked for
+  Rgb lobes[model::kLobeCount];  // its part per lobe (model::Lobe order); 0 for lobes not asked
+  Counters counters;
+};
+
+struct EvalData;  // the asset's views and derived tables (eval/eval_data.hpp)
+
+class Evaluator {
+ public:
+  Evaluator() noexcept;
+  ~Evaluator();
+  Evaluator(Evaluator&&) noexcept;
+  Evaluator& operator=(Evaluator&&) noexcept;
+
+  // Opens the views every method needs and builds the derived footprint sums. Needs the feature
+  // maps, fabric records, parallax table with its SAT, visibility ASGs and clusters; the
+  // Integral-Radiance specular tables are optional here (the multi-scale methods report NotFound
+  // without them). Errors: the reader's (NotFound CBK-E019 naming the missing section, layout and
+  // range errors), CrossSection (CBK-E022) when the sections disagree on the resolution or the
+  // clusters, Unsupported when the derived tables cannot be allocated.
+  Status open(const reader::Asset& asset, const EvalOptions& options = {}) noexcept;
+  bool is_open() const noexcept { return data_ != nullptr; }
+
+  uint32_t resolution() const noexcept;
+  uint32_t cluster_count() const noexcept;
+  // Which tables the multi-scale methods read: "raw", "compressed" or "none".
+  const char* table_source() const noexcept;
+  // Bytes of the derived footprint sums held by open().
+  uint64_t derived_bytes() const noexcept;
+
+  // One estimate of the footprint average of Eq. 5 (header comment). wi (towards the light) and wo
+  // (towards the viewer) are any finite non-zero vectors in the local frame (normalised here);
+  // spp >= 1 samples for the sampling methods (ignored by Reference and by the direct path); rng
+  // advances. Errors: InvalidArgument for a bad footprint, direction, spp or lobe mask (0 or
+  // unknown bits), NotFound when the method needs tables the asset does not have.
+  Status estimate(const Footprint& footprint, const double wi[3], const double wo[3],
+                  Method method, uint32_t spp, Rng& rng, LobeMask lobes,
+                  Estimate* out) const noexcept;
+
+  // The Reference method with s x s midpoint samples per covered source texel instead of the exact
+  // partition (s >= 1): converges to Reference at |difference| <= 2 / s * max_lobe_value
+  // (docs/evaluator.md, "Reference"); for testing that bound.
+  Status reference_supersampled(const Footprint& footprint, const double wi[3], const double wo[3],
+                                uint32_t s, LobeMask lobes, Estimate* out) const noexcept;
+
+  const EvalData* data() const noexcept { return data_.get(); }
+
+ private:
+  std::unique_ptr<EvalData> data_;
+};
+
+}  // namespace clothbake::eval

@@ -1,0 +1,105 @@
+// The integrand of Eq. 5 at one texel (texel_shading.hpp).
+#include "eval/texel_shading.hpp"
+
+#include <cmath>
+
+#include "model/asg.hpp"
+
+namespace clothbake::eval {
+namespace {
+
+bool unit_vector(const double v[3], model::Vec3d* out) {
+  if (v == nullptr || !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+    return false;
+  const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  if (!(len > 0.0) || !std::isfinite(len)) return false;
+  *out = model::Vec3d(v[0] / len, v[1] / len, v[2] / len);
+  return true;
+}
+
+}  // namespace
+
+bool make_frame(const EvalData& data, const double wi[3], const double wo[3], LobeMask mask,
+                ShadingFrame* frame, Status* status) noexcept {
+  ShadingFrame& f = *frame;
+  if (!unit_vector(wi, &f.wi)) {
+    *status = Status::error(reader::ErrorCode::InvalidArgument, reader::Check::None,
+                            "wi must be a finite non-zero vector");
+    return false;
+  }
+  if (!unit_vector(wo, &f.wo)) {
+    *status = Status::error(reader::ErrorCode::InvalidArgument, reader::Check::None,
+                            "wo must be a finite non-zero vector");
+    return false;
+  }
+  f.mask = mask;
+  f.wi_light = model::Vec3d(f.wi.x, f.wi.y, std::abs(f.wi.z));
+  f.h = f.wi + f.wo;
+  f.cos_i = std::abs(f.wi.z);
+  f.delta = f.wi.x == -f.wo.x && f.wi.y == -f.wo.y && f.wi.z == -f.wo.z;
+
+  // The parallax direction exactly as the reader uses it (mirrored to the upper side, then moved
+  // onto the cap's rim below min_cos), and Eq. 2's factor in texel units.
+  const double mirrored[3] = {f.wo.x, f.wo.y, std::abs(f.wo.z)};
+  reader::ParallaxSample sample;
+  if (!data.parallax.depth(0, 0, mirrored, &sample).ok()) {
+    *status = Status::error(reader::ErrorCode::InvalidArgument, reader::Check::None,
+                            "wo cannot be used for the parallax table");
+    return false;
+  }
+  f.view = model::Vec3d(sample.direction[0], sample.direction[1], sample.direction[2]);
+  const double n = double(data.n);
+  f.offset_per_depth[0] = n * f.view.x / f.view.z;
+  f.offset_per_depth[1] = n * f.view.y / f.view.z;
+  const model::DirectionGrid<double> parallax_grid{int(data.parallax.dirs()),
+                                                   data.parallax.info().min_cos};
+  f.parallax_bins = parallax_grid.bilinear(f.view);
+
+  // v_c(i) of every cluster, as reader::VisibilityClusterView::mean_visibility sums it.
+  const model::DirectionGrid<double> visibility_grid{int(data.clusters.visibility_dirs()), 0.0};
+  const model::BinBilinear<double> b = visibility_grid.bilinear(f.wi_light);
+  for (uint32_t c = 0; c < data.cluster_count(); ++c) {
+    double v = 0.0;
+    for (int k = 0; k < 4; ++k)
+      v += b.weight[k] * data.clusters.mean_visibility_bin(c, uint32_t(b.index[k]));
+    f.mean_visibility[c] = v > 1.0 ? 1.0 : v;  // V <= 1 (clamped); an overshooting lobe mean is not
+  }
+  return true;
+}
+
+double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x,
+                   int64_t y) noexcept {
+  double r = 0.0;
+  for (int k = 0; k < 4; ++k)
+    if (frame.parallax_bins.weight[k] > 0.0)
+      r += frame.parallax_bins.weight[k] *
+           data.parallax.bin_depth(uint32_t(frame.parallax_bins.index[k]), x, y);
+  return r;
+}
+
+void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
+                 TexelShading* out) noexcept {
+  const uint64_t t = data.texel(x, y);
+  const model::ClothBsdf<double> bsdf(data.texel_params(t));
+  // V exactly as reader::VisibilityAsgView::visibility computes it, for the mirrored direction.
+  const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe(x, y));
+  const double v = model::asg_eval(lobe, frame.wi_light);
+  const double visibility = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
+  const model::LobeValues<double> f = bsdf.eval(frame.wi, frame.wo, visibility);
+  for (int l = 0; l < model::kLobeCount; ++l) {
+    const model::Lobe lobe_id = model::Lobe(l);
+    if (!(frame.mask & lobe_bit(lobe_id))) {
+      out->lobes[l] = Rgb();
+    } else if (lobe_id == model::Lobe::DeltaTransmission) {
+      out->lobes[l] = frame.delta ? f.delta_transmission : Rgb();
+    } else {
+      out->lobes[l] = f[lobe_id] * frame.cos_i;
+    }
+  }
+  out->visibility = visibility;
+  out->gap = bsdf.gap();
+  out->sggx_d = bsdf.sggx().D(frame.h);
+  out->label = data.clusters.label(x, y);
+}
+
+}  // namespace clothbake::eval

@@ -1,0 +1,60 @@
+// The integrand of Eq. 5 at one texel, and the per-estimate constants every method shares
+// (docs/evaluator.md, "The integrand").
+//
+//   g(t) = f^(t, i, o) V(t, i) |i_z|   per lobe of Eq. 4, the BSDF of model/cloth_bsdf.hpp with the
+//                                      parameters of texel t (EvalData::texel_params)
+//   delta: the weight V T_sheen (1 - I) of the Dirac term when i = -o, else 0
+//
+// Both sides of the cloth have the same relief (the model's two-sidedness): the parallax table is
+// looked up for (o_x, o_y, |o_z|) and the visibility for (i_x, i_y, |i_z|).
+//
+// C++17, standard library only, no allocation. Internal to the evaluator library.
+#pragma once
+
+#include <cstdint>
+
+#include "eval/eval_data.hpp"
+#include "model/directions.hpp"
+
+namespace clothbake::eval {
+
+// Everything that depends on (i, o) but not on the texel, computed once per estimate.
+struct ShadingFrame {
+  model::Vec3d wi, wo;     // unit, as the caller gave them
+  model::Vec3d wi_light;   // (i_x, i_y, |i_z|): the light direction of the visibility look-ups
+  model::Vec3d view;       // the parallax direction as the table uses it (mirrored, on the cap)
+  model::Vec3d h;          // i + o, unnormalised (D is homogeneous of degree 0)
+  double cos_i = 0;        // |i_z|
+  bool delta = false;      // i == -o exactly: the delta lobe contributes
+  LobeMask mask = kAllLobes;
+  // Eq. 2 in texel units: the offset of a texel with depth r is r * offset_per_depth.
+  double offset_per_depth[2] = {0, 0};
+  // Bilinear weights of the parallax view direction over the table's bins.
+  model::BinBilinear<double> parallax_bins;
+  // v_c(i) per cluster (Eq. 8), for the mirrored light direction.
+  double mean_visibility[reader::kMaxVisibilityClusters];  // the first C entries are set
+};
+
+// Builds the frame; false (with a message in *status) for a bad direction. wi, wo are normalised.
+bool make_frame(const EvalData& data, const double wi[3], const double wo[3], LobeMask mask,
+                ShadingFrame* frame, Status* status) noexcept;
+
+// The parallax depth r of texel (x, y) for the frame's view (bilinear between bins, as
+// reader::ParallaxView::depth).
+double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x,
+                   int64_t y) noexcept;
+
+// What one texel contributes.
+struct TexelShading {
+  Rgb lobes[model::kLobeCount];  // g(t) per lobe (0 for lobes outside the mask)
+  double visibility = 0;         // V(t, i), the stored ASG clamped to [0, 1]
+  double gap = 1;                // I(t)
+  double sggx_d = 0;             // D_t(h), the fibre SGGX of the texel (specular lobes)
+  uint32_t label = 0;            // visibility cluster of t
+};
+
+// g(t) of texel (x, y) (any integers: the tile wraps).
+void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
+                 TexelShading* out) noexcept;
+
+}  // namespace clothbake::eval

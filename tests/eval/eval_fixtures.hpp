@@ -1,0 +1,125 @@
+// Assets the evaluator tests share, baked once per test process with the built `clothbake`:
+//   twill: the demo twill at 64^2 with raw and compressed tables (--keep-raw)
+//   flat:  a flat 16^2 fabric where every approximation of the paper is exact: constant height
+//          (no parallax, V = 1), one yarn of roughness 1 (D = 1/pi: no binning error), one constant
+//          tangent and colour, one cluster; a 4 x 4 checker of gaps for the delta lobe
+//   bare:  the twill without Integral-Radiance tables (stages up to the clusters)
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "tests/support/run_cli.hpp"
+
+namespace clothbake::eval_test {
+
+inline const char* kTwillToml = R"(name = "twill 64"
+[weave]
+name = "twill3/1"
+[weave.warp]
+spacing_mm = 0.30
+width = 0.92
+height_mm = 0.16
+twist_deg = 25
+[weave.weft]
+spacing_mm = 0.30
+width = 0.88
+height_mm = 0.14
+twist_deg = 20
+[[yarn]]
+name = "warp"
+roughness = 0.40
+optical_thickness = 2.0
+specular_albedo = 0.64
+diffuse_reflectance = 0.24
+diffuse_transmittance = 0.12
+color = [0.05, 0.09, 0.26]
+[[yarn]]
+name = "weft"
+roughness = 0.45
+optical_thickness = 2.0
+specular_albedo = 0.53
+diffuse_reflectance = 0.30
+diffuse_transmittance = 0.17
+color = [0.78, 0.74, 0.64]
+[sheen]
+color = 0.25
+roughness = 0.45
+[bake]
+resolution = 64
+)";
+
+inline const char* kFlatToml = R"(name = "flat"
+[maps]
+height = "flat_height.exr"
+tangent = "flat_tangent.exr"
+gap = "flat_gap.exr"
+[[yarn]]
+name = "only"
+roughness = 1.0
+optical_thickness = 1.5
+specular_albedo = 0.5
+diffuse_reflectance = 0.3
+diffuse_transmittance = 0.2
+color = [0.8, 0.6, 0.4]
+[sheen]
+color = 0.3
+roughness = 0.5
+[bake]
+clusters = 1
+)";
+
+struct Assets {
+  std::filesystem::path dir;
+  std::string twill, flat, bare;
+};
+
+inline void write_text(const std::filesystem::path& path, const char* text) {
+  std::ofstream(path) << text;
+}
+
+inline void run_or_fail(const std::vector<std::string>& argv) {
+  const test_support::CliRun run = test_support::detail::spawn(argv);
+  ASSERT_EQ(run.code, 0) << argv[0] << " failed:\n" << run.out << run.err;
+}
+
+inline void bake(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {"bake"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  argv.push_back("--quiet");
+  const test_support::CliRun run = test_support::run_clothbake(argv);
+  ASSERT_EQ(run.code, 0) << run.out << run.err;
+}
+
+// Bakes the three assets into a fresh temporary folder (once per process).
+inline const Assets& assets() {
+  static const Assets baked = [] {
+    Assets a;
+    a.dir = std::filesystem::temp_directory_path() /
+            ("clothbake_eval_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(a.dir);
+    const auto path = [&](const char* name) { return (a.dir / name).string(); };
+    write_text(a.dir / "twill.toml", kTwillToml);
+    write_text(a.dir / "flat.toml", kFlatToml);
+    run_or_fail({"/usr/bin/oiiotool", "--pattern", "constant:color=0.25", "16x16", "1", "-d",
+                 "float", "-o", path("flat_height.exr")});
+    run_or_fail({"/usr/bin/oiiotool", "--pattern", "constant:color=0.6,0.8,0", "16x16", "3", "-d",
+                 "float", "-o", path("flat_tangent.exr")});
+    run_or_fail({"/usr/bin/oiiotool", "--pattern", "checker:width=4:height=4:color1=1:color2=0",
+                 "16x16", "1", "-d", "float", "-o", path("flat_gap.exr")});
+    a.twill = path("twill.cbk");
+    a.flat = path("flat.cbk");
+    a.bare = path("bare.cbk");
+    bake({path("twill.toml"), "-o", a.twill, "--keep-raw"});
+    bake({path("flat.toml"), "-o", a.flat, "--no-compress"});
+    bake({path("twill.toml"), "-o", a.bare, "--stages", "cluster"});
+    return a;
+  }();
+  return baked;
+}
+
+}  // namespace clothbake::eval_test

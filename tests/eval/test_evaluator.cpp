@@ -1,0 +1,432 @@
+// The multi-scale evaluator (eval/evaluator.hpp) against closed forms, its own exact reference and
+// the model: exactness of the reference partition, unbiasedness within standard errors, the
+// variance of the unbiased control variates against brute force, and bad arguments.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "eval/evaluator.hpp"
+#include "eval/texel_shading.hpp"
+#include "formats/reader/visibility_sections.hpp"
+#include "tests/eval/eval_fixtures.hpp"
+
+namespace clothbake::eval {
+namespace {
+
+using eval_test::assets;
+using model::Lobe;
+
+// An open asset and its evaluator (the evaluator keeps views into the asset).
+struct Opened {
+  reader::Asset asset;
+  Evaluator evaluator;
+};
+
+std::unique_ptr<Opened> open(const std::string& path, TableChoice tables = TableChoice::Auto) {
+  auto o = std::make_unique<Opened>();
+  const Status s = o->asset.open_file(path.c_str());
+  EXPECT_TRUE(s.ok()) << s.message();
+  EvalOptions options;
+  options.tables = tables;
+  const Status e = o->evaluator.open(o->asset, options);
+  EXPECT_TRUE(e.ok()) << e.message();
+  return o;
+}
+
+struct Stats {
+  Rgb mean, se;        // mean of K estimates and its standard error
+  double sd_green = 0;  // standard deviation of one estimate (green)
+};
+
+Stats repeat(const Evaluator& ev, const Footprint& p, const double wi[3], const double wo[3],
+             Method method, uint32_t spp, int k, uint64_t seed, LobeMask mask = kAllLobes) {
+  Rng rng(seed);
+  Rgb sum, sum2;
+  for (int i = 0; i < k; ++i) {
+    Estimate e;
+    const Status s = ev.estimate(p, wi, wo, method, spp, rng, mask, &e);
+    EXPECT_TRUE(s.ok()) << s.message();
+    sum += e.value;
+    sum2 += e.value * e.value;
+  }
+  Stats st;
+  st.mean = sum / double(k);
+  for (int c = 0; c < 3; ++c) {
+    const double var = std::max(0.0, sum2[c] / k - st.mean[c] * st.mean[c]) * k / (k - 1.0);
+    (c == 0 ? st.se.r : c == 1 ? st.se.g : st.se.b) = std::sqrt(var / k);
+    if (c == 1) st.sd_green = std::sqrt(var);
+  }
+  return st;
+}
+
+Rgb reference(const Evaluator& ev, const Footprint& p, const double wi[3], const double wo[3],
+              LobeMask mask = kAllLobes) {
+  Rng rng(0);
+  Estimate e;
+  const Status s = ev.estimate(p, wi, wo, Method::Reference, 1, rng, mask, &e);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return e.value;
+}
+
+// |mean - ref| within 3 standard errors per channel, plus `slack` relative to ref (table and float
+// rounding that no number of samples removes).
+void expect_within_3se(const Stats& st, const Rgb& ref, double slack, const std::string& what) {
+  for (int c = 0; c < 3; ++c)
+    EXPECT_LE(std::abs(st.mean[c] - ref[c]), 3.0 * st.se[c] + slack * std::abs(ref[c]) + 1e-15)
+        << what << " channel " << c << ": mean " << st.mean[c] << " reference " << ref[c]
+        << " se " << st.se[c];
+}
+
+const double kReflectWi[3] = {0.3, 0.2, 0.9};
+const double kReflectWo[3] = {-0.4, 0.1, 0.85};
+const double kTransmitWi[3] = {0.2, -0.3, -0.8};  // light behind the cloth
+const double kTransmitWo[3] = {-0.3, 0.1, 0.9};
+
+// ---------------------------------------------------------------------------------------------
+// The flat fabric: every approximation of Eq. 8-10 is exact.
+
+// The integrand of the flat fabric at a yarn (I = 1) or gap (I = 0) texel, from the model directly.
+Rgb flat_value(bool yarn, const double wi[3], const double wo[3]) {
+  model::TexelParams<double> p;
+  p.tangent = {0.6, 0.8, 0.0};
+  p.roughness = 1.0;
+  p.optical_thickness = 1.5;
+  p.specular_albedo = Rgb(0.5 * 0.8, 0.5 * 0.6, 0.5 * 0.4);
+  p.diffuse_reflectance = Rgb(0.3 * 0.8, 0.3 * 0.6, 0.3 * 0.4);
+  p.diffuse_transmittance = Rgb(0.2 * 0.8, 0.2 * 0.6, 0.2 * 0.4);
+  p.gap = yarn ? 1.0 : 0.0;
+  p.sheen_color = Rgb(0.3);
+  p.sheen_roughness = 0.5;
+  const model::Vec3d i = model::normalize(model::Vec3d(wi[0], wi[1], wi[2]));
+  const model::Vec3d o = model::normalize(model::Vec3d(wo[0], wo[1], wo[2]));
+  const model::LobeValues<double> f = model::ClothBsdf<double>(p).eval(i, o, 1.0);
+  Rgb v = f.total * std::abs(i.z);
+  if (i.x == -o.x && i.y == -o.y && i.z == -o.z) v += f.delta_transmission;
+  return v;
+}
+
+TEST(Flat, ReferenceIsTheClosedForm) {
+  auto o = open(assets().flat);
+  for (const auto* dirs : {std::pair{kReflectWi, kReflectWo}, std::pair{kTransmitWi, kTransmitWo}}) {
+    const Rgb yarn = flat_value(true, dirs.first, dirs.second);
+    const Rgb gap = flat_value(false, dirs.first, dirs.second);
+    // The checker has 4 x 4 blocks, yarn at block (0, 0): a block, whole tiles, many tiles.
+    const Rgb in_block = reference(o->evaluator, {0.5, 1.25, 3.5, 3.75}, dirs.first, dirs.second);
+    const Rgb in_gap = reference(o->evaluator, {4.5, 0.25, 7.5, 3.75}, dirs.first, dirs.second);
+    const Rgb tile = reference(o->evaluator, {-3.0, 5.0, 13.0, 21.0}, dirs.first, dirs.second);
+    const Rgb huge = reference(o->evaluator, {16.0 * 7, -16.0 * 40, 16.0 * 300, 16.0 * 9},
+                               dirs.first, dirs.second);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(in_block[c], yarn[c], 1e-12 * yarn[c]);
+      EXPECT_NEAR(in_gap[c], gap[c], 1e-12 * yarn[c]);
+      EXPECT_NEAR(tile[c], 0.5 * (yarn[c] + gap[c]), 1e-12 * yarn[c]);
+      EXPECT_NEAR(huge[c], 0.5 * (yarn[c] + gap[c]), 1e-9 * yarn[c]);
+    }
+  }
+}
+
+TEST(Flat, DeltaLobeIsTheGapWeightAtMinusO) {
+  auto o = open(assets().flat);
+  const double wo[3] = {0.2, -0.1, 0.95};
+  const double wi[3] = {-0.2, 0.1, -0.95};
+  const Rgb tile = reference(o->evaluator, {0, 0, 16, 16}, wi, wo, lobe_bit(Lobe::DeltaTransmission));
+  // W = V T_sheen (1 - I) on the gap half of the tile.
+  model::TexelParams<double> p;
+  p.sheen_color = Rgb(0.3);
+  p.sheen_roughness = 0.5;
+  const Rgb t_sheen = model::ClothBsdf<double>(p).sheen_transmittance(
+      model::normalize(model::Vec3d(wo[0], wo[1], wo[2])));
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(tile[c], 0.5 * t_sheen[c], 1e-12);
+  // Off the Dirac direction the delta lobe is 0.
+  const Rgb off = reference(o->evaluator, {0, 0, 16, 16}, kTransmitWi, kTransmitWo,
+                            lobe_bit(Lobe::DeltaTransmission));
+  EXPECT_EQ(off.g, 0.0);
+  // Every method agrees: the multi-scale ones from the gap table, exactly.
+  for (Method m : {Method::Multiscale, Method::MultiscalePaper}) {
+    const Stats st = repeat(o->evaluator, {0.3, 0.6, 15.3, 14.6}, wi, wo, m, 2, 50, 9,
+                            lobe_bit(Lobe::DeltaTransmission));
+    const Rgb ref = reference(o->evaluator, {0.3, 0.6, 15.3, 14.6}, wi, wo,
+                              lobe_bit(Lobe::DeltaTransmission));
+    expect_within_3se(st, ref, 1e-6, method_name(m));
+  }
+}
+
+TEST(Flat, EveryMethodAgreesInExpectation) {
+  auto o = open(assets().flat);
+  const Footprint footprints[] = {{2.2, 5.1, 3.2, 6.1}, {1.5, 2.5, 5.5, 6.5}, {0.3, 0.7, 32.3, 32.7},
+                                  {0, 0, 16, 16}, {-40.5, 9.25, 200.5, 150.75}};
+  for (const auto* dirs : {std::pair{kReflectWi, kReflectWo}, std::pair{kTransmitWi, kTransmitWo}})
+    for (const Footprint& p : footprints) {
+      const Rgb ref = reference(o->evaluator, p, dirs.first, dirs.second);
+      for (Method m : {Method::Multiscale, Method::MultiscalePaper, Method::Brute}) {
+        const Stats st = repeat(o->evaluator, p, dirs.first, dirs.second, m, 2, 400, 17);
+        // The raw tables' fixed-point quantisation is far below 1e-6 of the value.
+        expect_within_3se(st, ref, 1e-6, method_name(m));
+      }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The integrand itself.
+
+TEST(TexelShading, IsTheModelWithTheTexelsParametersAndTheStoredVisibility) {
+  auto o = open(assets().twill);
+  const EvalData& d = *o->evaluator.data();
+  reader::VisibilityAsgView visibility;
+  ASSERT_TRUE(visibility.open(o->asset).ok());
+  Rng rng(5);
+  for (int k = 0; k < 500; ++k) {
+    const double wi[3] = {rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() * 2 - 1};
+    const double wo[3] = {rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() * 2 - 1};
+    ShadingFrame frame;
+    Status s;
+    ASSERT_TRUE(make_frame(d, wi, wo, kAllLobes, &frame, &s));
+    const int64_t x = int64_t(rng.uniform() * 64), y = int64_t(rng.uniform() * 64);
+    TexelShading shading;
+    shade_texel(d, frame, x, y, &shading);
+    // V as `clothbake query visibility` reports it, for the light mirrored onto the upper side.
+    const double light[3] = {frame.wi.x, frame.wi.y, std::abs(frame.wi.z)};
+    double v = 0;
+    ASSERT_TRUE(visibility.visibility(x, y, light, &v).ok());
+    EXPECT_EQ(shading.visibility, v);
+    const model::LobeValues<double> f =
+        model::ClothBsdf<double>(d.texel_params(d.texel(x, y))).eval(frame.wi, frame.wo, v);
+    for (int l = 0; l < model::kLobeCount; ++l) {
+      if (Lobe(l) == Lobe::DeltaTransmission) continue;
+      const Rgb want = f[Lobe(l)] * std::abs(frame.wi.z);
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(shading.lobes[l][c], want[c]);
+    }
+    EXPECT_EQ(shading.lobes[int(Lobe::DeltaTransmission)].g, 0.0);  // i != -o
+  }
+}
+
+TEST(TexelShading, ColourTintsTheYarnAlbedos) {
+  auto o = open(assets().twill);
+  const EvalData& d = *o->evaluator.data();
+  for (uint64_t t : {uint64_t(0), uint64_t(1000), uint64_t(4095)}) {
+    const model::TexelParams<double> p = d.texel_params(t);
+    const YarnShading& yarn = d.yarns[d.maps.yarn_id[t]];
+    const double colour = d.maps.albedo[3 * t + 1];
+    EXPECT_EQ(p.specular_albedo.g, yarn.specular_albedo.g * colour);
+    EXPECT_EQ(p.diffuse_reflectance.g, yarn.diffuse_reflectance.g * colour);
+    EXPECT_EQ(p.diffuse_transmittance.g, yarn.diffuse_transmittance.g * colour);
+    EXPECT_EQ(p.gap, d.maps.gap[t]);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The reference.
+
+TEST(Reference, SupersamplingConvergesToTheExactPartitionWithinItsBound) {
+  auto o = open(assets().twill);
+  const EvalData& d = *o->evaluator.data();
+  const Footprint footprints[] = {{10.3, 20.7, 11.3, 21.7}, {5.5, 7.25, 9.5, 11.25},
+                                  {3.1, 40.2, 35.1, 72.2}, {-17.5, 3.3, 100.5, 90.7}};
+  for (const auto* dirs : {std::pair{kReflectWi, kReflectWo}, std::pair{kTransmitWi, kTransmitWo}}) {
+    // The bound |Q_s - exact| <= max_t g(t) / s (docs/evaluator.md, "Reference"), per channel.
+    ShadingFrame frame;
+    Status s;
+    ASSERT_TRUE(make_frame(d, dirs.first, dirs.second, kAllLobes, &frame, &s));
+    Rgb g_max;
+    for (int64_t y = 0; y < 64; ++y)
+      for (int64_t x = 0; x < 64; ++x) {
+        TexelShading shading;
+        shade_texel(d, frame, x, y, &shading);
+        Rgb g;
+        for (const Rgb& lobe : shading.lobes) g += lobe;
+        for (int c = 0; c < 3; ++c)
+          if (g[c] > g_max[c]) (c == 0 ? g_max.r : c == 1 ? g_max.g : g_max.b) = g[c];
+      }
+    for (const Footprint& p : footprints) {
+      const Rgb exact = reference(o->evaluator, p, dirs.first, dirs.second);
+      double previous = -1;
+      for (uint32_t ss : {2u, 4u, 8u, 16u, 32u}) {
+        Estimate e;
+        ASSERT_TRUE(o->evaluator
+                        .reference_supersampled(p, dirs.first, dirs.second, ss, kAllLobes, &e)
+                        .ok());
+        for (int c = 0; c < 3; ++c) EXPECT_LE(std::abs(e.value[c] - exact[c]), g_max[c] / ss);
+        if (previous >= 0) {
+          // Doubling the supersampling changes the value by less than the two bounds.
+          EXPECT_LE(std::abs(e.value.g - previous), g_max.g / ss + 2 * g_max.g / ss);
+        }
+        previous = e.value.g;
+      }
+    }
+  }
+}
+
+TEST(Reference, WholeTileMultiplesAreThePeriodicAverage) {
+  auto o = open(assets().twill);
+  const Rgb tile = reference(o->evaluator, {0, 0, 64, 64}, kReflectWi, kReflectWo);
+  const Rgb shifted = reference(o->evaluator, {64 * 5, -64 * 3, 64 * 6, -64 * 2}, kReflectWi, kReflectWo);
+  const Rgb many = reference(o->evaluator, {-64 * 30, 64 * 2, 64 * 34, 64 * 66}, kReflectWi, kReflectWo);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(shifted[c], tile[c], 1e-13 * tile[c]);
+    EXPECT_NEAR(many[c], tile[c], 1e-11 * tile[c]);
+  }
+}
+
+TEST(Reference, BruteForceIsUnbiasedForIt) {
+  auto o = open(assets().twill);
+  const Footprint footprints[] = {{10.3, 20.7, 11.3, 21.7}, {3.1, 40.2, 35.1, 72.2}};
+  for (const auto* dirs : {std::pair{kReflectWi, kReflectWo}, std::pair{kTransmitWi, kTransmitWo}})
+    for (const Footprint& p : footprints) {
+      const Stats st = repeat(o->evaluator, p, dirs.first, dirs.second, Method::Brute, 16, 2000, 3);
+      expect_within_3se(st, reference(o->evaluator, p, dirs.first, dirs.second), 0.0, "brute");
+    }
+}
+
+TEST(Reference, LobesAddUpAndTheMaskRestricts) {
+  auto o = open(assets().twill);
+  const Footprint p{5.5, 7.25, 19.5, 21.25};
+  const Rgb all = reference(o->evaluator, p, kReflectWi, kReflectWo);
+  Rgb sum;
+  for (int l = 0; l < model::kLobeCount; ++l) {
+    Rng rng(1);
+    Estimate e;
+    ASSERT_TRUE(o->evaluator
+                    .estimate(p, kReflectWi, kReflectWo, Method::Reference, 1, rng,
+                              lobe_bit(Lobe(l)), &e)
+                    .ok());
+    for (int m = 0; m < model::kLobeCount; ++m)
+      if (m != l) EXPECT_EQ(e.lobes[m].g, 0.0);
+    sum += e.value;
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c], all[c], 1e-14);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The multi-scale methods.
+
+TEST(Multiscale, IsUnbiasedOnTheTwillWithRawAndCompressedTables) {
+  const Footprint footprints[] = {{10.3, 20.7, 11.3, 21.7},  // one texel
+                                  {5.5, 7.25, 9.5, 11.25},   // 4^2
+                                  {3.1, 40.2, 35.1, 72.2},   // 32^2
+                                  {0, 0, 64, 64}};           // a whole tile
+  for (TableChoice tables : {TableChoice::Raw, TableChoice::Compressed}) {
+    auto o = open(assets().twill, tables);
+    for (const auto* dirs :
+         {std::pair{kReflectWi, kReflectWo}, std::pair{kTransmitWi, kTransmitWo}})
+      for (const Footprint& p : footprints) {
+        const Stats st =
+            repeat(o->evaluator, p, dirs.first, dirs.second, Method::Multiscale, 2, 4000, 11);
+        // The compressed tables' footprint sums carry float rounding of partly covered texels.
+        expect_within_3se(st, reference(o->evaluator, p, dirs.first, dirs.second),
+                          tables == TableChoice::Raw ? 1e-9 : 2e-4, o->evaluator.table_source());
+      }
+  }
+}
+
+TEST(Multiscale, SmallFootprintsAreSummedExactly) {
+  auto o = open(assets().twill);
+  const Footprint p{10.3, 20.7, 10.9, 21.2};
+  const Rgb ref = reference(o->evaluator, p, kReflectWi, kReflectWo);
+  for (Method m : {Method::Multiscale, Method::MultiscalePaper}) {
+    Rng rng(2);
+    Estimate e;
+    ASSERT_TRUE(o->evaluator.estimate(p, kReflectWi, kReflectWo, m, 2, rng, kAllLobes, &e).ok());
+    EXPECT_TRUE(e.counters.direct);
+    EXPECT_EQ(e.counters.samples, 0u);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(e.value[c], ref[c]);
+  }
+}
+
+TEST(Multiscale, HasLessVarianceThanBruteForceOnFarFieldFootprints) {
+  auto o = open(assets().twill);
+  // Measured ratios (docs/evaluator.md, "Variance"); the assertion keeps a margin below them.
+  const Footprint footprints[] = {{3.1, 40.2, 35.1, 72.2}, {0, 0, 64, 64}, {-100, 7, 156, 263}};
+  const double views[][3] = {{-0.1, 0.1, 0.99}, {-0.4, 0.1, 0.85}};
+  for (const auto& wo : views)
+    for (const Footprint& p : footprints) {
+      const Stats ms = repeat(o->evaluator, p, kReflectWi, wo, Method::Multiscale, 2, 3000, 21);
+      const Stats brute = repeat(o->evaluator, p, kReflectWi, wo, Method::Brute, 2, 3000, 21);
+      const double ratio = (brute.sd_green * brute.sd_green) / (ms.sd_green * ms.sd_green);
+      std::printf("variance ratio brute / multiscale at 2 spp, view (%g, %g, %g), %gx%g: %.2f\n",
+                  wo[0], wo[1], wo[2], p.x1 - p.x0, p.y1 - p.y0, ratio);
+      EXPECT_GT(ratio, 2.5);
+    }
+}
+
+TEST(MultiscalePaper, IsBiasedWhereTheFootprintMeanAlbedoDoesNotHold) {
+  // The twill's warp is indigo and its weft undyed: kbar times the clustered D differs from the
+  // sum of k D, so the printed Eq. 9 is off by far more than its noise.
+  auto o = open(assets().twill);
+  const Footprint p{0, 0, 64, 64};
+  const Stats st = repeat(o->evaluator, p, kReflectWi, kReflectWo, Method::MultiscalePaper, 2,
+                          2000, 4);
+  const Rgb ref = reference(o->evaluator, p, kReflectWi, kReflectWo);
+  EXPECT_GT(std::abs(st.mean.g - ref.g), 20 * st.se.g);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input.
+
+TEST(Errors, BadArgumentsAreInvalidArgument) {
+  auto o = open(assets().twill);
+  Rng rng(1);
+  Estimate e;
+  const Footprint good{0, 0, 4, 4};
+  const double zero[3] = {0, 0, 0};
+  const double nan[3] = {NAN, 0, 1};
+  const double inf[3] = {INFINITY, 0, 1};
+  auto code = [&](const Footprint& p, const double* wi, const double* wo, Method m, uint32_t spp,
+                  LobeMask mask) { return o->evaluator.estimate(p, wi, wo, m, spp, rng, mask, &e).code(); };
+  const auto invalid = reader::ErrorCode::InvalidArgument;
+  EXPECT_EQ(code(good, zero, kReflectWo, Method::Multiscale, 2, kAllLobes), invalid);
+  EXPECT_EQ(code(good, kReflectWi, nan, Method::Multiscale, 2, kAllLobes), invalid);
+  EXPECT_EQ(code(good, inf, kReflectWo, Method::Brute, 2, kAllLobes), invalid);
+  EXPECT_EQ(code({4, 0, 0, 4}, kReflectWi, kReflectWo, Method::Reference, 1, kAllLobes), invalid);
+  EXPECT_EQ(code({0, NAN, 4, 4}, kReflectWi, kReflectWo, Method::Brute, 1, kAllLobes), invalid);
+  EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method::Brute, 0, kAllLobes), invalid);
+  EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method::Multiscale, 0, kAllLobes), invalid);
+  EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method::Multiscale, 2, 0), invalid);
+  EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method::Multiscale, 2, 1u << 7), invalid);
+  EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method(9), 2, kAllLobes), invalid);
+  EXPECT_EQ(o->evaluator.estimate(good, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes,
+                                  nullptr)
+                .code(),
+            invalid);
+  Evaluator closed;
+  EXPECT_EQ(closed.estimate(good, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes, &e).code(),
+            invalid);
+}
+
+TEST(Errors, MethodsNeedTheirTables) {
+  auto o = open(assets().bare);
+  ASSERT_TRUE(o->evaluator.is_open());
+  EXPECT_STREQ(o->evaluator.table_source(), "none");
+  Rng rng(1);
+  Estimate e;
+  const Footprint p{0, 0, 8, 8};
+  const Status s =
+      o->evaluator.estimate(p, kReflectWi, kReflectWo, Method::Multiscale, 2, rng, kAllLobes, &e);
+  EXPECT_EQ(s.code(), reader::ErrorCode::NotFound);
+  EXPECT_NE(std::string(s.message()).find("Integral-Radiance"), std::string::npos);
+  // Brute force and the reference need none.
+  EXPECT_TRUE(o->evaluator.estimate(p, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes, &e).ok());
+  EXPECT_TRUE(o->evaluator.estimate(p, kReflectWi, kReflectWo, Method::Reference, 1, rng, kAllLobes, &e).ok());
+  // Asking for a representation the asset does not have fails at open.
+  reader::Asset flat;
+  ASSERT_TRUE(flat.open_file(assets().flat.c_str()).ok());
+  Evaluator ev;
+  EvalOptions options;
+  options.tables = TableChoice::Compressed;
+  EXPECT_EQ(ev.open(flat, options).code(), reader::ErrorCode::NotFound);
+}
+
+TEST(Errors, MethodNamesRoundTrip) {
+  for (int m = 0; m < kMethodCount; ++m) {
+    Method parsed;
+    ASSERT_TRUE(parse_method(method_name(Method(m)), &parsed));
+    EXPECT_EQ(parsed, Method(m));
+  }
+  Method parsed;
+  EXPECT_FALSE(parse_method("multiscale-unbiased", &parsed));
+  EXPECT_FALSE(parse_method(nullptr, &parsed));
+}
+
+}  // namespace
+}  // namespace clothbake::eval
