@@ -116,7 +116,7 @@ inline const Assets& assets() {
     a.bare = path("bare.cbk");
     bake({path("twill.toml"), "-o", a.twill, "--keep-raw"});
     bake({path("flat.toml"), "-o", a.flat, "--no-compress"});
-    bake({path("twill.toml"), "-o", a.bare, "--stages", "cluster"});
+    bake({path("twill.toml"), "-o", a.bare, "--stages", "feature_maps,parallax,cluster"});
     return a;
   }();
   return baked;
