@@ -15,8 +15,8 @@ constexpr double kInvPi = 0.318309886183790671537767526745028724;
 
 // The per-footprint constants of the control variate g (docs/evaluator.md, "Multi-scale"):
 //   specular  g(q) = s_c G |i_z| T_sheen v_c(q) T_c(q)(q, h)   (T: the table value, I D binned;
-//                    s_c = kbar_c, the footprint mean of k over cluster c's texels; the paper form
-//                    uses the footprint mean kbar for every cluster)
+//                    s_c = kbar_c, the mean of k over cluster c's texels in the tile; the paper
+//                    form uses the footprint mean kbar for every cluster)
 //   diffuse   g(q) = |i_z| / pi T_sheen v_c(q) I(q) R(q)       (R = R_d or T_d times the colour)
 //   sheen     g(q) = colour sheen(i, o) |i_z| v_c(q)
 //   delta     g(q) = T_sheen v_c(q) T_gap(q)                   (T_gap = 1 - I, from its table)
@@ -127,9 +127,9 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
   double values[3 * reader::kMaxVisibilityClusters];
   if (k.specular) {
     // Eq. 9-11: kbar G-bar (v-bar F), G-bar the SpongeCake attenuation f / (alpha D) of the centre
-    // texel; kbar the footprint mean of k (paper form) or kbar_c its mean over cluster c's texels
-    // (unbiased form: any per-cluster constant keeps the control variate exact, and the clusters'
-    // own means follow the yarn colours).
+    // texel; kbar the footprint mean of k (paper form) or kbar_c the tile mean over cluster c's
+    // texels (unbiased form: any per-cluster constant keeps the control variate exact, and the
+    // clusters' own means follow the yarn colours at no footprint query).
     const double d_h = centre.sggx().D(frame.h);
     const double f =
         reflect ? model::spongecake_reflection(centre.sggx(), centre.optical_thickness(), frame.wi,
@@ -138,18 +138,14 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
                                                  frame.wi, frame.wo);
     const double g_bar = d_h > 0.0 ? f / d_h : 0.0;
     const Rgb common = t_sheen * (g_bar * cos_i);
-    double areas[reader::kMaxVisibilityClusters];
-    data.sums.integral(plan, data.sums.layout().albedo(), 3 * clusters, values);
-    data.sums.integral(plan, data.sums.layout().area(), clusters, areas);
-    Rgb k_total;
-    for (uint32_t c = 0; c < clusters; ++c)
-      k_total += Rgb(values[3 * c], values[3 * c + 1], values[3 * c + 2]);
-    const Rgb footprint_scale = k_total / area * common;
+    Rgb footprint_scale;
+    if (paper_form) {
+      data.sums.integral(plan, data.sums.layout().albedo(), 3, values);
+      footprint_scale = Rgb(values[0], values[1], values[2]) / area * common;
+      out->counters.table_queries += 1;
+    }
     for (uint32_t c = 0; c < clusters; ++c) {
-      const Rgb scale =
-          paper_form || !(areas[c] > 0.0)
-              ? footprint_scale
-              : Rgb(values[3 * c], values[3 * c + 1], values[3 * c + 2]) / areas[c] * common;
+      const Rgb scale = paper_form ? footprint_scale : data.cluster_albedo[c] * common;
       for (int ch = 0; ch < 3; ++ch)
         k.specular_scale[3 * c + ch] = scale[ch];
     }
@@ -160,7 +156,7 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     for (uint32_t c = 0; c < clusters; ++c)
       sum += k.scale(c) * (frame.mean_visibility[c] * values[c]);
     base[int(k.specular_lobe)] = sum / area;
-    out->counters.table_queries += 3;
+    out->counters.table_queries += 1;
   }
   if (k.diffuse) {
     k.diffuse_scale = t_sheen * (cos_i * kInvPi);

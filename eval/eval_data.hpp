@@ -53,6 +53,7 @@ struct EvalData {
   reader::VisibilityClusterView clusters;
   TableSource specular, gap;
   FootprintSums sums;
+  std::vector<Rgb> cluster_albedo;  // mean specular albedo k of each cluster's texels (tile)
 
   uint32_t cluster_count() const { return clusters.cluster_count(); }
   uint64_t texel(int64_t x, int64_t y) const {

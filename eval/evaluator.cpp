@@ -15,7 +15,7 @@ namespace {
 using reader::Check;
 using reader::ErrorCode;
 
-// Largest derived footprint sums open() builds (bounds (N + 1)^2 x 11 C doubles).
+// Largest derived footprint sums open() builds (bounds (N + 1)^2 x (3 + 8 C) doubles).
 constexpr uint64_t kMaxDerivedBytes = uint64_t(1) << 30;
 
 const char* const kMethodNames[kMethodCount] = {"multiscale", "multiscale-paper", "brute",
@@ -186,7 +186,7 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
     const Rgb rd = (yarn.diffuse_reflectance * c) * gap;
     const Rgb td = (yarn.diffuse_transmittance * c) * gap;
     for (int ch = 0; ch < 3; ++ch) {
-      out[layout.albedo() + 3 * label + ch] = k[ch];
+      out[layout.albedo() + ch] = k[ch];
       out[layout.diffuse_r() + 3 * label + ch] = rd[ch];
       out[layout.diffuse_t() + 3 * label + ch] = td[ch];
     }
@@ -196,6 +196,19 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   if (!built)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "cannot allocate the footprint sums");
+  // Each cluster's mean specular albedo over the tile: the per-cluster constants of the unbiased
+  // control variate.
+  std::vector<double> count(clusters, 0.0);
+  d->cluster_albedo.assign(clusters, Rgb());
+  for (uint64_t t = 0; t < uint64_t(d->n) * d->n; ++t) {
+    const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
+    const float* colour = d->maps.albedo.data + 3 * t;
+    d->cluster_albedo[label] +=
+        d->yarns[d->maps.yarn_id[t]].specular_albedo * Rgb(colour[0], colour[1], colour[2]);
+    count[label] += 1.0;
+  }
+  for (uint32_t c = 0; c < clusters; ++c)
+    if (count[c] > 0) d->cluster_albedo[c] = d->cluster_albedo[c] / count[c];
   data_ = std::move(d);
   return {};
 }

@@ -1,10 +1,8 @@
 // Summed-area tables of the per-texel quantities the evaluator's control variates integrate and
 // that no Integral-Radiance table holds (docs/evaluator.md, "Footprint sums"):
 //
+//   k(x)              = the specular albedo of x's yarn times x's colour (RGB): the k-bar of Eq. 9
 //   A_c(x)            = [label(x) = c]                            (sheen; cluster areas)
-//   k_c(x)            = k(x) [label(x) = c], k = the specular albedo of x's yarn times x's colour
-//                       (RGB): the cluster means k-bar_c of the unbiased form, and the k-bar of
-//                       Eq. 9 as their sum
 //   Rd_c(x), Td_c(x)  = I(x) R_d(x) [label(x) = c], I(x) T_d(x) [label(x) = c]  (RGB, diffuse)
 //   G_c(x)            = (1 - I(x)) [label(x) = c]                (delta, when the asset has no gap
 //                                                                table)
@@ -30,12 +28,12 @@ namespace clothbake::eval {
 // Channel layout of the footprint sums for C clusters.
 struct SumChannels {
   uint32_t clusters = 0;
-  uint32_t area() const { return 0; }                     // C
-  uint32_t albedo() const { return clusters; }            // 3C, [c][rgb]
-  uint32_t diffuse_r() const { return 4 * clusters; }     // 3C
-  uint32_t diffuse_t() const { return 7 * clusters; }     // 3C
-  uint32_t gap() const { return 10 * clusters; }          // C
-  uint32_t count() const { return 11 * clusters; }
+  uint32_t albedo() const { return 0; }                   // 3
+  uint32_t area() const { return 3; }                     // C
+  uint32_t diffuse_r() const { return 3 + clusters; }     // 3C, [c][rgb]
+  uint32_t diffuse_t() const { return 3 + 4 * clusters; } // 3C
+  uint32_t gap() const { return 3 + 7 * clusters; }       // C
+  uint32_t count() const { return 3 + 8 * clusters; }
 };
 
 class FootprintSums {

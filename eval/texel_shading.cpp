@@ -41,13 +41,13 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   // The parallax direction exactly as the reader uses it (mirrored to the upper side, then moved
   // onto the cap's rim below min_cos), and Eq. 2's factor in texel units.
   const double mirrored[3] = {f.wo.x, f.wo.y, std::abs(f.wo.z)};
-  reader::ParallaxSample sample;
-  if (!data.parallax.depth(0, 0, mirrored, &sample).ok()) {
+  double view[3];
+  if (!data.parallax.view_direction(mirrored, view).ok()) {
     *status = Status::error(reader::ErrorCode::InvalidArgument, reader::Check::None,
                             "wo cannot be used for the parallax table");
     return false;
   }
-  f.view = model::Vec3d(sample.direction[0], sample.direction[1], sample.direction[2]);
+  f.view = model::Vec3d(view[0], view[1], view[2]);
   const double n = double(data.n);
   f.offset_per_depth[0] = n * f.view.x / f.view.z;
   f.offset_per_depth[1] = n * f.view.y / f.view.z;
@@ -69,12 +69,7 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
 
 double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x,
                    int64_t y) noexcept {
-  double r = 0.0;
-  for (int k = 0; k < 4; ++k)
-    if (frame.parallax_bins.weight[k] > 0.0)
-      r += frame.parallax_bins.weight[k] *
-           data.parallax.bin_depth(uint32_t(frame.parallax_bins.index[k]), x, y);
-  return r;
+  return data.parallax.weighted_depth(frame.parallax_bins.index, frame.parallax_bins.weight, x, y);
 }
 
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,

@@ -82,7 +82,7 @@ double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcep
   return -double(codes_[index]) * info_.depth_scale;
 }
 
-Status ParallaxView::direction(const double view[3], double o[3]) const noexcept {
+Status ParallaxView::view_direction(const double view[3], double o[3]) const noexcept {
   if (view == nullptr || !std::isfinite(view[0]) || !std::isfinite(view[1]) ||
       !std::isfinite(view[2]))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
@@ -105,12 +105,23 @@ Status ParallaxView::direction(const double view[3], double o[3]) const noexcept
   return {};
 }
 
+double ParallaxView::weighted_depth(const int bin[4], const double weight[4], int64_t x,
+                                   int64_t y) const noexcept {
+  const uint64_t n = info_.resolution;
+  const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
+  double r = 0.0;
+  for (int k = 0; k < 4; ++k)
+    if (weight[k] > 0.0)
+      r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) * info_.depth_scale);
+  return r;
+}
+
 Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
                            ParallaxSample* out) const noexcept {
   if (!is_open() || out == nullptr)
     return Status::error(ErrorCode::InvalidArgument, Check::None, "parallax view is not open");
   double o[3];
-  Status s = direction(view, o);
+  Status s = view_direction(view, o);
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
@@ -132,9 +143,10 @@ uint64_t ParallaxView::code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) con
   auto s = [&](uint64_t i, uint64_t j) -> uint32_t {  // exclusive prefix, modulo 2^32
     return (i == 0 || j == 0) ? 0u : table[(j - 1) * n + (i - 1)];
   };
-  // A rectangle of x * rows texels sums to at most 65535 * x * rows: below 2^32 it is exact.
+  // A rectangle of x * rows texels sums to at most 65535 * x * rows: below 2^32 it is exact (the
+  // common case, N <= 256, tested without a division).
+  if (65535u * uint64_t(x) * y < kTwo32) return s(x, y);
   const uint64_t rows = (kTwo32 - 1) / (65535u * uint64_t(x));
-  if (rows >= y) return s(x, y);
   uint64_t sum = 0;
   for (uint64_t j0 = 0; j0 < y; j0 += rows) {
     const uint64_t j1 = j0 + rows < y ? j0 + rows : y;
@@ -188,7 +200,7 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   if (!(area > 0.0))
     return depth(int64_t(std::floor(rect.x0)), int64_t(std::floor(rect.y0)), view, out);
   double o[3];
-  s = direction(view, o);
+  s = view_direction(view, o);
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));

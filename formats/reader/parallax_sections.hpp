@@ -84,6 +84,15 @@ class ParallaxView {
 
   // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2.
   double bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept;
+  // sum over k < 4 with weight[k] > 0 of weight[k] * bin_depth(bin[k], x, y), wrapping (x, y)
+  // once: the per-texel depth for bilinear weights computed once per view (the evaluator's hot
+  // path). Precondition: every bin with a positive weight < dirs^2.
+  double weighted_depth(const int bin[4], const double weight[4], int64_t x,
+                        int64_t y) const noexcept;
+
+  // The view direction a query uses for `view` (any finite non-zero vector): normalised and, below
+  // the cap, moved onto the cap's rim at the same azimuth. InvalidArgument otherwise.
+  Status view_direction(const double view[3], double o[3]) const noexcept;
 
   // r at texel (x, y) for view direction `view` (bilinear between bins), with its Eq. 2 offset.
   // InvalidArgument for a zero or non-finite view.
@@ -102,7 +111,6 @@ class ParallaxView {
   uint64_t code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
 
  private:
-  Status direction(const double view[3], double o[3]) const noexcept;
   double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
   double prefix_integral(uint32_t bin, double x, double y) const noexcept;
 

@@ -1,0 +1,110 @@
+// One footprint estimate of the evaluator on one core: every method, footprints of side 1, 32, 256
+// and 4096 texels at random positions, random reflection directions (cycled from a fixed set).
+//
+//   CLOTHBAKE_BENCH_ASSET=twill.cbk bench_eval [--benchmark_filter=...]
+//   CLOTHBAKE_BENCH_TABLES=raw|compressed (default: auto, as the evaluator opens it)
+// Items per second: estimates (Multiscale*, Brute), samples (BrutePerSample), texels (Reference).
+// Target (docs/evaluator.md, "Speed"): Multiscale at 2 spp <= 2 us per footprint, flat in size.
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include "eval/evaluator.hpp"
+
+namespace clothbake::eval {
+namespace {
+
+struct Setup {
+  reader::Asset asset;
+  Evaluator evaluator;
+  std::vector<std::array<double, 6>> directions;  // wi, wo
+};
+
+Setup& setup() {
+  static std::unique_ptr<Setup> s = [] {
+    auto s = std::make_unique<Setup>();
+    const char* path = std::getenv("CLOTHBAKE_BENCH_ASSET");
+    if (path == nullptr) {
+      std::fprintf(stderr, "bench_eval: set CLOTHBAKE_BENCH_ASSET to a baked asset (.cbk)\n");
+      std::exit(2);
+    }
+    Status st = s->asset.open_file(path);
+    EvalOptions options;
+    if (const char* t = std::getenv("CLOTHBAKE_BENCH_TABLES"))
+      options.tables = std::strcmp(t, "raw") == 0 ? TableChoice::Raw : TableChoice::Compressed;
+    if (st.ok()) st = s->evaluator.open(s->asset, options);
+    if (!st.ok()) {
+      std::fprintf(stderr, "bench_eval: %s: %s\n", path, st.message());
+      std::exit(2);
+    }
+    std::fprintf(stderr, "bench_eval: %s, %u^2 texels, %u clusters, %s tables\n", path,
+                 s->evaluator.resolution(), s->evaluator.cluster_count(),
+                 s->evaluator.table_source());
+    Rng rng(42);
+    for (int k = 0; k < 256; ++k) {
+      auto hemisphere = [&](double min_z) {
+        const double z = min_z + (1.0 - min_z) * rng.uniform(), phi = 6.283185307179586 * rng.uniform();
+        const double r = std::sqrt(1.0 - z * z);
+        return std::array<double, 3>{r * std::cos(phi), r * std::sin(phi), z};
+      };
+      const auto wi = hemisphere(0.2), wo = hemisphere(0.2);
+      s->directions.push_back({wi[0], wi[1], wi[2], wo[0], wo[1], wo[2]});
+    }
+    return s;
+  }();
+  return *s;
+}
+
+void run(benchmark::State& state, Method method, uint32_t spp) {
+  Setup& s = setup();
+  const double side = double(state.range(0));
+  const double n = s.evaluator.resolution();
+  Rng rng(7);
+  std::vector<Footprint> footprints;
+  for (int k = 0; k < 1024; ++k) {
+    const double x = rng.uniform() * n, y = rng.uniform() * n;
+    footprints.push_back({x, y, x + side, y + side});
+  }
+  size_t k = 0;
+  Estimate e;
+  for (auto _ : state) {
+    const auto& d = s.directions[k % s.directions.size()];
+    const Status st = s.evaluator.estimate(footprints[k % footprints.size()], d.data(), d.data() + 3,
+                                           method, spp, rng, kAllLobes, &e);
+    if (!st.ok()) state.SkipWithError(st.message());
+    benchmark::DoNotOptimize(e);
+    ++k;
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+
+void BM_Multiscale(benchmark::State& state) { run(state, Method::Multiscale, 2); }
+void BM_MultiscalePaper(benchmark::State& state) { run(state, Method::MultiscalePaper, 2); }
+void BM_Brute2spp(benchmark::State& state) { run(state, Method::Brute, 2); }
+
+void BM_BrutePerSample(benchmark::State& state) {
+  run(state, Method::Brute, 64);
+  state.SetItemsProcessed(int64_t(state.iterations()) * 64);
+}
+
+void BM_ReferencePerTexel(benchmark::State& state) {
+  run(state, Method::Reference, 1);
+  state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0) * state.range(0));
+}
+
+BENCHMARK(BM_Multiscale)->Arg(1)->Arg(32)->Arg(256)->Arg(4096);
+BENCHMARK(BM_MultiscalePaper)->Arg(1)->Arg(32)->Arg(256)->Arg(4096);
+BENCHMARK(BM_Brute2spp)->Arg(32)->Arg(256);
+BENCHMARK(BM_BrutePerSample)->Arg(32);
+BENCHMARK(BM_ReferencePerTexel)->Arg(4)->Arg(32);
+
+}  // namespace
+}  // namespace clothbake::eval
+
+BENCHMARK_MAIN();
