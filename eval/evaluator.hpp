@@ -39,6 +39,7 @@
 #include "formats/reader/status.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/rgb.hpp"
+#include "model/splitmix64.hpp"
 
 namespace clothbake::eval {
 
@@ -76,23 +77,9 @@ struct EvalOptions {
   double direct_max_side = 1.0;
 };
 
-// A deterministic random source: SplitMix64 (Steele, Lea and Flood 2014), bit for bit the same on
-// every platform, so that a seed gives the same estimates everywhere.
-class Rng {
- public:
-  explicit Rng(uint64_t seed = 0) noexcept : state_(seed) {}
-  uint64_t next() noexcept {
-    uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [0, 1) with 53 random bits.
-  double uniform() noexcept { return double(next() >> 11) * 0x1.0p-53; }
-
- private:
-  uint64_t state_;
-};
+// The random source of the sampling methods: the project's SplitMix64 (model/splitmix64.hpp), bit
+// for bit the same on every platform, so that a seed gives the same estimates everywhere.
+using Rng = model::SplitMix64;
 
 // What one estimate cost.
 struct Counters {

@@ -76,6 +76,10 @@ clusters = 1
 struct Assets {
   std::filesystem::path dir;
   std::string twill, flat, bare;
+  ~Assets() {
+    std::error_code ec;
+    if (!dir.empty()) std::filesystem::remove_all(dir, ec);  // the process's own folder only
+  }
 };
 
 inline void write_text(const std::filesystem::path& path, const char* text) {
