@@ -135,6 +135,25 @@ class Evaluator {
   Status reference_supersampled(const Footprint& footprint, const double wi[3], const double wo[3],
                                 uint32_t s, LobeMask lobes, Estimate* out) const noexcept;
 
+  // Importance sampling for a renderer's BSDF samples (Sec. 5.1, multiple importance sampling): the
+  // lobe mixture of model::ClothBsdf at the footprint's representative texel, the one at the centre
+  // of the footprint shifted by its mean parallax offset (the texel at x'(p0) for a zero-area
+  // footprint). Any density gives an unbiased estimate; this one follows the footprint's centre.
+  // u_lobe, u1, u2 uniform in [0, 1). out->valid is false when f^ is 0 for wo; a delta sample has
+  // wi = -wo and pdf = the discrete probability of the delta technique. Errors as estimate().
+  struct DirectionSample {
+    bool valid = false;
+    bool is_delta = false;
+    double wi[3] = {0, 0, 1};
+    double pdf = 0;  // solid-angle density of the continuous techniques, or P(delta)
+  };
+  Status sample_direction(const Footprint& footprint, const double wo[3], double u_lobe, double u1,
+                          double u2, DirectionSample* out) const noexcept;
+  // The solid-angle density of sample_direction's continuous techniques at wi (it integrates to
+  // 1 - P(delta)).
+  Status direction_pdf(const Footprint& footprint, const double wi[3], const double wo[3],
+                       double* out) const noexcept;
+
   const EvalData* data() const noexcept { return data_.get(); }
 
  private:

@@ -275,6 +275,27 @@ std::optional<Rgb> TomlSection::rgb(std::string_view key, const Range& range) co
   return out;
 }
 
+std::optional<std::vector<double>> TomlSection::numbers(std::string_view key, std::size_t count,
+                                                       const Range& range) const {
+  if (!has(key)) return std::nullopt;
+  const toml::node& n = node(key);
+  const toml::array* arr = n.as_array();
+  if (!arr || arr->size() != count)
+    fail(key, fmt::format("must be an array of {} numbers, got {}{}", count, type_name(n),
+                          arr ? fmt::format(" of {} elements", arr->size()) : ""));
+  std::vector<double> out(count);
+  for (std::size_t c = 0; c < count; ++c) {
+    double v = 0;
+    if (!node_number(*arr->get(c), v))
+      fail(key, fmt::format("[{}] must be a number, got {}", c, type_name(*arr->get(c))));
+    if (!range.contains(v))
+      fail(key,
+           fmt::format("[{}] = {} is out of range; valid range is {}", c, v, range.describe()));
+    out[c] = v;
+  }
+  return out;
+}
+
 std::optional<std::vector<Rgb>> TomlSection::rgb_list(std::string_view key,
                                                       const Range& range) const {
   if (!has(key)) return std::nullopt;

@@ -62,6 +62,9 @@ class TomlSection {
   std::optional<Rgb> rgb(std::string_view key, const Range& range) const;
   // An array of colours, each an array of three numbers inside `range` (at least one colour).
   std::optional<std::vector<Rgb>> rgb_list(std::string_view key, const Range& range) const;
+  // An array of exactly `count` numbers, each inside `range` (a position, a direction, a size).
+  std::optional<std::vector<double>> numbers(std::string_view key, std::size_t count,
+                                             const Range& range) const;
   // An array of strings (at least one).
   std::optional<std::vector<std::string>> string_array(std::string_view key) const;
 

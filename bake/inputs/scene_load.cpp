@@ -1,0 +1,203 @@
+// Scene descriptions (scene_load.hpp).
+#include "bake/inputs/scene_load.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "bake/inputs/fabric_files.hpp"
+#include "bake/inputs/fabric_toml.hpp"
+#include "common/error.hpp"
+#include "common/image_io/image_io.hpp"
+#include "render/shapes.hpp"
+
+namespace clothbake::inputs {
+namespace {
+
+namespace fs = std::filesystem;
+using render::Vec3;
+
+const Range kAnyFinite{};
+const Range kPositive{0, 1e12, true, false};
+const Range kNonNegative{0, 1e12, false, false};
+
+Vec3 vec3(const TomlSection& s, std::string_view key, const Vec3& fallback) {
+  const auto v = s.numbers(key, 3, kAnyFinite);
+  return v ? Vec3((*v)[0], (*v)[1], (*v)[2]) : fallback;
+}
+
+Vec3 unit(const TomlSection& s, std::string_view key, const Vec3& fallback) {
+  const Vec3 v = vec3(s, key, fallback);
+  const double len = length(v);
+  if (!(len > 1e-12) || !std::isfinite(len)) s.fail(key, "must be a non-zero vector");
+  return v / len;
+}
+
+render::Rgb colour(const TomlSection& s, std::string_view key, const render::Rgb& fallback,
+                   const Range& range) {
+  const auto c = s.rgb(key, range);
+  return c ? render::Rgb((*c)[0], (*c)[1], (*c)[2]) : fallback;
+}
+
+std::string resolve(const TomlSection& s, std::string_view key, const fs::path& base) {
+  const std::string value = *s.string(key);
+  if (value.empty()) s.fail(key, "must not be empty");
+  const fs::path p = fs::path(value).is_absolute() ? fs::path(value) : base / value;
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec))
+    s.fail(key, fmt::format("= \"{}\": {} is not a readable file", value, p.string()));
+  return p.string();
+}
+
+render::Camera load_camera(const TomlSection& c) {
+  c.check_keys({"position", "look_at", "up", "fov_deg", "resolution"});
+  render::Camera cam;
+  cam.position = vec3(c, "position", cam.position);
+  cam.look_at = vec3(c, "look_at", cam.look_at);
+  cam.up = unit(c, "up", cam.up);
+  cam.fov_deg = c.real("fov_deg", Range{0, 180, true, true}).value_or(cam.fov_deg);
+  if (const auto r = c.numbers("resolution", 2, Range{1, 16384})) {
+    if ((*r)[0] != std::floor((*r)[0]) || (*r)[1] != std::floor((*r)[1]))
+      c.fail("resolution", "must be two integers [width, height]");
+    cam.width = int((*r)[0]);
+    cam.height = int((*r)[1]);
+  }
+  const Vec3 forward = cam.look_at - cam.position;
+  if (!(length(forward) > 1e-12)) c.fail("look_at", "must differ from the camera position");
+  if (!(length(cross(normalize(forward), cam.up)) > 1e-6))
+    c.fail("up", "must not be parallel to the viewing direction");
+  return cam;
+}
+
+render::Light load_light(const TomlSection& l, std::size_t index, const fs::path& base) {
+  render::Light light;
+  light.name = fmt::format("light[{}]", index);
+  if (!l.has("type")) l.fail("type", "is required (point, directional or environment)");
+  const std::string type = *l.choice("type", {"point", "directional", "environment"});
+  if (type == "point") {
+    l.check_keys({"type", "position", "intensity"});
+    light.type = render::LightType::Point;
+    if (!l.has("position")) l.fail("position", "is required for a point light");
+    light.position = vec3(l, "position", {});
+    light.intensity = colour(l, "intensity", light.intensity, kNonNegative);
+  } else if (type == "directional") {
+    l.check_keys({"type", "direction", "irradiance"});
+    light.type = render::LightType::Directional;
+    if (!l.has("direction")) l.fail("direction", "is required for a directional light");
+    light.direction = unit(l, "direction", {});
+    light.irradiance = colour(l, "irradiance", light.irradiance, kNonNegative);
+  } else {
+    l.check_keys({"type", "map", "scale"});
+    light.type = render::LightType::Environment;
+    if (!l.has("map")) l.fail("map", "is required for an environment light (a lat-long EXR)");
+    const std::string path = resolve(l, "map", base);
+    const Image image = read_image(path);
+    if (image.channels < 3)
+      l.fail("map", fmt::format("{} has {} channel(s); an environment map needs RGB", path,
+                                image.channels));
+    render::EnvironmentMap& env = light.environment;
+    env.width = image.width;
+    env.height = image.height;
+    env.scale = l.real("scale", kNonNegative).value_or(1.0);
+    env.rgb.resize(std::size_t(env.width) * env.height * 3);
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const float v = image.at(x, y, c);
+          if (!std::isfinite(v) || v < 0)
+            l.fail("map", fmt::format("{}: pixel ({}, {}) channel {} is {}, not a finite radiance "
+                                      ">= 0", path, x, y, c, v));
+          env.rgb[(std::size_t(y) * env.width + x) * 3 + c] = v;
+        }
+  }
+  return light;
+}
+
+render::Object load_object(const TomlSection& o, std::size_t index, const fs::path& base,
+                           std::string* fabric) {
+  render::Object obj;
+  obj.name = fmt::format("object[{}]", index);
+  if (!o.has("shape")) o.fail("shape", "is required (plane, cylinder or sphere)");
+  const std::string shape = *o.choice("shape", {"plane", "cylinder", "sphere"});
+  std::vector<std::string> keys = {"shape", "name", "center", "asset", "fabric", "tiles_per_unit",
+                                   "color"};
+  if (shape == "plane") {
+    obj.shape = render::ShapeType::Plane;
+    keys.insert(keys.end(), {"normal", "tangent", "size"});
+  } else if (shape == "cylinder") {
+    obj.shape = render::ShapeType::Cylinder;
+    keys.insert(keys.end(), {"axis", "radius", "height"});
+  } else {
+    obj.shape = render::ShapeType::Sphere;
+    keys.insert(keys.end(), {"axis", "radius"});
+  }
+  o.check_keys(keys);
+  if (const auto name = o.string("name")) obj.name = fmt::format("object[{}] ({})", index, *name);
+  obj.center = vec3(o, "center", obj.center);
+  if (obj.shape == render::ShapeType::Plane) {
+    obj.normal = unit(o, "normal", obj.normal);
+    obj.tangent = unit(o, "tangent", obj.tangent);
+    if (!(length(cross(obj.normal, obj.tangent)) > 1e-6))
+      o.fail("tangent", "must not be parallel to the normal");
+    if (const auto size = o.numbers("size", 2, kPositive)) {
+      obj.size[0] = (*size)[0];
+      obj.size[1] = (*size)[1];
+    }
+  } else {
+    obj.axis = unit(o, "axis", obj.axis);
+    obj.radius = o.real("radius", kPositive).value_or(obj.radius);
+    if (obj.shape == render::ShapeType::Cylinder)
+      obj.height = o.real("height", kPositive).value_or(obj.height);
+  }
+  if (o.has("asset") && o.has("fabric"))
+    o.fail("fabric", "and asset are exclusive: give the baked asset or the fabric to bake");
+  if (o.has("asset")) obj.asset = resolve(o, "asset", base);
+  if (o.has("fabric")) *fabric = resolve(o, "fabric", base);
+  obj.tiles_per_unit = o.real("tiles_per_unit", kPositive).value_or(obj.tiles_per_unit);
+  obj.diffuse = colour(o, "color", obj.diffuse, Range{0, 1});
+  return obj;
+}
+
+}  // namespace
+
+LoadedScene load_scene(const std::string& path) {
+  const std::string text = read_file_bytes(path);
+  const toml::table root_table = parse_toml_text(text, path);
+  const TomlSection root(root_table, path, "");
+  root.check_keys({"camera", "light", "object", "render"});
+  const fs::path base = fs::path(path).parent_path();
+  LoadedScene out;
+  render::Scene& scene = out.scene;
+  scene.path = path;
+  const auto camera = root.table("camera");
+  if (!camera) root.fail("camera", "is required: [camera] position, look_at, up, fov_deg, resolution");
+  scene.camera = load_camera(*camera);
+  if (const auto r = root.table("render")) {
+    r->check_keys({"max_error"});
+    scene.max_error = r->real("max_error", Range{0, 1, true, false}).value_or(scene.max_error);
+  }
+  if (const auto lights = root.table_array("light"))
+    for (std::size_t k = 0; k < lights->size(); ++k)
+      scene.lights.push_back(load_light((*lights)[k], k, base));
+  if (const auto objects = root.table_array("object"))
+    for (std::size_t k = 0; k < objects->size(); ++k) {
+      std::string fabric;
+      scene.objects.push_back(load_object((*objects)[k], k, base, &fabric));
+      out.fabrics.push_back(fabric);
+    }
+  if (scene.objects.empty()) root.fail("object", "the scene has no [[object]]");
+  if (scene.lights.empty()) root.fail("light", "the scene has no [[light]]");
+  const auto lights = root.table_array("light");
+  for (std::size_t k = 0; k < scene.lights.size(); ++k) {
+    const render::Light& l = scene.lights[k];
+    if (l.type != render::LightType::Point) continue;
+    for (const render::Object& o : scene.objects)
+      if (render::inside(o, l.position))
+        (*lights)[k].fail("position", fmt::format("is inside {}: the light could not reach the "
+                                                  "scene", o.name));
+  }
+  return out;
+}
+
+}  // namespace clothbake::inputs

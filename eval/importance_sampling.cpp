@@ -1,0 +1,80 @@
+// BSDF importance sampling of a footprint's representative texel (evaluator.hpp,
+// Evaluator::sample_direction).
+#include <cmath>
+
+#include "eval/eval_data.hpp"
+#include "eval/evaluator.hpp"
+
+namespace clothbake::eval {
+namespace {
+
+using reader::Check;
+using reader::ErrorCode;
+
+bool unit(const double v[3], model::Vec3d* out) {
+  if (v == nullptr || !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+    return false;
+  const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  if (!(len > 0) || !std::isfinite(len)) return false;
+  *out = model::Vec3d(v[0] / len, v[1] / len, v[2] / len);
+  return true;
+}
+
+// The representative texel of a footprint for view direction o (unit).
+Status centre_texel(const EvalData& d, const Footprint& p, const model::Vec3d& o, uint64_t* t) {
+  reader::FootprintPlan plan;
+  if (!reader::make_footprint_plan(p, d.n, &plan)) return reader::plan_footprint(p, d.n, &plan);
+  const double view[3] = {o.x, o.y, std::abs(o.z)};
+  reader::ParallaxSample s;
+  const bool area = p.x1 > p.x0 && p.y1 > p.y0;
+  const Status status = area ? d.parallax.footprint_depth(p, view, &s)
+                             : d.parallax.depth(int64_t(std::floor(p.x0)),
+                                                int64_t(std::floor(p.y0)), view, &s);
+  if (!status.ok()) return status;
+  const double n = d.n;
+  const double cx = area ? 0.5 * (p.x0 + p.x1) : p.x0, cy = area ? 0.5 * (p.y0 + p.y1) : p.y0;
+  *t = d.texel(int64_t(std::floor(cx + s.offset[0] * n)), int64_t(std::floor(cy + s.offset[1] * n)));
+  return {};
+}
+
+}  // namespace
+
+Status Evaluator::sample_direction(const Footprint& footprint, const double wo[3], double u_lobe,
+                                   double u1, double u2, DirectionSample* out) const noexcept {
+  if (!data_ || out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "evaluator is not open");
+  model::Vec3d o;
+  if (!unit(wo, &o))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "wo must be a finite non-zero vector");
+  uint64_t t = 0;
+  const Status s = centre_texel(*data_, footprint, o, &t);
+  if (!s.ok()) return s;
+  const model::ClothBsdf<double> bsdf(data_->texel_params(t));
+  const model::BsdfSample<double> b = bsdf.sample(o, u_lobe, u1, u2);
+  *out = DirectionSample{};
+  out->valid = b.valid;
+  out->is_delta = b.is_delta;
+  out->wi[0] = b.wi.x;
+  out->wi[1] = b.wi.y;
+  out->wi[2] = b.wi.z;
+  out->pdf = b.pdf;
+  return {};
+}
+
+Status Evaluator::direction_pdf(const Footprint& footprint, const double wi[3], const double wo[3],
+                                double* out) const noexcept {
+  if (!data_ || out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "evaluator is not open");
+  model::Vec3d i, o;
+  if (!unit(wi, &i) || !unit(wo, &o))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "wi and wo must be finite non-zero vectors");
+  uint64_t t = 0;
+  const Status s = centre_texel(*data_, footprint, o, &t);
+  if (!s.ok()) return s;
+  *out = model::ClothBsdf<double>(data_->texel_params(t)).pdf(i, o);
+  return {};
+}
+
+}  // namespace clothbake::eval

@@ -1,0 +1,77 @@
+// EXR and PNG outputs of a render (image_output.hpp).
+#include "render/image_output.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "common/error.hpp"
+#include "common/image_io/image_io.hpp"
+
+namespace clothbake::render {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string temporary_name(const fs::path& path) {
+  // Appended piecewise: GCC 12 warns (-Wrestrict, a false positive) on "." + string + ...
+  // The extension stays last: OpenImageIO picks the format by it.
+  std::string name = ".";
+  name.append(path.stem().string());
+  name.append(".tmp-");
+  name.append(std::to_string(::getpid()));
+  name.append(path.extension().string());
+  return (path.parent_path() / name).string();
+}
+
+}  // namespace
+
+double srgb_encode(double v) {
+  if (!(v > 0)) return 0;
+  if (v >= 1) return 1;
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+}
+
+void check_output_path(const std::string& exr_path) {
+  const fs::path p(exr_path);
+  if (p.extension() != ".exr")
+    throw_input_error(exr_path + ": the output must be an .exr file (a .png preview is written "
+                      "beside it)");
+  std::error_code ec;
+  if (fs::is_directory(p, ec)) throw_input_error(exr_path + ": is a directory");
+  const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+  if (!fs::is_directory(dir, ec))
+    throw_input_error(exr_path + ": the folder " + dir.string() + " does not exist");
+}
+
+OutputFiles write_render_images(const std::string& exr_path, const RenderResult& r) {
+  OutputFiles files;
+  files.exr = exr_path;
+  files.png = fs::path(exr_path).replace_extension(".png").string();
+  Image linear(r.width, r.height, 3), preview(r.width, r.height, 3);
+  for (std::size_t k = 0; k < r.rgb.size(); ++k) {
+    linear.pixels[k] = r.rgb[k];
+    preview.pixels[k] = float(srgb_encode(r.rgb[k]));
+  }
+  const std::string exr_tmp = temporary_name(files.exr), png_tmp = temporary_name(files.png);
+  std::error_code ec;
+  try {
+    write_image(exr_tmp, linear, PixelType::Float32);
+    write_image(png_tmp, preview, PixelType::UInt8);
+  } catch (...) {
+    fs::remove(exr_tmp, ec);
+    fs::remove(png_tmp, ec);
+    throw;
+  }
+  fs::rename(exr_tmp, files.exr, ec);
+  if (!ec) fs::rename(png_tmp, files.png, ec);
+  if (ec) {
+    fs::remove(exr_tmp, ec);
+    fs::remove(png_tmp, ec);
+    throw_input_error(exr_path + ": cannot write the render: " + ec.message());
+  }
+  return files;
+}
+
+}  // namespace clothbake::render

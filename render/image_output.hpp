@@ -1,0 +1,26 @@
+// The renderer's image files: a linear float EXR and an sRGB 8-bit PNG preview beside it, written
+// through OpenImageIO to temporary names that are renamed only when both are complete.
+#pragma once
+
+#include <string>
+
+#include "render/renderer.hpp"
+
+namespace clothbake::render {
+
+struct OutputFiles {
+  std::string exr, png;
+};
+
+// Checks an output path before any work: it must end in .exr, not be a directory, and its folder
+// must exist. Throws clothbake::Error(Input) naming the path.
+void check_output_path(const std::string& exr_path);
+
+// Writes exr_path and the same path with .png. Throws clothbake::Error(Input) on I/O failure,
+// leaving neither file changed.
+OutputFiles write_render_images(const std::string& exr_path, const RenderResult& image);
+
+// The sRGB transfer function of a linear value, clamped to [0, 1].
+double srgb_encode(double linear);
+
+}  // namespace clothbake::render

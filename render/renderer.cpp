@@ -1,0 +1,288 @@
+// The direct-lighting renderer (renderer.hpp).
+#include "render/renderer.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+
+#include "common/error.hpp"
+#include "formats/writer/open_asset.hpp"
+#include "model/splitmix64.hpp"
+#include "render/camera.hpp"
+#include "render/environment.hpp"
+#include "render/shapes.hpp"
+
+namespace clothbake::render {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr eval::LobeMask kDeltaBit = eval::lobe_bit(model::Lobe::DeltaTransmission);
+constexpr eval::LobeMask kContinuousLobes = eval::kAllLobes & ~kDeltaBit;
+
+// An object's shading: an opened asset and its evaluator, or a Lambertian colour.
+struct Material {
+  std::unique_ptr<reader::Asset> asset;
+  eval::Evaluator evaluator;
+  bool cloth = false;
+  double texels_per_unit = 0;  // tiles_per_unit * N
+};
+
+// The shading frame of a hit: z = the geometric normal, x along dP/du.
+struct Frame {
+  Vec3 x, y, z;
+  explicit Frame(const SurfaceHit& h) : z(h.normal) {
+    x = normalize(h.dpdu - z * dot(z, h.dpdu));
+    if (!(length(x) > 0.5)) {
+      Vec3 s, t;
+      model::orthonormal_basis(z, s, t);
+      x = s;
+    }
+    y = cross(z, x);
+  }
+  Vec3 local(const Vec3& v) const { return {dot(v, x), dot(v, y), dot(v, z)}; }
+  Vec3 world(const Vec3& v) const { return x * v.x + y * v.y + z * v.z; }
+};
+
+uint64_t pixel_seed(uint64_t seed, uint32_t pass, uint64_t pixel) {
+  uint64_t s = seed ^ 0x243f6a8885a308d3ull;
+  model::splitmix64_next(s);
+  s ^= (uint64_t(pass) << 40) ^ pixel;
+  return model::splitmix64_next(s);
+}
+
+struct Counters {
+  std::atomic<uint64_t> estimates{0}, texel_evals{0}, samples{0}, direct{0}, cloth_pixels{0};
+  std::mutex mutex;
+  double min_texels = INFINITY, max_texels = 0;
+};
+
+}  // namespace
+
+struct Renderer::Impl {
+  PinholeCamera camera;
+  std::vector<Material> materials;
+  std::vector<std::unique_ptr<Environment>> environments;  // per light (null if not environment)
+  const Environment* background = nullptr;
+  explicit Impl(const Camera& c) : camera(c) {}
+};
+
+Renderer::Renderer(const Scene& scene, const RenderOptions& options)
+    : scene_(scene), options_(options), impl_(std::make_unique<Impl>(scene.camera)) {
+  for (const Object& o : scene.objects) {
+    Material m;
+    if (!o.asset.empty()) {
+      m.asset = std::make_unique<reader::Asset>(formats::open_asset(o.asset, reader::Verify::Checksums));
+      eval::EvalOptions eo;
+      eo.tables = options.tables;
+      const reader::Status s = m.evaluator.open(*m.asset, eo);
+      if (!s.ok())
+        throw Error(s.code() == reader::ErrorCode::NotFound ? ExitCode::Input
+                                                            : formats::exit_code_of(s),
+                    scene.path + ": " + o.name + ".asset: " + o.asset + ": " +
+                        formats::describe(s));
+      m.cloth = true;
+      m.texels_per_unit = o.tiles_per_unit * m.evaluator.resolution();
+    }
+    impl_->materials.push_back(std::move(m));
+  }
+  for (const Light& l : scene.lights) {
+    if (l.type == LightType::Environment) {
+      impl_->environments.push_back(std::make_unique<Environment>(l.environment));
+      if (!impl_->background) impl_->background = impl_->environments.back().get();
+    } else {
+      impl_->environments.push_back(nullptr);
+    }
+  }
+}
+
+Renderer::~Renderer() = default;
+
+PixelFootprint Renderer::pixel_footprint(int px, int py) const {
+  PixelFootprint out;
+  const CameraRay cr = impl_->camera.generate(px + 0.5, py + 0.5);
+  const SurfaceHit hit = intersect_scene(cr.ray, scene_.objects, 0.0, INFINITY);
+  if (!hit.hit()) return out;
+  out.object = hit.object;
+  const Frame frame(hit);
+  const Vec3 wo = frame.local(-cr.ray.direction);
+  out.wo[0] = wo.x, out.wo[1] = wo.y, out.wo[2] = wo.z;
+  const Material& m = impl_->materials[std::size_t(hit.object)];
+  const double scale = m.cloth ? m.texels_per_unit : scene_.objects[std::size_t(hit.object)].tiles_per_unit;
+  out.rect = footprint_rectangle(hit.u * scale, hit.v * scale, surface_differentials(cr, hit), scale);
+  return out;
+}
+
+RenderResult Renderer::render(const std::function<void(double)>& progress) const {
+  const auto start = std::chrono::steady_clock::now();
+  const Scene& scene = scene_;
+  const Impl& impl = *impl_;
+  const int w = scene.camera.width, h = scene.camera.height;
+  RenderResult result;
+  result.width = w;
+  result.height = h;
+  std::vector<double> sum(std::size_t(w) * h * 3, 0.0);
+  Counters counters;
+  const uint32_t spp = options_.spp;
+
+  // One pixel sample of pass `pass`: the primary hit's direct lighting.
+  auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
+    eval::Rng rng(pixel_seed(options_.seed, pass, uint64_t(py) * w + px));
+    const CameraRay cr = impl.camera.generate(px + 0.5, py + 0.5);
+    const SurfaceHit hit = intersect_scene(cr.ray, scene.objects, 0.0, INFINITY);
+    if (!hit.hit()) return impl.background ? impl.background->radiance(cr.ray.direction) : Rgb();
+    const Object& object = scene.objects[std::size_t(hit.object)];
+    const Material& m = impl.materials[std::size_t(hit.object)];
+    const Frame frame(hit);
+    const Vec3 wo_world = -cr.ray.direction;
+    const Vec3 wo = frame.local(wo_world);
+    const double wo_arr[3] = {wo.x, wo.y, wo.z};
+    reader::Footprint fp{};
+    if (m.cloth) {
+      fp = footprint_rectangle(hit.u * m.texels_per_unit, hit.v * m.texels_per_unit,
+                               surface_differentials(cr, hit), m.texels_per_unit);
+      counters.cloth_pixels.fetch_add(pass == 0 ? 1 : 0, std::memory_order_relaxed);
+      if (pass == 0) {
+        const double texels = (fp.x1 - fp.x0) * (fp.y1 - fp.y0);
+        std::lock_guard lock(counters.mutex);
+        counters.min_texels = std::min(counters.min_texels, texels);
+        counters.max_texels = std::max(counters.max_texels, texels);
+      }
+    }
+    const double eps = 1e-7 * (1.0 + std::abs(hit.point.x) + std::abs(hit.point.y) +
+                               std::abs(hit.point.z) + hit.t);
+    auto shadow_origin = [&](const Vec3& wi) {
+      return hit.point + hit.normal * (dot(hit.normal, wi) > 0 ? eps : -eps);
+    };
+    // The integrand of the rendering equation for light from world direction wi: f^ V |cos|.
+    auto bsdf = [&](const Vec3& wi_world, eval::LobeMask mask, uint32_t samples) -> Rgb {
+      const Vec3 wi = frame.local(wi_world);
+      if (!m.cloth) {
+        if (!(wi.z * wo.z > 0)) return {};
+        return object.diffuse * (std::abs(wi.z) / kPi);
+      }
+      const double wi_arr[3] = {wi.x, wi.y, wi.z};
+      eval::Estimate e;
+      const reader::Status s =
+          m.evaluator.estimate(fp, wi_arr, wo_arr, options_.method, samples, rng, mask, &e);
+      counters.estimates.fetch_add(1, std::memory_order_relaxed);
+      counters.texel_evals.fetch_add(e.counters.texel_evals, std::memory_order_relaxed);
+      counters.samples.fetch_add(e.counters.samples, std::memory_order_relaxed);
+      if (e.counters.direct) counters.direct.fetch_add(1, std::memory_order_relaxed);
+      return s.ok() ? e.value : Rgb();
+    };
+    // A BSDF-sampled direction and its density (continuous techniques only).
+    auto bsdf_pdf = [&](const Vec3& wi_world) -> double {
+      const Vec3 wi = frame.local(wi_world);
+      if (!m.cloth) return wi.z * wo.z > 0 ? std::abs(wi.z) / kPi : 0.0;
+      const double wi_arr[3] = {wi.x, wi.y, wi.z};
+      double pdf = 0;
+      return m.evaluator.direction_pdf(fp, wi_arr, wo_arr, &pdf).ok() ? pdf : 0.0;
+    };
+
+    Rgb radiance;
+    for (std::size_t li = 0; li < scene.lights.size(); ++li) {
+      const Light& light = scene.lights[li];
+      if (light.type == LightType::Point) {
+        const Vec3 to = light.position - hit.point;
+        const double dist = length(to);
+        if (!(dist > 0)) continue;
+        const Vec3 wi = to / dist;
+        if (occluded({shadow_origin(wi), wi}, scene.objects, 0.0, dist * (1 - 1e-9))) continue;
+        radiance += bsdf(wi, kContinuousLobes, spp) * light.intensity / (dist * dist);
+      } else if (light.type == LightType::Directional) {
+        const Vec3 wi = -light.direction;
+        if (occluded({shadow_origin(wi), wi}, scene.objects, 0.0, INFINITY)) continue;
+        radiance += bsdf(wi, kContinuousLobes, spp) * light.irradiance;
+      } else {
+        const Environment& env = *impl.environments[li];
+        Rgb sum_env;
+        for (uint32_t k = 0; k < spp; ++k) {
+          // Light sample, weighted by the balance heuristic against the BSDF density.
+          double p_light = 0;
+          const Vec3 wl = env.sample(rng.uniform(), rng.uniform(), &p_light);
+          if (p_light > 0 && !occluded({shadow_origin(wl), wl}, scene.objects, 0.0, INFINITY)) {
+            const double p_bsdf = bsdf_pdf(wl);
+            sum_env += bsdf(wl, kContinuousLobes, 1) * env.radiance(wl) / (p_light + p_bsdf);
+          }
+          // BSDF sample, the same heuristic.
+          Vec3 wb;
+          double p_bsdf = 0;
+          bool delta = false, valid = false;
+          const double ul = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+          if (m.cloth) {
+            eval::Evaluator::DirectionSample ds;
+            if (m.evaluator.sample_direction(fp, wo_arr, ul, u1, u2, &ds).ok() && ds.valid) {
+              valid = true;
+              delta = ds.is_delta;
+              wb = frame.world(Vec3(ds.wi[0], ds.wi[1], ds.wi[2]));
+              p_bsdf = ds.pdf;
+            }
+          } else {
+            // Cosine-weighted on the viewer's side.
+            const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+            const double z = std::sqrt(std::max(0.0, 1 - u1)) * (wo.z >= 0 ? 1 : -1);
+            wb = frame.world(Vec3(r * std::cos(phi), r * std::sin(phi), z));
+            p_bsdf = std::abs(z) / kPi;
+            valid = p_bsdf > 0;
+          }
+          if (valid && !delta && p_bsdf > 0 &&
+              !occluded({shadow_origin(wb), wb}, scene.objects, 0.0, INFINITY)) {
+            const double pl = env.pdf(wb);
+            sum_env += bsdf(wb, kContinuousLobes, 1) * env.radiance(wb) / (pl + p_bsdf);
+          }
+        }
+        radiance += sum_env / double(spp);
+        // The delta lobe: the environment straight through the gaps, V T_sheen (1 - I) L(-o).
+        if (m.cloth && !occluded({shadow_origin(-wo_world), -wo_world}, scene.objects, 0.0, INFINITY))
+          radiance += bsdf(-wo_world, kDeltaBit, spp) * env.radiance(-wo_world);
+      }
+    }
+    return radiance;
+  };
+
+  std::atomic<uint64_t> rows_done{0};
+  uint32_t pass = 0;
+  do {
+    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+      for (int py = rows.begin(); py != rows.end(); ++py) {
+        for (int px = 0; px < w; ++px) {
+          const Rgb c = shade(px, py, pass);
+          double* out = &sum[(std::size_t(py) * w + px) * 3];
+          out[0] += c.r;
+          out[1] += c.g;
+          out[2] += c.b;
+        }
+        const uint64_t done = rows_done.fetch_add(1) + 1;
+        if (progress && options_.time_budget <= 0) progress(double(done) / h);
+      }
+    });
+    ++pass;
+    if (progress && options_.time_budget > 0) {
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      progress(std::min(1.0, elapsed / options_.time_budget));
+    }
+  } while (options_.time_budget > 0 &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() <
+               options_.time_budget);
+
+  result.rgb.resize(sum.size());
+  for (std::size_t k = 0; k < sum.size(); ++k)
+    result.rgb[k] = float(sum[k] / pass);
+  RenderStats& st = result.stats;
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  st.passes = pass;
+  st.estimates = counters.estimates;
+  st.texel_evals = counters.texel_evals;
+  st.samples = counters.samples;
+  st.direct = counters.direct;
+  st.cloth_pixels = counters.cloth_pixels;
+  st.footprint_texels_min = std::isfinite(counters.min_texels) ? counters.min_texels : 0;
+  st.footprint_texels_max = counters.max_texels;
+  return result;
+}
+
+}  // namespace clothbake::render
