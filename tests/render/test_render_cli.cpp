@@ -1,0 +1,90 @@
+// `clothbake render` end to end: outputs, JSON, bad scenes with their keys and exit codes, nothing
+// written on failure.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "tests/eval/eval_fixtures.hpp"
+
+namespace clothbake::render {
+namespace {
+
+using eval_test::assets;
+using test_support::run_clothbake;
+namespace fs = std::filesystem;
+
+std::string good_scene() {
+  return "[camera]\nposition = [0, 0, 2]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov_deg = 30\n"
+         "resolution = [16, 12]\n[[light]]\ntype = \"point\"\nposition = [0.5, 0.5, 1.5]\n"
+         "intensity = 3\n[[object]]\nshape = \"plane\"\ncenter = [0, 0, 0]\nnormal = [0, 0, 1]\n"
+         "tangent = [1, 0, 0]\nsize = [2, 2]\nasset = \"" +
+         assets().twill + "\"\ntiles_per_unit = 2\n";
+}
+
+fs::path write_scene(const std::string& name, const std::string& text) {
+  const fs::path p = assets().dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+TEST(RenderCli, WritesTheExrAndThePreview) {
+  const fs::path scene = write_scene("good.toml", good_scene());
+  const fs::path out = assets().dir / "good.exr";
+  const auto run = run_clothbake({"render", scene.string(), "-o", out.string(), "--json"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  EXPECT_EQ(j["resolution"][0], 16);
+  EXPECT_EQ(j["method"], "multiscale");
+  EXPECT_GT(j["cloth_pixels"].get<int>(), 0);
+  EXPECT_TRUE(fs::is_regular_file(out));
+  EXPECT_TRUE(fs::is_regular_file(assets().dir / "good.png"));
+  // A second run with the same seed writes the same pixels.
+  const fs::path again = assets().dir / "again.exr";
+  ASSERT_EQ(run_clothbake({"render", scene.string(), "-o", again.string()}).code, 0);
+  std::ifstream a(out, std::ios::binary), b(again, std::ios::binary);
+  const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_EQ(sa, sb);
+}
+
+TEST(RenderCli, BadScenesNameTheKeyAndWriteNothing) {
+  const std::string base = good_scene();
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = base;
+    const auto at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return s.replace(at, from.size(), to);
+  };
+  struct Case {
+    std::string name, text, key;
+  } cases[] = {
+      {"missing-asset", replace(assets().twill, assets().twill + ".nope"), "object[0].asset"},
+      {"unknown-key", replace("tiles_per_unit", "tiles_per_unti"), "tiles_per_unit"},
+      {"nan-position", replace("position = [0.5, 0.5, 1.5]", "position = [0.5, nan, 1.5]"),
+       "light[0].position"},
+      {"zero-resolution", replace("resolution = [16, 12]", "resolution = [0, 12]"),
+       "camera.resolution"},
+      {"light-inside", replace("[[object]]\nshape = \"plane\"",
+                               "[[object]]\nshape = \"sphere\"\nradius = 5\n[[object]]\nshape = "
+                               "\"plane\""),
+       "light[0].position"},
+      {"no-light", replace("[[light]]\ntype = \"point\"\nposition = [0.5, 0.5, 1.5]\nintensity = 3\n", ""),
+       "light"},
+  };
+  for (const Case& c : cases) {
+    const fs::path scene = write_scene(c.name + ".toml", c.text);
+    const fs::path out = assets().dir / (c.name + ".exr");
+    const auto run = run_clothbake({"render", scene.string(), "-o", out.string()});
+    EXPECT_EQ(run.code, 2) << c.name << ": " << run.err;
+    EXPECT_NE(run.err.find(c.key), std::string::npos) << c.name << ": " << run.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+    EXPECT_FALSE(fs::exists(assets().dir / (c.name + ".png"))) << c.name;
+  }
+  // Bad options are usage errors.
+  const fs::path scene = write_scene("ok.toml", base);
+  EXPECT_EQ(run_clothbake({"render", scene.string(), "-o", (assets().dir / "x.exr").string(), "--spp", "0"}).code, 1);
+  EXPECT_EQ(run_clothbake({"render", scene.string(), "-o", (assets().dir / "x.png").string()}).code, 2);
+}
+
+}  // namespace
+}  // namespace clothbake::render
