@@ -28,6 +28,7 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/report_error_time.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
@@ -106,10 +107,24 @@ std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<
 
 Action setup_report(CLI::App& app) {
   auto o = std::make_shared<ReportCliOptions>();
-  app.add_option("WHAT", o->what, "report to produce: compression")
+  app.add_option("WHAT", o->what,
+                 "report to produce: compression (FABRIC) or error-time (SCENE, "
+                 "docs/rendering.md)")
       ->required()
-      ->check(CLI::IsMember({"compression"}));
-  app.add_option("FABRIC", o->fabric, "fabric description (TOML)")->required();
+      ->check(CLI::IsMember({"compression", "error-time"}));
+  app.add_option("FABRIC", o->fabric, "fabric description (compression) or scene (error-time)")
+      ->required();
+  auto et = std::make_shared<ErrorTimeOptions>();
+  std::string methods = "multiscale,multiscale-paper,brute", spp = "1,2,4,8,16,32,64";
+  auto m = std::make_shared<std::string>(methods);
+  auto s = std::make_shared<std::string>(spp);
+  app.add_option("--methods", *m, "error-time: methods to compare (default " + methods + ")");
+  app.add_option("--spp", *s, "error-time: spp sweep (default " + spp + ")");
+  app.add_option("--reference-spp", et->reference_spp,
+                 "error-time: light samples of the reference when the scene has environment "
+                 "lights (default 256)");
+  app.add_option("--seed", et->seed, "error-time: seed of the renders (default 1)");
+  app.add_option("--cache", et->cache, "error-time: asset and reference cache folder");
   app.add_option("-o,--output", o->output, "output directory (created; other files kept)")
       ->required();
   app.add_option("--resolution", o->resolution, "texels per tile side (default: the fabric's)")
@@ -129,7 +144,19 @@ Action setup_report(CLI::App& app) {
   app.add_flag("--no-raw", o->no_raw, "skip the raw tables (built in memory: 2 GiB at 256^2)");
   app.add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
   add_json_flag(app, o->json, "print the rows as JSON on stdout");
-  return [o] {
+  return [o, et, m, s] {
+    if (o->what == "error-time") {
+      et->scene = o->fabric;
+      et->output = o->output;
+      et->no_plots = o->no_plots;
+      et->json = o->json;
+      et->methods.clear();
+      std::stringstream in(*m);
+      for (std::string item; std::getline(in, item, ',');) et->methods.push_back(item);
+      et->spp.clear();
+      for (int v : positive_list<int>(*s, "--spp")) et->spp.push_back(uint32_t(v));
+      return run_error_time_report(*et);
+    }
     compress::ReportOptions options;
     options.clusters = positive_list<int>(o->clusters, "--clusters");
     options.ranks = positive_list<int>(o->ranks, "--ranks");

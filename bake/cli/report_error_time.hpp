@@ -1,0 +1,27 @@
+// `clothbake report error-time SCENE.toml -o DIR`: renders the scene's reference once (cached by
+// content), then every method over an spp sweep, timing each render's wall time on this machine in
+// this run; writes DIR/error-time.csv, error-time.json (rows, and per method pair the equal-error
+// speedup and the equal-time error ratio), error-time.png/.svg and grid.png (via
+// scripts/plot_error_time.py), and a summary on stdout (docs/rendering.md, "Error against run
+// time").
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace clothbake::cli {
+
+struct ErrorTimeOptions {
+  std::string scene, output, cache;
+  std::vector<std::string> methods = {"multiscale", "multiscale-paper", "brute"};
+  std::vector<uint32_t> spp = {1, 2, 4, 8, 16, 32, 64};
+  uint32_t reference_spp = 256;  // light samples of the reference with environment lights
+  uint64_t seed = 1;
+  bool no_plots = false, json = false;
+};
+
+// Throws CLI::ValidationError for bad options, clothbake::Error for a bad scene or output.
+int run_error_time_report(const ErrorTimeOptions& options);
+
+}  // namespace clothbake::cli
