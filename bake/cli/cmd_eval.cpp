@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "common/error.hpp"
 #include "eval/evaluator.hpp"
 #include "formats/writer/open_asset.hpp"
@@ -33,39 +34,13 @@ struct EvalCliOptions {
 };
 
 std::array<double, 4> parse_rect(const std::string& text) {
-  std::string s = text;
-  for (char& c : s)
-    if (c == ',') c = ' ';
-  std::istringstream in(s);
-  std::array<double, 4> r{};
-  std::string token;
-  int count = 0;
-  while (in >> token) {
-    if (count == 4)
-      throw CLI::ValidationError("--rect", "expected x0,y0,x1,y1, got '" + text + "'");
-    std::size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != token.size() || !std::isfinite(v))
-      throw CLI::ValidationError("--rect", "'" + token + "' is not a finite number");
-    r[count++] = v;
-  }
-  if (count != 4) throw CLI::ValidationError("--rect", "expected x0,y0,x1,y1, got '" + text + "'");
-  if (r[2] < r[0] || r[3] < r[1])
+  NumberListRule rule;
+  rule.expected = "x0,y0,x1,y1";
+  rule.count = 4;
+  const std::vector<double> v = parse_number_list(text, "--rect", rule);
+  if (v[2] < v[0] || v[3] < v[1])
     throw CLI::ValidationError("--rect", "x1 must be >= x0 and y1 >= y0");
-  return r;
-}
-
-std::array<double, 3> parse_direction(const std::string& text, const std::string& option) {
-  const std::array<double, 3> d = parse_vec3(text, option);
-  if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2]) ||
-      !(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 0))
-    throw CLI::ValidationError(option, "the direction must be finite and non-zero");
-  return d;
+  return {v[0], v[1], v[2], v[3]};
 }
 
 eval::LobeMask parse_lobes(const std::string& text) {
@@ -190,7 +165,7 @@ const bool registered = register_command(
      "force or the exact reference",
      [](CLI::App& app) -> Action {
        auto o = std::make_shared<EvalCliOptions>();
-       app.add_option("ASSET", o->asset, "asset file (.cbk)")->required();
+       add_asset_argument(app, o->asset);
        app.add_option("--rect", o->rect,
                       "footprint x0,y0,x1,y1 in texel units, half-open, any size, wraps")
            ->required();
@@ -213,7 +188,7 @@ const bool registered = register_command(
                       "Integral-Radiance tables of the multi-scale methods: auto (compressed if "
                       "present, else raw), raw, compressed")
            ->check(CLI::IsMember({"auto", "raw", "compressed"}));
-       app.add_flag("--json", o->json, "print the estimate as JSON on stdout");
+       add_json_flag(app, o->json, "print the estimate as JSON on stdout");
        return [o] { return run_eval(*o); };
      }});
 

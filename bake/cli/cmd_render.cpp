@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/cli/scene_bake.hpp"
 #include "bake/inputs/scene_load.hpp"
 #include "common/error.hpp"
@@ -136,7 +137,7 @@ const bool registered = register_command(
        app.add_option("--cache", o->cache,
                       "folder for assets baked from `fabric =` objects (default: $CLOTHBAKE_CACHE, "
                       "else ~/.cache/clothbake)");
-       app.add_flag("--json", o->json, "print the render's statistics as JSON on stdout");
+       add_json_flag(app, o->json, "print the render's statistics as JSON on stdout");
        return [o] { return run_render(*o); };
      }});
 
