@@ -131,11 +131,10 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     // texels (unbiased form: any per-cluster constant keeps the control variate exact, and the
     // clusters' own means follow the yarn colours at no footprint query).
     const double d_h = centre.sggx().D(frame.h);
-    const double f =
-        reflect ? model::spongecake_reflection(centre.sggx(), centre.optical_thickness(), frame.wi,
-                                               frame.wo)
-                : model::spongecake_transmission(centre.sggx(), centre.optical_thickness(),
-                                                 frame.wi, frame.wo);
+    const double f = reflect ? model::spongecake_reflection(
+                                   centre.sggx(), centre.optical_thickness(), frame.wi, frame.wo)
+                             : model::spongecake_transmission(
+                                   centre.sggx(), centre.optical_thickness(), frame.wi, frame.wo);
     const double g_bar = d_h > 0.0 ? f / d_h : 0.0;
     const Rgb common = t_sheen * (g_bar * cos_i);
     Rgb footprint_scale;
@@ -206,8 +205,7 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
       if (k.specular) {
         const int s = int(k.specular_lobe);
         const double deviation = shading.visibility - frame.mean_visibility[shading.label];
-        residual[s] += k.scale(0) * (shading.gap * shading.sggx_d * deviation) -
-                       shading.lobes[s];
+        residual[s] += k.scale(0) * (shading.gap * shading.sggx_d * deviation) - shading.lobes[s];
       }
       return;
     }

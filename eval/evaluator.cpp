@@ -140,7 +140,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   if (!s.ok()) return s;
   s = d->clusters.open(asset);
   if (!s.ok()) return s;
-  if (d->parallax.resolution() != d->n) return cross_section("parallax resolution", d->parallax.resolution(), d->n);
+  if (d->parallax.resolution() != d->n)
+    return cross_section("parallax resolution", d->parallax.resolution(), d->n);
   if (d->visibility.resolution() != d->n)
     return cross_section("visibility resolution", d->visibility.resolution(), d->n);
   if (d->clusters.resolution() != d->n)
@@ -150,8 +151,9 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   s = open_tables(asset, reader::RadianceTableKind::Specular, options.tables, &d->specular);
   if (!s.ok()) return s;
   const TableChoice gap_choice =
-      d->specular.present() ? (d->specular.is_compressed() ? TableChoice::Compressed : TableChoice::Raw)
-                            : options.tables;
+      d->specular.present()
+          ? (d->specular.is_compressed() ? TableChoice::Compressed : TableChoice::Raw)
+          : options.tables;
   s = open_tables(asset, reader::RadianceTableKind::Gap, gap_choice, &d->gap);
   if (s.code() == ErrorCode::NotFound) {
     d->gap.tables = nullptr;  // no gap tables in this representation: the footprint sums stand in
@@ -161,7 +163,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   for (const TableSource* source : {&d->specular, &d->gap}) {
     if (!source->present()) continue;
     if (source->tables->resolution() != d->n)
-      return cross_section("Integral-Radiance table resolution", source->tables->resolution(), d->n);
+      return cross_section("Integral-Radiance table resolution", source->tables->resolution(),
+                           d->n);
     if (source->tables->cluster_count() != clusters)
       return cross_section("Integral-Radiance cluster count", source->tables->cluster_count(),
                            clusters);
@@ -194,8 +197,7 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
     out[layout.gap() + label] = 1.0 - gap;
   });
   if (!built)
-    return Status::error(ErrorCode::Unsupported, Check::None,
-                         "cannot allocate the footprint sums");
+    return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate the footprint sums");
   // Each cluster's mean specular albedo over the tile: the per-cluster constants of the unbiased
   // control variate.
   std::vector<double> count(clusters, 0.0);
@@ -249,18 +251,17 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
     return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown method");
   const bool multiscale = method == Method::Multiscale || method == Method::MultiscalePaper;
   if (multiscale && !data_->specular.present())
-    return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "method %s needs Integral-Radiance tables; this asset has none%s",
-                         method_name(method),
-                         data_->options.tables == TableChoice::Auto ? "" : " of the kind asked for");
+    return Status::error(
+        ErrorCode::NotFound, Check::MissingSection,
+        "method %s needs Integral-Radiance tables; this asset has none%s", method_name(method),
+        data_->options.tables == TableChoice::Auto ? "" : " of the kind asked for");
   ShadingFrame frame;
   if (!make_frame(*data_, wi, wo, lobes, &frame, &s)) return s;
   *out = Estimate{};
 
   const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
   const double direct_side = data_->options.direct_max_side;
-  if (!(w > 0.0 && h > 0.0) ||
-      (multiscale && w < direct_side && h < direct_side)) {
+  if (!(w > 0.0 && h > 0.0) || (multiscale && w < direct_side && h < direct_side)) {
     out->counters.direct = true;
     s = exact_average(*data_, frame, footprint, 0, out);
   } else if (method == Method::Reference) {
@@ -268,7 +269,8 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   } else if (method == Method::Brute) {
     brute_force(*data_, frame, footprint, spp, rng, out);
   } else {
-    s = control_variates(*data_, frame, footprint, spp, rng, method == Method::MultiscalePaper, out);
+    s = control_variates(*data_, frame, footprint, spp, rng, method == Method::MultiscalePaper,
+                         out);
   }
   if (!s.ok()) return s;
   sum_value(out);
@@ -276,8 +278,8 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
 }
 
 Status Evaluator::reference_supersampled(const Footprint& footprint, const double wi[3],
-                                         const double wo[3], uint32_t supersampling,
-                                         LobeMask lobes, Estimate* out) const noexcept {
+                                         const double wo[3], uint32_t supersampling, LobeMask lobes,
+                                         Estimate* out) const noexcept {
   Status s = check_arguments(data_.get(), footprint, lobes, out);
   if (!s.ok()) return s;
   if (supersampling == 0)

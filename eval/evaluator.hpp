@@ -125,9 +125,8 @@ class Evaluator {
   // spp >= 1 samples for the sampling methods (ignored by Reference and by the direct path); rng
   // advances. Errors: InvalidArgument for a bad footprint, direction, spp or lobe mask (0 or
   // unknown bits), NotFound when the method needs tables the asset does not have.
-  Status estimate(const Footprint& footprint, const double wi[3], const double wo[3],
-                  Method method, uint32_t spp, Rng& rng, LobeMask lobes,
-                  Estimate* out) const noexcept;
+  Status estimate(const Footprint& footprint, const double wi[3], const double wo[3], Method method,
+                  uint32_t spp, Rng& rng, LobeMask lobes, Estimate* out) const noexcept;
 
   // The Reference method with s x s midpoint samples per covered source texel instead of the exact
   // partition (s >= 1): converges to Reference at |difference| <= 2 / s * max_lobe_value

@@ -7,11 +7,11 @@
 //   G_c(x)            = (1 - I(x)) [label(x) = c]                (delta, when the asset has no gap
 //                                                                table)
 //
-// One exclusive prefix sum in double per channel, interleaved by channel at every SAT point, so that
-// a footprint reads each corner's channels from consecutive memory. A footprint integral is exact up
-// to double rounding (relative error ~1e-16 times the number of texels), for any rectangle: the
-// plan of reader::make_footprint_plan reduces it to one tile, and a fractional corner is the
-// bilinear interpolation of the prefix sums (exact for piecewise-constant texels).
+// One exclusive prefix sum in double per channel, interleaved by channel at every SAT point, so
+// that a footprint reads each corner's channels from consecutive memory. A footprint integral is
+// exact up to double rounding (relative error ~1e-16 times the number of texels), for any
+// rectangle: the plan of reader::make_footprint_plan reduces it to one tile, and a fractional
+// corner is the bilinear interpolation of the prefix sums (exact for piecewise-constant texels).
 //
 // C++17, standard library only. build() allocates (N + 1)^2 x channels doubles; integral() does
 // not allocate and is noexcept.
@@ -28,11 +28,11 @@ namespace clothbake::eval {
 // Channel layout of the footprint sums for C clusters.
 struct SumChannels {
   uint32_t clusters = 0;
-  uint32_t albedo() const { return 0; }                   // 3
-  uint32_t area() const { return 3; }                     // C
-  uint32_t diffuse_r() const { return 3 + clusters; }     // 3C, [c][rgb]
-  uint32_t diffuse_t() const { return 3 + 4 * clusters; } // 3C
-  uint32_t gap() const { return 3 + 7 * clusters; }       // C
+  uint32_t albedo() const { return 0; }                    // 3
+  uint32_t area() const { return 3; }                      // C
+  uint32_t diffuse_r() const { return 3 + clusters; }      // 3C, [c][rgb]
+  uint32_t diffuse_t() const { return 3 + 4 * clusters; }  // 3C
+  uint32_t gap() const { return 3 + 7 * clusters; }        // C
   uint32_t count() const { return 3 + 8 * clusters; }
 };
 

@@ -27,13 +27,14 @@ Status centre_texel(const EvalData& d, const Footprint& p, const model::Vec3d& o
   const double view[3] = {o.x, o.y, std::abs(o.z)};
   reader::ParallaxSample s;
   const bool area = p.x1 > p.x0 && p.y1 > p.y0;
-  const Status status = area ? d.parallax.footprint_depth(p, view, &s)
-                             : d.parallax.depth(int64_t(std::floor(p.x0)),
-                                                int64_t(std::floor(p.y0)), view, &s);
+  const Status status =
+      area ? d.parallax.footprint_depth(p, view, &s)
+           : d.parallax.depth(int64_t(std::floor(p.x0)), int64_t(std::floor(p.y0)), view, &s);
   if (!status.ok()) return status;
   const double n = d.n;
   const double cx = area ? 0.5 * (p.x0 + p.x1) : p.x0, cy = area ? 0.5 * (p.y0 + p.y1) : p.y0;
-  *t = d.texel(int64_t(std::floor(cx + s.offset[0] * n)), int64_t(std::floor(cy + s.offset[1] * n)));
+  *t =
+      d.texel(int64_t(std::floor(cx + s.offset[0] * n)), int64_t(std::floor(cy + s.offset[1] * n)));
   return {};
 }
 

@@ -67,8 +67,7 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   return true;
 }
 
-double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x,
-                   int64_t y) noexcept {
+double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept {
   return data.parallax.weighted_depth(frame.parallax_bins.index, frame.parallax_bins.weight, x, y);
 }
 

@@ -20,12 +20,12 @@ namespace clothbake::eval {
 
 // Everything that depends on (i, o) but not on the texel, computed once per estimate.
 struct ShadingFrame {
-  model::Vec3d wi, wo;     // unit, as the caller gave them
-  model::Vec3d wi_light;   // (i_x, i_y, |i_z|): the light direction of the visibility look-ups
-  model::Vec3d view;       // the parallax direction as the table uses it (mirrored, on the cap)
-  model::Vec3d h;          // i + o, unnormalised (D is homogeneous of degree 0)
-  double cos_i = 0;        // |i_z|
-  bool delta = false;      // i == -o exactly: the delta lobe contributes
+  model::Vec3d wi, wo;    // unit, as the caller gave them
+  model::Vec3d wi_light;  // (i_x, i_y, |i_z|): the light direction of the visibility look-ups
+  model::Vec3d view;      // the parallax direction as the table uses it (mirrored, on the cap)
+  model::Vec3d h;         // i + o, unnormalised (D is homogeneous of degree 0)
+  double cos_i = 0;       // |i_z|
+  bool delta = false;     // i == -o exactly: the delta lobe contributes
   LobeMask mask = kAllLobes;
   // Eq. 2 in texel units: the offset of a texel with depth r is r * offset_per_depth.
   double offset_per_depth[2] = {0, 0};
@@ -41,8 +41,7 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
 
 // The parallax depth r of texel (x, y) for the frame's view (bilinear between bins, as
 // reader::ParallaxView::depth).
-double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x,
-                   int64_t y) noexcept;
+double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept;
 
 // What one texel contributes.
 struct TexelShading {

@@ -40,12 +40,15 @@ Environment::Environment(const EnvironmentMap& map) : map_(&map) {
     row_cdf_[y + 1] = total;
   }
   if (!(total > 0)) return;  // a black map: never sampled (pdf 0 everywhere)
-  for (double& v : weight_) v /= total;
-  for (double& v : row_cdf_) v /= total;
+  for (double& v : weight_)
+    v /= total;
+  for (double& v : row_cdf_)
+    v /= total;
   for (int y = 0; y < h; ++y) {
     double* c = &column_cdf_[std::size_t(y) * (w + 1)];
     if (c[w] > 0)
-      for (int x = 1; x <= w; ++x) c[x] /= c[w];
+      for (int x = 1; x <= w; ++x)
+        c[x] /= c[w];
   }
 }
 
@@ -77,8 +80,8 @@ Vec3 Environment::sample(double u1, double u2, double* pdf) const {
   *pdf = 0;
   if (w == 0 || !(row_cdf_.back() > 0)) return {0, 1, 0};
   // Row by the marginal CDF, then column by the row's conditional CDF (binary searches).
-  const int y = std::clamp(int(std::upper_bound(row_cdf_.begin(), row_cdf_.end(), u1) -
-                               row_cdf_.begin()) - 1, 0, h - 1);
+  const int y = std::clamp(
+      int(std::upper_bound(row_cdf_.begin(), row_cdf_.end(), u1) - row_cdf_.begin()) - 1, 0, h - 1);
   const double* c = &column_cdf_[std::size_t(y) * (w + 1)];
   const double* hit = std::upper_bound(c, c + w + 1, u2);
   const int x = std::clamp(int(hit - c) - 1, 0, w - 1);

@@ -36,7 +36,8 @@ double srgb_encode(double v) {
 void check_output_path(const std::string& exr_path) {
   const fs::path p(exr_path);
   if (p.extension() != ".exr")
-    throw_input_error(exr_path + ": the output must be an .exr file (a .png preview is written "
+    throw_input_error(exr_path +
+                      ": the output must be an .exr file (a .png preview is written "
                       "beside it)");
   std::error_code ec;
   if (fs::is_directory(p, ec)) throw_input_error(exr_path + ": is a directory");

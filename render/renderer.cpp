@@ -75,15 +75,15 @@ Renderer::Renderer(const Scene& scene, const RenderOptions& options)
   for (const Object& o : scene.objects) {
     Material m;
     if (!o.asset.empty()) {
-      m.asset = std::make_unique<reader::Asset>(formats::open_asset(o.asset, reader::Verify::Checksums));
+      m.asset =
+          std::make_unique<reader::Asset>(formats::open_asset(o.asset, reader::Verify::Checksums));
       eval::EvalOptions eo;
       eo.tables = options.tables;
       const reader::Status s = m.evaluator.open(*m.asset, eo);
       if (!s.ok())
-        throw Error(s.code() == reader::ErrorCode::NotFound ? ExitCode::Input
-                                                            : formats::exit_code_of(s),
-                    scene.path + ": " + o.name + ".asset: " + o.asset + ": " +
-                        formats::describe(s));
+        throw Error(
+            s.code() == reader::ErrorCode::NotFound ? ExitCode::Input : formats::exit_code_of(s),
+            scene.path + ": " + o.name + ".asset: " + o.asset + ": " + formats::describe(s));
       m.cloth = true;
       m.texels_per_unit = o.tiles_per_unit * m.evaluator.resolution();
     }
@@ -111,8 +111,10 @@ PixelFootprint Renderer::pixel_footprint(int px, int py) const {
   const Vec3 wo = frame.local(-cr.ray.direction);
   out.wo[0] = wo.x, out.wo[1] = wo.y, out.wo[2] = wo.z;
   const Material& m = impl_->materials[std::size_t(hit.object)];
-  const double scale = m.cloth ? m.texels_per_unit : scene_.objects[std::size_t(hit.object)].tiles_per_unit;
-  out.rect = footprint_rectangle(hit.u * scale, hit.v * scale, surface_differentials(cr, hit), scale);
+  const double scale =
+      m.cloth ? m.texels_per_unit : scene_.objects[std::size_t(hit.object)].tiles_per_unit;
+  out.rect =
+      footprint_rectangle(hit.u * scale, hit.v * scale, surface_differentials(cr, hit), scale);
   return out;
 }
 
@@ -237,7 +239,8 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
         }
         radiance += sum_env / double(spp);
         // The delta lobe: the environment straight through the gaps, V T_sheen (1 - I) L(-o).
-        if (m.cloth && !occluded({shadow_origin(-wo_world), -wo_world}, scene.objects, 0.0, INFINITY))
+        if (m.cloth &&
+            !occluded({shadow_origin(-wo_world), -wo_world}, scene.objects, 0.0, INFINITY))
           radiance += bsdf(-wo_world, kDeltaBit, spp) * env.radiance(-wo_world);
       }
     }
@@ -262,7 +265,8 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
     });
     ++pass;
     if (progress && options_.time_budget > 0) {
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double elapsed =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       progress(std::min(1.0, elapsed / options_.time_budget));
     }
   } while (options_.time_budget > 0 &&

@@ -3,8 +3,8 @@
 // a shadow ray, cloth shaded by eval::Evaluator::estimate over the pixel's footprint, Lambertian
 // surfaces where an object has no asset. Environment lights combine light sampling and BSDF
 // importance sampling (Sec. 5.1) by multiple importance sampling (balance heuristic, one sample of
-// each per pixel sample); point and directional lights are sampled exactly. The delta lobe shows the
-// environment straight through the cloth's gaps.
+// each per pixel sample); point and directional lights are sampled exactly. The delta lobe shows
+// the environment straight through the cloth's gaps.
 //
 // Determinism: every pixel draws from its own generator, seeded from (seed, pass, pixel index), and
 // the pixels are independent: the image is bit-identical for any thread count (TBB, rows in
@@ -26,16 +26,16 @@ namespace clothbake::render {
 
 struct RenderOptions {
   eval::Method method = eval::Method::Multiscale;
-  uint32_t spp = 2;          // evaluator samples per footprint, and light/BSDF sample pairs for
-                             // environment lights, per pixel and pass
+  uint32_t spp = 2;  // evaluator samples per footprint, and light/BSDF sample pairs for
+                     // environment lights, per pixel and pass
   uint64_t seed = 1;
-  double time_budget = 0;    // seconds: render passes of `spp` until the budget is spent (at least
-                             // one); 0: one pass
+  double time_budget = 0;  // seconds: render passes of `spp` until the budget is spent (at least
+                           // one); 0: one pass
   eval::TableChoice tables = eval::TableChoice::Auto;
 };
 
 struct RenderStats {
-  double seconds = 0;      // wall time of render()
+  double seconds = 0;  // wall time of render()
   uint32_t passes = 0;
   uint64_t estimates = 0;  // evaluator calls
   uint64_t texel_evals = 0, samples = 0, direct = 0;

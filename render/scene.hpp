@@ -43,10 +43,10 @@ enum class LightType : uint8_t { Point, Directional, Environment };
 struct Light {
   std::string name;  // "light[0]" for messages
   LightType type = LightType::Point;
-  Vec3 position;          // point
-  Rgb intensity{1};       // point: radiant intensity
-  Vec3 direction{0, -1, 0};  // directional: the direction the light travels (unit)
-  Rgb irradiance{1};         // directional
+  Vec3 position;               // point
+  Rgb intensity{1};            // point: radiant intensity
+  Vec3 direction{0, -1, 0};    // directional: the direction the light travels (unit)
+  Rgb irradiance{1};           // directional
   EnvironmentMap environment;  // environment
 };
 

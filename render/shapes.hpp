@@ -20,8 +20,8 @@ struct SurfaceHit {
   double t = std::numeric_limits<double>::infinity();  // ray parameter (distance)
   int object = -1;
   Vec3 point;
-  Vec3 normal;        // unit geometric normal (outward for closed shapes, the plane's normal)
-  Vec3 dpdu, dpdv;    // dP/du, dP/dv (u, v in world units of arc length)
+  Vec3 normal;      // unit geometric normal (outward for closed shapes, the plane's normal)
+  Vec3 dpdu, dpdv;  // dP/du, dP/dv (u, v in world units of arc length)
   double u = 0, v = 0;
   bool hit() const { return object >= 0; }
 };

@@ -96,8 +96,8 @@ int run_eval(const EvalCliOptions& o) {
   eval::Estimate e;
   const auto start = std::chrono::steady_clock::now();
   for (uint32_t k = 0; k < o.repeat; ++k) {
-    const reader::Status s = evaluator.estimate(footprint, wi.data(), wo.data(), method, o.spp,
-                                                rng, mask, &e);
+    const reader::Status s =
+        evaluator.estimate(footprint, wi.data(), wo.data(), method, o.spp, rng, mask, &e);
     if (s.code() == reader::ErrorCode::InvalidArgument)
       throw CLI::ValidationError("--rect", s.message());
     fail_on(s, o.asset);
@@ -171,8 +171,7 @@ const bool registered = register_command(
            ->required();
        app.add_option("--wi", o->wi, "light direction x,y,z in the local frame (towards the light)")
            ->required();
-       app.add_option("--wo", o->wo,
-                      "view direction x,y,z in the local frame (towards the viewer)")
+       app.add_option("--wo", o->wo, "view direction x,y,z in the local frame (towards the viewer)")
            ->required();
        app.add_option("--method", o->method,
                       "multiscale (unbiased control variates, default), multiscale-paper (Eq. 8-10 "

@@ -123,8 +123,9 @@ const bool registered = register_command(
            ->required();
        app.add_option("-o,--output", o->output, "output image (.exr); a .png preview beside it")
            ->required();
-       app.add_option("--method", o->method,
-                      "multiscale (default), multiscale-paper, brute or reference (docs/evaluator.md)")
+       app.add_option(
+              "--method", o->method,
+              "multiscale (default), multiscale-paper, brute or reference (docs/evaluator.md)")
            ->check(CLI::IsMember({"multiscale", "multiscale-paper", "brute", "reference"}));
        app.add_option("--spp", o->spp, "samples per pixel footprint and light (default 2)");
        app.add_option("--time-budget", o->time_budget,

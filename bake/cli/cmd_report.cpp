@@ -152,9 +152,11 @@ Action setup_report(CLI::App& app) {
       et->json = o->json;
       et->methods.clear();
       std::stringstream in(*m);
-      for (std::string item; std::getline(in, item, ',');) et->methods.push_back(item);
+      for (std::string item; std::getline(in, item, ',');)
+        et->methods.push_back(item);
       et->spp.clear();
-      for (int v : positive_list<int>(*s, "--spp")) et->spp.push_back(uint32_t(v));
+      for (int v : positive_list<int>(*s, "--spp"))
+        et->spp.push_back(uint32_t(v));
       return run_error_time_report(*et);
     }
     compress::ReportOptions options;

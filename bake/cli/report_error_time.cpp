@@ -81,7 +81,8 @@ double loglog_at(const std::vector<std::pair<double, double>>& pts, double x, bo
 
 void write_png(const fs::path& path, const render::RenderResult& r) {
   Image img(r.width, r.height, 3);
-  for (std::size_t k = 0; k < r.rgb.size(); ++k) img.pixels[k] = float(render::srgb_encode(r.rgb[k]));
+  for (std::size_t k = 0; k < r.rgb.size(); ++k)
+    img.pixels[k] = float(render::srgb_encode(r.rgb[k]));
   write_image(path.string(), img, PixelType::UInt8);
 }
 
@@ -91,7 +92,8 @@ void write_error_png(const fs::path& path, const render::RenderResult& a,
   Image img(ref.width, ref.height, 1);
   for (int k = 0; k < ref.width * ref.height; ++k) {
     double x = 0, r = 0;
-    for (int c = 0; c < 3; ++c) x += a.rgb[3 * k + c], r += ref.rgb[3 * k + c];
+    for (int c = 0; c < 3; ++c)
+      x += a.rgb[3 * k + c], r += ref.rgb[3 * k + c];
     const double e = r > 1e-6 ? std::abs(x - r) / r : 0.0;
     img.pixels[std::size_t(k)] = float(std::min(1.0, e / scale));
   }
@@ -105,8 +107,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   for (const std::string& name : o.methods) {
     eval::Method m;
     if (!eval::parse_method(name.c_str(), &m) || m == eval::Method::Reference)
-      throw CLI::ValidationError("--methods", "unknown method '" + name +
-                                                  "' (multiscale, multiscale-paper, brute)");
+      throw CLI::ValidationError(
+          "--methods", "unknown method '" + name + "' (multiscale, multiscale-paper, brute)");
     methods.push_back(m);
   }
   if (methods.empty()) throw CLI::ValidationError("--methods", "no method given");
@@ -124,7 +126,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   bake_scene_fabrics(loaded, o.cache, true);
   const render::Scene& scene = loaded.scene;
   bool environment = false;
-  for (const render::Light& l : scene.lights) environment |= l.type == render::LightType::Environment;
+  for (const render::Light& l : scene.lights)
+    environment |= l.type == render::LightType::Environment;
 
   // The reference: exact footprints; environment lights need many light samples. Cached by the
   // content of the scene, its assets and the reference settings.
@@ -203,8 +206,10 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     const bool reached = std::isfinite(t_equal);
     const double t_brute = reached ? t_equal : brute.back().first;
     const double e_equal_time = loglog_at(brute, operating->seconds, false);
-    summary["operating_point"] = {{"method", "multiscale"}, {"spp", operating->spp},
-                                  {"seconds", operating->seconds}, {"relmse", operating->relmse}};
+    summary["operating_point"] = {{"method", "multiscale"},
+                                  {"spp", operating->spp},
+                                  {"seconds", operating->seconds},
+                                  {"relmse", operating->relmse}};
     summary["pairs"] = nlohmann::json::array();
     for (const Row& r : rows) {
       if (r.method == "brute" || r.spp != operating->spp) continue;
@@ -239,7 +244,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     }
     if (!equal_error)
       for (const Row& r : rows)
-        if (r.method == "brute" && (!equal_error || r.relmse < equal_error->relmse)) equal_error = &r;
+        if (r.method == "brute" && (!equal_error || r.relmse < equal_error->relmse))
+          equal_error = &r;
     const double scale = std::max(0.05, 2 * std::sqrt(operating->relmse));
     write_png(out / "images" / "reference.png", reference);
     grid.push_back({{"label", "reference"}, {"image", "images/reference.png"}});
@@ -261,17 +267,24 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   std::string csv = "scene,method,spp,seconds,rmse,relmse,bias_estimate\n";
   nlohmann::json jrows = nlohmann::json::array();
   for (const Row& r : rows) {
-    csv += fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", fs::path(o.scene).filename().string(),
-                       r.method, r.spp, r.seconds, r.rmse, r.relmse, r.bias);
-    jrows.push_back({{"method", r.method}, {"spp", r.spp}, {"seconds", r.seconds}, {"rmse", r.rmse},
-                     {"relmse", r.relmse}, {"bias_estimate", r.bias}});
+    csv +=
+        fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", fs::path(o.scene).filename().string(),
+                    r.method, r.spp, r.seconds, r.rmse, r.relmse, r.bias);
+    jrows.push_back({{"method", r.method},
+                     {"spp", r.spp},
+                     {"seconds", r.seconds},
+                     {"rmse", r.rmse},
+                     {"relmse", r.relmse},
+                     {"bias_estimate", r.bias}});
   }
   nlohmann::json doc = {{"scene", o.scene},
                         {"resolution", {scene.camera.width, scene.camera.height}},
-                        {"reference", {{"method", "reference"}, {"spp", ref_options.spp},
-                                       {"cached", reference_seconds == 0},
-                                       {"seconds", reference_seconds},
-                                       {"file", cached.string()}}},
+                        {"reference",
+                         {{"method", "reference"},
+                          {"spp", ref_options.spp},
+                          {"cached", reference_seconds == 0},
+                          {"seconds", reference_seconds},
+                          {"file", cached.string()}}},
                         {"rows", jrows},
                         {"summary", summary},
                         {"grid", grid}};
@@ -281,7 +294,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     // $CLOTHBAKE_PLOT_SCRIPT_DIR, else the source tree this file was compiled from.
     const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT_DIR");
     const fs::path script =
-        (env ? fs::path(env) : fs::path(__FILE__).parent_path().parent_path().parent_path() / "scripts") /
+        (env ? fs::path(env)
+             : fs::path(__FILE__).parent_path().parent_path().parent_path() / "scripts") /
         "plot_error_time.py";
     const std::string python =
         fs::exists("/usr/bin/python3") ? std::string("/usr/bin/python3") : std::string("python3");
@@ -296,14 +310,16 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   }
   std::printf("error against run time: %s, %dx%d, reference %s\n", o.scene.c_str(),
               scene.camera.width, scene.camera.height,
-              reference_seconds == 0 ? "from the cache" : fmt::format("{:.3g} s", reference_seconds).c_str());
+              reference_seconds == 0 ? "from the cache"
+                                     : fmt::format("{:.3g} s", reference_seconds).c_str());
   std::printf("  %-17s %5s %10s %12s %12s\n", "method", "spp", "seconds", "relMSE", "bias est.");
   for (const Row& r : rows)
     std::printf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds, r.relmse,
                 r.bias);
   if (summary.contains("equal_error_speedup"))
     std::printf("  multi-scale at %u spp against brute force: %s%.2fx faster at equal error\n",
-                operating->spp, summary["equal_error_speedup_is_lower_bound"].get<bool>() ? ">" : "",
+                operating->spp,
+                summary["equal_error_speedup_is_lower_bound"].get<bool>() ? ">" : "",
                 summary["equal_error_speedup"].get<double>());
   std::printf("  %s/{error-time.csv,error-time.json,error-time.png,grid.png}\n", o.output.c_str());
   return 0;

@@ -38,7 +38,8 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
     Fabric fabric = load_fabric(loaded.fabrics[k]);
     std::string key = std::string(CLOTHBAKE_VERSION_STRING) + "\n" +
                       bake_settings_json(fabric.bake).dump() + "\n";
-    for (const InputFile& f : fabric.inputs) key += f.role + " " + f.xxh64 + "\n";
+    for (const InputFile& f : fabric.inputs)
+      key += f.role + " " + f.xxh64 + "\n";
     const std::string stem = fs::path(loaded.fabrics[k]).stem().string();
     const fs::path asset = fs::path(cache) / (stem + "-" + inputs::xxh64_hex(key) + ".cbk");
     std::error_code ec;

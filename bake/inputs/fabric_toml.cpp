@@ -276,7 +276,7 @@ std::optional<Rgb> TomlSection::rgb(std::string_view key, const Range& range) co
 }
 
 std::optional<std::vector<double>> TomlSection::numbers(std::string_view key, std::size_t count,
-                                                       const Range& range) const {
+                                                        const Range& range) const {
   if (!has(key)) return std::nullopt;
   const toml::node& n = node(key);
   const toml::array* arr = n.as_array();

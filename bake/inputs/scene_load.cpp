@@ -107,7 +107,8 @@ render::Light load_light(const TomlSection& l, std::size_t index, const fs::path
           const float v = image.at(x, y, c);
           if (!std::isfinite(v) || v < 0)
             l.fail("map", fmt::format("{}: pixel ({}, {}) channel {} is {}, not a finite radiance "
-                                      ">= 0", path, x, y, c, v));
+                                      ">= 0",
+                                      path, x, y, c, v));
           env.rgb[(std::size_t(y) * env.width + x) * 3 + c] = v;
         }
   }
@@ -120,8 +121,8 @@ render::Object load_object(const TomlSection& o, std::size_t index, const fs::pa
   obj.name = fmt::format("object[{}]", index);
   if (!o.has("shape")) o.fail("shape", "is required (plane, cylinder or sphere)");
   const std::string shape = *o.choice("shape", {"plane", "cylinder", "sphere"});
-  std::vector<std::string> keys = {"shape", "name", "center", "asset", "fabric", "tiles_per_unit",
-                                   "color"};
+  std::vector<std::string> keys = {"shape",  "name",           "center", "asset",
+                                   "fabric", "tiles_per_unit", "color"};
   if (shape == "plane") {
     obj.shape = render::ShapeType::Plane;
     keys.insert(keys.end(), {"normal", "tangent", "size"});
@@ -171,7 +172,8 @@ LoadedScene load_scene(const std::string& path) {
   render::Scene& scene = out.scene;
   scene.path = path;
   const auto camera = root.table("camera");
-  if (!camera) root.fail("camera", "is required: [camera] position, look_at, up, fov_deg, resolution");
+  if (!camera)
+    root.fail("camera", "is required: [camera] position, look_at, up, fov_deg, resolution");
   scene.camera = load_camera(*camera);
   if (const auto r = root.table("render")) {
     r->check_keys({"max_error"});
@@ -195,7 +197,8 @@ LoadedScene load_scene(const std::string& path) {
     for (const render::Object& o : scene.objects)
       if (render::inside(o, l.position))
         (*lights)[k].fail("position", fmt::format("is inside {}: the light could not reach the "
-                                                  "scene", o.name));
+                                                  "scene",
+                                                  o.name));
   }
   return out;
 }

@@ -49,7 +49,8 @@ Setup& setup() {
     Rng rng(42);
     for (int k = 0; k < 256; ++k) {
       auto hemisphere = [&](double min_z) {
-        const double z = min_z + (1.0 - min_z) * rng.uniform(), phi = 6.283185307179586 * rng.uniform();
+        const double z = min_z + (1.0 - min_z) * rng.uniform(),
+                     phi = 6.283185307179586 * rng.uniform();
         const double r = std::sqrt(1.0 - z * z);
         return std::array<double, 3>{r * std::cos(phi), r * std::sin(phi), z};
       };
@@ -75,8 +76,8 @@ void run(benchmark::State& state, Method method, uint32_t spp) {
   Estimate e;
   for (auto _ : state) {
     const auto& d = s.directions[k % s.directions.size()];
-    const Status st = s.evaluator.estimate(footprints[k % footprints.size()], d.data(), d.data() + 3,
-                                           method, spp, rng, kAllLobes, &e);
+    const Status st = s.evaluator.estimate(footprints[k % footprints.size()], d.data(),
+                                           d.data() + 3, method, spp, rng, kAllLobes, &e);
     if (!st.ok()) state.SkipWithError(st.message());
     benchmark::DoNotOptimize(e);
     ++k;
@@ -84,9 +85,15 @@ void run(benchmark::State& state, Method method, uint32_t spp) {
   state.SetItemsProcessed(int64_t(state.iterations()));
 }
 
-void BM_Multiscale(benchmark::State& state) { run(state, Method::Multiscale, 2); }
-void BM_MultiscalePaper(benchmark::State& state) { run(state, Method::MultiscalePaper, 2); }
-void BM_Brute2spp(benchmark::State& state) { run(state, Method::Brute, 2); }
+void BM_Multiscale(benchmark::State& state) {
+  run(state, Method::Multiscale, 2);
+}
+void BM_MultiscalePaper(benchmark::State& state) {
+  run(state, Method::MultiscalePaper, 2);
+}
+void BM_Brute2spp(benchmark::State& state) {
+  run(state, Method::Brute, 2);
+}
 
 void BM_BrutePerSample(benchmark::State& state) {
   run(state, Method::Brute, 64);

@@ -50,7 +50,9 @@ double number(const char* text, const char* option) {
   return v;
 }
 
-double mean3(const Rgb& c) { return (c.r + c.g + c.b) / 3.0; }
+double mean3(const Rgb& c) {
+  return (c.r + c.g + c.b) / 3.0;
+}
 
 // relMSE and time per estimate of `method` at `spp` over every config, K repeats each.
 Point measure(const Evaluator& ev, const std::vector<Config>& configs, Method method, uint32_t spp,
@@ -82,7 +84,8 @@ double time_at_error(const std::vector<Point>& sweep, double target) {
   for (size_t k = 1; k < sweep.size(); ++k) {
     const Point &a = sweep[k - 1], &b = sweep[k];
     if (a.relmse >= target && b.relmse <= target) {
-      const double u = (std::log(target) - std::log(a.relmse)) / (std::log(b.relmse) - std::log(a.relmse));
+      const double u =
+          (std::log(target) - std::log(a.relmse)) / (std::log(b.relmse) - std::log(a.relmse));
       return std::exp(std::log(a.seconds) + u * (std::log(b.seconds) - std::log(a.seconds)));
     }
   }
@@ -101,16 +104,25 @@ int main(int argc, char** argv) {
     const std::string opt = argv[a];
     if (a + 1 >= argc) usage(("missing value of " + opt).c_str());
     const char* v = argv[++a];
-    if (opt == "--footprints") footprints = int(number(v, "--footprints"));
-    else if (opt == "--repeats") repeats = std::max(2, int(number(v, "--repeats")));
-    else if (opt == "--min-side") min_side = number(v, "--min-side");
-    else if (opt == "--max-side") max_side = number(v, "--max-side");
-    else if (opt == "--seed") seed = number(v, "--seed");
+    if (opt == "--footprints")
+      footprints = int(number(v, "--footprints"));
+    else if (opt == "--repeats")
+      repeats = std::max(2, int(number(v, "--repeats")));
+    else if (opt == "--min-side")
+      min_side = number(v, "--min-side");
+    else if (opt == "--max-side")
+      max_side = number(v, "--max-side");
+    else if (opt == "--seed")
+      seed = number(v, "--seed");
     else if (opt == "--tables") {
-      if (std::strcmp(v, "raw") == 0) options.tables = TableChoice::Raw;
-      else if (std::strcmp(v, "compressed") == 0) options.tables = TableChoice::Compressed;
-      else usage("--tables is raw or compressed");
-    } else usage(("unknown option " + opt).c_str());
+      if (std::strcmp(v, "raw") == 0)
+        options.tables = TableChoice::Raw;
+      else if (std::strcmp(v, "compressed") == 0)
+        options.tables = TableChoice::Compressed;
+      else
+        usage("--tables is raw or compressed");
+    } else
+      usage(("unknown option " + opt).c_str());
   }
   reader::Asset asset;
   Evaluator ev;
@@ -133,7 +145,8 @@ int main(int argc, char** argv) {
   double reference_seconds = 0, texels = 0;
   while (int(configs.size()) < footprints) {
     Config c;
-    const double side = std::exp(std::log(min_side) + rng.uniform() * std::log(max_side / min_side));
+    const double side =
+        std::exp(std::log(min_side) + rng.uniform() * std::log(max_side / min_side));
     const double aspect = std::exp((rng.uniform() - 0.5) * std::log(4.0));  // 1:2 .. 2:1
     const double x = rng.uniform() * n, y = rng.uniform() * n;
     c.footprint = {x, y, x + side * std::sqrt(aspect), y + side / std::sqrt(aspect)};
@@ -142,29 +155,31 @@ int main(int argc, char** argv) {
     Estimate e;
     const auto t0 = std::chrono::steady_clock::now();
     s = ev.estimate(c.footprint, c.wi, c.wo, Method::Reference, 1, rng, kAllLobes, &e);
-    reference_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    reference_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     texels += (c.footprint.x1 - c.footprint.x0) * (c.footprint.y1 - c.footprint.y0);
     if (!s.ok()) usage(s.message());
     c.reference = mean3(e.value);
     if (c.reference > 1e-6) configs.push_back(c);  // relative errors need a non-black reference
   }
-  std::printf("asset %s: %g^2 texels, %u clusters, %s tables; %d footprints of side %g..%g texels, "
-              "%d repeats\n",
-              argv[1], n, ev.cluster_count(), ev.table_source(), footprints, min_side, max_side,
-              repeats);
+  std::printf(
+      "asset %s: %g^2 texels, %u clusters, %s tables; %d footprints of side %g..%g texels, "
+      "%d repeats\n",
+      argv[1], n, ev.cluster_count(), ev.table_source(), footprints, min_side, max_side, repeats);
   std::printf("reference: %.3g s per footprint on average\n", reference_seconds / footprints);
   std::printf("%-17s %6s %12s %12s %12s\n", "method", "spp", "us/estimate", "relMSE", "bias^2");
   std::vector<Point> brute;
   for (uint32_t spp : {2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u}) {
     brute.push_back(measure(ev, configs, Method::Brute, spp, repeats, 100 + spp));
     const Point& p = brute.back();
-    std::printf("%-17s %6u %12.3f %12.4g %12.3g\n", "brute", spp, p.seconds * 1e6, p.relmse, p.bias2);
+    std::printf("%-17s %6u %12.3f %12.4g %12.3g\n", "brute", spp, p.seconds * 1e6, p.relmse,
+                p.bias2);
   }
   for (Method m : {Method::Multiscale, Method::MultiscalePaper}) {
     const Point p = measure(ev, configs, m, 2, repeats, 7);
     const double tb = time_at_error(brute, p.relmse);
-    std::printf("%-17s %6d %12.3f %12.4g %12.3g   equal-error speedup %s%.1fx\n", method_name(m),
-                2, p.seconds * 1e6, p.relmse, p.bias2, tb < 0 ? ">" : "",
+    std::printf("%-17s %6d %12.3f %12.4g %12.3g   equal-error speedup %s%.1fx\n", method_name(m), 2,
+                p.seconds * 1e6, p.relmse, p.bias2, tb < 0 ? ">" : "",
                 (tb < 0 ? brute.back().seconds : tb) / p.seconds);
   }
   return 0;

@@ -24,7 +24,8 @@ namespace {
 
 double total(const TexelShading& s) {
   double v = 0;
-  for (const Rgb& l : s.lobes) v += l.mean();
+  for (const Rgb& l : s.lobes)
+    v += l.mean();
   return v;
 }
 
@@ -51,7 +52,9 @@ int main(int argc, char** argv) {
   int samples = 200000;
   for (int a = 2; a + 1 < argc; a += 2) {
     const std::string opt = argv[a];
-    if (opt == "--light" && std::sscanf(argv[a + 1], "%lf,%lf,%lf", &light[0], &light[1], &light[2]) == 3) continue;
+    if (opt == "--light" &&
+        std::sscanf(argv[a + 1], "%lf,%lf,%lf", &light[0], &light[1], &light[2]) == 3)
+      continue;
     if (opt == "--samples" && (samples = std::atoi(argv[a + 1])) > 0) continue;
     std::fprintf(stderr, "eval_variance_study: bad option %s\n", opt.c_str());
     return 2;
@@ -68,9 +71,10 @@ int main(int argc, char** argv) {
   const double n = d.n;
   std::printf("asset %s, light (%g, %g, %g), %d uniform samples over the tile\n", argv[1], light[0],
               light[1], light[2], samples);
-  std::printf("%-22s %10s %10s %10s %10s %10s\n", "view", "max offset", "sd f", "aligned", "shifted",
-              "f ratio^2");
-  const double views[][3] = {{-0.1, 0.1, 0.99}, {-0.4, 0.1, 0.85}, {-0.7, 0.1, 0.7}, {0.5, 0.5, 0.7}};
+  std::printf("%-22s %10s %10s %10s %10s %10s\n", "view", "max offset", "sd f", "aligned",
+              "shifted", "f ratio^2");
+  const double views[][3] = {
+      {-0.1, 0.1, 0.99}, {-0.4, 0.1, 0.85}, {-0.7, 0.1, 0.7}, {0.5, 0.5, 0.7}};
   for (const auto& wo : views) {
     ShadingFrame frame;
     if (!make_frame(d, light, wo, kAllLobes, &frame, &s)) return 2;
@@ -83,7 +87,8 @@ int main(int argc, char** argv) {
     for (int64_t y = 0; y < int64_t(n); ++y)
       for (int64_t x = 0; x < int64_t(n); ++x) {
         const double r = texel_depth(d, frame, x, y);
-        max_offset = std::max(max_offset, std::hypot(r * frame.offset_per_depth[0], r * frame.offset_per_depth[1]));
+        max_offset = std::max(
+            max_offset, std::hypot(r * frame.offset_per_depth[0], r * frame.offset_per_depth[1]));
       }
     Rng rng(3);
     Moments f, aligned, shifted;
@@ -101,8 +106,8 @@ int main(int argc, char** argv) {
     }
     char name[64];
     std::snprintf(name, sizeof name, "(%g, %g, %g)", wo[0], wo[1], wo[2]);
-    std::printf("%-22s %10.2f %10.4f %10.4f %10.4f %10.1f\n", name, max_offset, f.sd(), aligned.sd(),
-                shifted.sd(), (f.sd() / shifted.sd()) * (f.sd() / shifted.sd()));
+    std::printf("%-22s %10.2f %10.4f %10.4f %10.4f %10.1f\n", name, max_offset, f.sd(),
+                aligned.sd(), shifted.sd(), (f.sd() / shifted.sd()) * (f.sd() / shifted.sd()));
   }
   return 0;
 }

@@ -106,7 +106,7 @@ Status ParallaxView::view_direction(const double view[3], double o[3]) const noe
 }
 
 double ParallaxView::weighted_depth(const int bin[4], const double weight[4], int64_t x,
-                                   int64_t y) const noexcept {
+                                    int64_t y) const noexcept {
   const uint64_t n = info_.resolution;
   const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
   double r = 0.0;

@@ -103,8 +103,8 @@ inline void bake(const std::vector<std::string>& args) {
 inline const Assets& assets() {
   static const Assets baked = [] {
     Assets a;
-    a.dir = std::filesystem::temp_directory_path() /
-            ("clothbake_eval_" + std::to_string(::getpid()));
+    a.dir =
+        std::filesystem::temp_directory_path() / ("clothbake_eval_" + std::to_string(::getpid()));
     std::filesystem::create_directories(a.dir);
     const auto path = [&](const char* name) { return (a.dir / name).string(); };
     write_text(a.dir / "twill.toml", kTwillToml);

@@ -15,8 +15,8 @@ using eval_test::assets;
 using test_support::run_clothbake;
 
 std::vector<std::string> query(const std::string& asset, std::vector<std::string> extra) {
-  std::vector<std::string> args = {"eval", asset, "--rect", "3.5,2.25,35.5,34.25",
-                                   "--wi", "0.3,0.2,0.9", "--wo", "-0.4,0.1,0.85"};
+  std::vector<std::string> args = {"eval", asset,         "--rect", "3.5,2.25,35.5,34.25",
+                                   "--wi", "0.3,0.2,0.9", "--wo",   "-0.4,0.1,0.85"};
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
 }
@@ -37,10 +37,13 @@ TEST(EvalCli, ReferenceJsonIsTheLibrarysAnswer) {
   const double wi[3] = {0.3, 0.2, 0.9}, wo[3] = {-0.4, 0.1, 0.85};
   Rng rng(1);
   Estimate e;
-  ASSERT_TRUE(ev.estimate({3.5, 2.25, 35.5, 34.25}, wi, wo, Method::Reference, 1, rng, kAllLobes, &e).ok());
-  for (int c = 0; c < 3; ++c) EXPECT_EQ(j["value"][c].get<double>(), e.value[c]);
+  ASSERT_TRUE(
+      ev.estimate({3.5, 2.25, 35.5, 34.25}, wi, wo, Method::Reference, 1, rng, kAllLobes, &e).ok());
+  for (int c = 0; c < 3; ++c)
+    EXPECT_EQ(j["value"][c].get<double>(), e.value[c]);
   double sum = 0;
-  for (const auto& [name, rgb] : j["lobes"].items()) sum += rgb[1].get<double>();
+  for (const auto& [name, rgb] : j["lobes"].items())
+    sum += rgb[1].get<double>();
   EXPECT_NEAR(sum, e.value.g, 1e-15);
   EXPECT_EQ(j["std_error"][1].get<double>(), 0.0);
 }

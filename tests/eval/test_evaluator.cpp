@@ -36,7 +36,7 @@ std::unique_ptr<Opened> open(const std::string& path, TableChoice tables = Table
 }
 
 struct Stats {
-  Rgb mean, se;        // mean of K estimates and its standard error
+  Rgb mean, se;         // mean of K estimates and its standard error
   double sd_green = 0;  // standard deviation of one estimate (green)
 };
 
@@ -75,15 +75,16 @@ Rgb reference(const Evaluator& ev, const Footprint& p, const double wi[3], const
 void expect_within_3se(const Stats& st, const Rgb& ref, double slack, const std::string& what) {
   for (int c = 0; c < 3; ++c)
     EXPECT_LE(std::abs(st.mean[c] - ref[c]), 3.0 * st.se[c] + slack * std::abs(ref[c]) + 1e-15)
-        << what << " channel " << c << ": mean " << st.mean[c] << " reference " << ref[c]
-        << " se " << st.se[c];
+        << what << " channel " << c << ": mean " << st.mean[c] << " reference " << ref[c] << " se "
+        << st.se[c];
 }
 
 // The same for the channel mean: one comparison per case, so that a test of many cases at 3
 // standard errors is not a test of the largest of many z-scores (48 channel comparisons would
 // exceed 3 by chance with probability 12 %). The standard error of the channel mean is bounded by
 // the mean of the channels' standard errors.
-void expect_mean_within_3se(const Stats& st, const Rgb& ref, double slack, const std::string& what) {
+void expect_mean_within_3se(const Stats& st, const Rgb& ref, double slack,
+                            const std::string& what) {
   const double mean = st.mean.mean(), want = ref.mean(), se = st.se.mean();
   EXPECT_LE(std::abs(mean - want), 3.0 * se + slack * std::abs(want) + 1e-15)
       << what << ": mean " << mean << " reference " << want << " se <= " << se;
@@ -134,8 +135,8 @@ TEST(Flat, ReferenceIsTheClosedForm) {
     const Rgb in_block = reference(o->evaluator, {0.5, 1.25, 3.5, 3.75}, dirs.wi, dirs.wo);
     const Rgb in_gap = reference(o->evaluator, {4.5, 0.25, 7.5, 3.75}, dirs.wi, dirs.wo);
     const Rgb tile = reference(o->evaluator, {-3.0, 5.0, 13.0, 21.0}, dirs.wi, dirs.wo);
-    const Rgb huge = reference(o->evaluator, {16.0 * 7, -16.0 * 40, 16.0 * 300, 16.0 * 9},
-                               dirs.wi, dirs.wo);
+    const Rgb huge =
+        reference(o->evaluator, {16.0 * 7, -16.0 * 40, 16.0 * 300, 16.0 * 9}, dirs.wi, dirs.wo);
     for (int c = 0; c < 3; ++c) {
       EXPECT_NEAR(in_block[c], yarn[c], 1e-12 * yarn[c]);
       EXPECT_NEAR(in_gap[c], gap[c], 1e-12 * yarn[c]);
@@ -149,14 +150,16 @@ TEST(Flat, DeltaLobeIsTheGapWeightAtMinusO) {
   auto o = open(assets().flat);
   const double wo[3] = {0.2, -0.1, 0.95};
   const double wi[3] = {-0.2, 0.1, -0.95};
-  const Rgb tile = reference(o->evaluator, {0, 0, 16, 16}, wi, wo, lobe_bit(Lobe::DeltaTransmission));
+  const Rgb tile =
+      reference(o->evaluator, {0, 0, 16, 16}, wi, wo, lobe_bit(Lobe::DeltaTransmission));
   // W = V T_sheen (1 - I) on the gap half of the tile.
   model::TexelParams<double> p;
   p.sheen_color = Rgb(0.3);
   p.sheen_roughness = 0.5;
   const Rgb t_sheen = model::ClothBsdf<double>(p).sheen_transmittance(
       model::normalize(model::Vec3d(wo[0], wo[1], wo[2])));
-  for (int c = 0; c < 3; ++c) EXPECT_NEAR(tile[c], 0.5 * t_sheen[c], 1e-12);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(tile[c], 0.5 * t_sheen[c], 1e-12);
   // Off the Dirac direction the delta lobe is 0.
   const Rgb off = reference(o->evaluator, {0, 0, 16, 16}, kTransmitWi, kTransmitWo,
                             lobe_bit(Lobe::DeltaTransmission));
@@ -165,16 +168,19 @@ TEST(Flat, DeltaLobeIsTheGapWeightAtMinusO) {
   for (Method m : {Method::Multiscale, Method::MultiscalePaper}) {
     const Stats st = repeat(o->evaluator, {0.3, 0.6, 15.3, 14.6}, wi, wo, m, 2, 50, 9,
                             lobe_bit(Lobe::DeltaTransmission));
-    const Rgb ref = reference(o->evaluator, {0.3, 0.6, 15.3, 14.6}, wi, wo,
-                              lobe_bit(Lobe::DeltaTransmission));
+    const Rgb ref =
+        reference(o->evaluator, {0.3, 0.6, 15.3, 14.6}, wi, wo, lobe_bit(Lobe::DeltaTransmission));
     expect_within_3se(st, ref, 1e-6, method_name(m));
   }
 }
 
 TEST(Flat, EveryMethodAgreesInExpectation) {
   auto o = open(assets().flat);
-  const Footprint footprints[] = {{2.2, 5.1, 3.2, 6.1}, {1.5, 2.5, 5.5, 6.5}, {0.3, 0.7, 32.3, 32.7},
-                                  {0, 0, 16, 16}, {-40.5, 9.25, 200.5, 150.75}};
+  const Footprint footprints[] = {{2.2, 5.1, 3.2, 6.1},
+                                  {1.5, 2.5, 5.5, 6.5},
+                                  {0.3, 0.7, 32.3, 32.7},
+                                  {0, 0, 16, 16},
+                                  {-40.5, 9.25, 200.5, 150.75}};
   for (const Directions& dirs : kConfigurations)
     for (const Footprint& p : footprints) {
       const Rgb ref = reference(o->evaluator, p, dirs.wi, dirs.wo);
@@ -215,7 +221,8 @@ TEST(TexelShading, IsTheModelWithTheTexelsParametersAndTheStoredVisibility) {
       if (Lobe(l) == Lobe::DeltaTransmission) continue;
       const Rgb want = f[Lobe(l)] * std::abs(frame.wi.z);
       // The same model on the same numbers, up to the rounding of separately compiled code.
-      for (int c = 0; c < 3; ++c) EXPECT_NEAR(shading.lobes[l][c], want[c], 1e-13 * want[c]);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(shading.lobes[l][c], want[c], 1e-13 * want[c]);
     }
     EXPECT_EQ(shading.lobes[int(Lobe::DeltaTransmission)].g, 0.0);  // i != -o
   }
@@ -241,8 +248,10 @@ TEST(TexelShading, ColourTintsTheYarnAlbedos) {
 TEST(Reference, SupersamplingConvergesToTheExactPartitionWithinItsBound) {
   auto o = open(assets().twill);
   const EvalData& d = *o->evaluator.data();
-  const Footprint footprints[] = {{10.3, 20.7, 11.3, 21.7}, {5.5, 7.25, 9.5, 11.25},
-                                  {3.1, 40.2, 35.1, 72.2}, {-17.5, 3.3, 100.5, 90.7}};
+  const Footprint footprints[] = {{10.3, 20.7, 11.3, 21.7},
+                                  {5.5, 7.25, 9.5, 11.25},
+                                  {3.1, 40.2, 35.1, 72.2},
+                                  {-17.5, 3.3, 100.5, 90.7}};
   for (const Directions& dirs : kConfigurations) {
     // The bound |Q_s - exact| <= max_t g(t) / s (docs/evaluator.md, "Reference"), per channel.
     ShadingFrame frame;
@@ -254,7 +263,8 @@ TEST(Reference, SupersamplingConvergesToTheExactPartitionWithinItsBound) {
         TexelShading shading;
         shade_texel(d, frame, x, y, &shading);
         Rgb g;
-        for (const Rgb& lobe : shading.lobes) g += lobe;
+        for (const Rgb& lobe : shading.lobes)
+          g += lobe;
         for (int c = 0; c < 3; ++c)
           if (g[c] > g_max[c]) (c == 0 ? g_max.r : c == 1 ? g_max.g : g_max.b) = g[c];
       }
@@ -263,10 +273,10 @@ TEST(Reference, SupersamplingConvergesToTheExactPartitionWithinItsBound) {
       double previous = -1;
       for (uint32_t ss : {2u, 4u, 8u, 16u, 32u}) {
         Estimate e;
-        ASSERT_TRUE(o->evaluator
-                        .reference_supersampled(p, dirs.wi, dirs.wo, ss, kAllLobes, &e)
-                        .ok());
-        for (int c = 0; c < 3; ++c) EXPECT_LE(std::abs(e.value[c] - exact[c]), g_max[c] / ss);
+        ASSERT_TRUE(
+            o->evaluator.reference_supersampled(p, dirs.wi, dirs.wo, ss, kAllLobes, &e).ok());
+        for (int c = 0; c < 3; ++c)
+          EXPECT_LE(std::abs(e.value[c] - exact[c]), g_max[c] / ss);
         if (previous >= 0) {
           // Doubling the supersampling changes the value by less than the two bounds.
           EXPECT_LE(std::abs(e.value.g - previous), g_max.g / ss + 2 * g_max.g / ss);
@@ -280,8 +290,10 @@ TEST(Reference, SupersamplingConvergesToTheExactPartitionWithinItsBound) {
 TEST(Reference, WholeTileMultiplesAreThePeriodicAverage) {
   auto o = open(assets().twill);
   const Rgb tile = reference(o->evaluator, {0, 0, 64, 64}, kReflectWi, kReflectWo);
-  const Rgb shifted = reference(o->evaluator, {64 * 5, -64 * 3, 64 * 6, -64 * 2}, kReflectWi, kReflectWo);
-  const Rgb many = reference(o->evaluator, {-64 * 30, 64 * 2, 64 * 34, 64 * 66}, kReflectWi, kReflectWo);
+  const Rgb shifted =
+      reference(o->evaluator, {64 * 5, -64 * 3, 64 * 6, -64 * 2}, kReflectWi, kReflectWo);
+  const Rgb many =
+      reference(o->evaluator, {-64 * 30, 64 * 2, 64 * 34, 64 * 66}, kReflectWi, kReflectWo);
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(shifted[c], tile[c], 1e-13 * tile[c]);
     EXPECT_NEAR(many[c], tile[c], 1e-11 * tile[c]);
@@ -306,17 +318,18 @@ TEST(Reference, LobesAddUpAndTheMaskRestricts) {
   for (int l = 0; l < model::kLobeCount; ++l) {
     Rng rng(1);
     Estimate e;
-    ASSERT_TRUE(o->evaluator
-                    .estimate(p, kReflectWi, kReflectWo, Method::Reference, 1, rng,
-                              lobe_bit(Lobe(l)), &e)
-                    .ok());
+    ASSERT_TRUE(
+        o->evaluator
+            .estimate(p, kReflectWi, kReflectWo, Method::Reference, 1, rng, lobe_bit(Lobe(l)), &e)
+            .ok());
     for (int m = 0; m < model::kLobeCount; ++m)
       if (m != l) {
         EXPECT_EQ(e.lobes[m].g, 0.0);
       }
     sum += e.value;
   }
-  for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c], all[c], 1e-14);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(sum[c], all[c], 1e-14);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -331,8 +344,7 @@ TEST(Multiscale, IsUnbiasedOnTheTwillWithRawAndCompressedTables) {
     auto o = open(assets().twill, tables);
     for (const Directions& dirs : kConfigurations)
       for (const Footprint& p : footprints) {
-        const Stats st =
-            repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 2, 4000, 11);
+        const Stats st = repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 2, 4000, 11);
         // The compressed tables' footprint sums carry float rounding of partly covered texels.
         expect_mean_within_3se(st, reference(o->evaluator, p, dirs.wi, dirs.wo),
                                tables == TableChoice::Raw ? 1e-9 : 2e-4,
@@ -351,7 +363,8 @@ TEST(Multiscale, SmallFootprintsAreSummedExactly) {
     ASSERT_TRUE(o->evaluator.estimate(p, kReflectWi, kReflectWo, m, 2, rng, kAllLobes, &e).ok());
     EXPECT_TRUE(e.counters.direct);
     EXPECT_EQ(e.counters.samples, 0u);
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(e.value[c], ref[c]);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(e.value[c], ref[c]);
   }
 }
 
@@ -376,8 +389,8 @@ TEST(MultiscalePaper, IsBiasedWhereTheFootprintMeanAlbedoDoesNotHold) {
   // sum of k D, so the printed Eq. 9 is off by far more than its noise.
   auto o = open(assets().twill);
   const Footprint p{0, 0, 64, 64};
-  const Stats st = repeat(o->evaluator, p, kReflectWi, kReflectWo, Method::MultiscalePaper, 2,
-                          2000, 4);
+  const Stats st =
+      repeat(o->evaluator, p, kReflectWi, kReflectWo, Method::MultiscalePaper, 2, 2000, 4);
   const Rgb ref = reference(o->evaluator, p, kReflectWi, kReflectWo);
   EXPECT_GT(std::abs(st.mean.g - ref.g), 20 * st.se.g);
 }
@@ -394,7 +407,9 @@ TEST(Errors, BadArgumentsAreInvalidArgument) {
   const double nan[3] = {NAN, 0, 1};
   const double inf[3] = {INFINITY, 0, 1};
   auto code = [&](const Footprint& p, const double* wi, const double* wo, Method m, uint32_t spp,
-                  LobeMask mask) { return o->evaluator.estimate(p, wi, wo, m, spp, rng, mask, &e).code(); };
+                  LobeMask mask) {
+    return o->evaluator.estimate(p, wi, wo, m, spp, rng, mask, &e).code();
+  };
   const auto invalid = reader::ErrorCode::InvalidArgument;
   EXPECT_EQ(code(good, zero, kReflectWo, Method::Multiscale, 2, kAllLobes), invalid);
   EXPECT_EQ(code(good, kReflectWi, nan, Method::Multiscale, 2, kAllLobes), invalid);
@@ -406,13 +421,14 @@ TEST(Errors, BadArgumentsAreInvalidArgument) {
   EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method::Multiscale, 2, 0), invalid);
   EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method::Multiscale, 2, 1u << 7), invalid);
   EXPECT_EQ(code(good, kReflectWi, kReflectWo, Method(9), 2, kAllLobes), invalid);
-  EXPECT_EQ(o->evaluator.estimate(good, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes,
-                                  nullptr)
-                .code(),
-            invalid);
+  EXPECT_EQ(
+      o->evaluator.estimate(good, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes, nullptr)
+          .code(),
+      invalid);
   Evaluator closed;
-  EXPECT_EQ(closed.estimate(good, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes, &e).code(),
-            invalid);
+  EXPECT_EQ(
+      closed.estimate(good, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes, &e).code(),
+      invalid);
 }
 
 TEST(Errors, MethodsNeedTheirTables) {
@@ -427,8 +443,11 @@ TEST(Errors, MethodsNeedTheirTables) {
   EXPECT_EQ(s.code(), reader::ErrorCode::NotFound);
   EXPECT_NE(std::string(s.message()).find("Integral-Radiance"), std::string::npos);
   // Brute force and the reference need none.
-  EXPECT_TRUE(o->evaluator.estimate(p, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes, &e).ok());
-  EXPECT_TRUE(o->evaluator.estimate(p, kReflectWi, kReflectWo, Method::Reference, 1, rng, kAllLobes, &e).ok());
+  EXPECT_TRUE(
+      o->evaluator.estimate(p, kReflectWi, kReflectWo, Method::Brute, 2, rng, kAllLobes, &e).ok());
+  EXPECT_TRUE(
+      o->evaluator.estimate(p, kReflectWi, kReflectWo, Method::Reference, 1, rng, kAllLobes, &e)
+          .ok());
   // Asking for a representation the asset does not have fails at open.
   reader::Asset flat;
   ASSERT_TRUE(flat.open_file(assets().flat.c_str()).ok());

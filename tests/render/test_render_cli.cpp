@@ -43,7 +43,8 @@ TEST(RenderCli, WritesTheExrAndThePreview) {
   const fs::path again = assets().dir / "again.exr";
   ASSERT_EQ(run_clothbake({"render", scene.string(), "-o", again.string()}).code, 0);
   std::ifstream a(out, std::ios::binary), b(again, std::ios::binary);
-  const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+  const std::string sa((std::istreambuf_iterator<char>(a)), {}),
+      sb((std::istreambuf_iterator<char>(b)), {});
   EXPECT_EQ(sa, sb);
 }
 
@@ -64,11 +65,13 @@ TEST(RenderCli, BadScenesNameTheKeyAndWriteNothing) {
        "light[0].position"},
       {"zero-resolution", replace("resolution = [16, 12]", "resolution = [0, 12]"),
        "camera.resolution"},
-      {"light-inside", replace("[[object]]\nshape = \"plane\"",
-                               "[[object]]\nshape = \"sphere\"\nradius = 5\n[[object]]\nshape = "
-                               "\"plane\""),
+      {"light-inside",
+       replace("[[object]]\nshape = \"plane\"",
+               "[[object]]\nshape = \"sphere\"\nradius = 5\n[[object]]\nshape = "
+               "\"plane\""),
        "light[0].position"},
-      {"no-light", replace("[[light]]\ntype = \"point\"\nposition = [0.5, 0.5, 1.5]\nintensity = 3\n", ""),
+      {"no-light",
+       replace("[[light]]\ntype = \"point\"\nposition = [0.5, 0.5, 1.5]\nintensity = 3\n", ""),
        "light"},
   };
   for (const Case& c : cases) {
@@ -82,8 +85,12 @@ TEST(RenderCli, BadScenesNameTheKeyAndWriteNothing) {
   }
   // Bad options are usage errors.
   const fs::path scene = write_scene("ok.toml", base);
-  EXPECT_EQ(run_clothbake({"render", scene.string(), "-o", (assets().dir / "x.exr").string(), "--spp", "0"}).code, 1);
-  EXPECT_EQ(run_clothbake({"render", scene.string(), "-o", (assets().dir / "x.png").string()}).code, 2);
+  EXPECT_EQ(run_clothbake(
+                {"render", scene.string(), "-o", (assets().dir / "x.exr").string(), "--spp", "0"})
+                .code,
+            1);
+  EXPECT_EQ(run_clothbake({"render", scene.string(), "-o", (assets().dir / "x.png").string()}).code,
+            2);
 }
 
 }  // namespace

@@ -79,7 +79,8 @@ TEST(Render, EnvironmentSamplingDensityIntegratesToOne) {
   map.width = 16;
   map.height = 8;
   for (int k = 0; k < 16 * 8; ++k)
-    for (int c = 0; c < 3; ++c) map.rgb.push_back(float(1 + (k * 7 % 5)));
+    for (int c = 0; c < 3; ++c)
+      map.rgb.push_back(float(1 + (k * 7 % 5)));
   const Environment env(map);
   // Integral of pdf over the sphere by a fine stratified grid in (phi, cos theta).
   double integral = 0;
@@ -184,9 +185,11 @@ TEST(Render, MultiscaleAndBruteForceConvergeAtTheMonteCarloRate) {
     // on a piecewise-constant texture measured -1.28, the control-variate residual -1.08. A bias
     // floor would flatten it towards 0.
     double mx = 0, my = 0;
-    for (std::size_t k = 0; k < x.size(); ++k) mx += x[k] / x.size(), my += y[k] / y.size();
+    for (std::size_t k = 0; k < x.size(); ++k)
+      mx += x[k] / x.size(), my += y[k] / y.size();
     double sxy = 0, sxx = 0;
-    for (std::size_t k = 0; k < x.size(); ++k) sxy += (x[k] - mx) * (y[k] - my), sxx += (x[k] - mx) * (x[k] - mx);
+    for (std::size_t k = 0; k < x.size(); ++k)
+      sxy += (x[k] - mx) * (y[k] - my), sxx += (x[k] - mx) * (x[k] - mx);
     const double slope = sxy / sxx;
     std::printf("%s: relMSE slope %.3f (1 spp %.3g, 64 spp %.3g)\n", eval::method_name(m), slope,
                 std::exp(y.front()), std::exp(y.back()));
