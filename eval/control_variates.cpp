@@ -97,7 +97,8 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
   reader::ParallaxSample mean;
   Status status = data.parallax.footprint_depth(p, view, &mean);
   if (!status.ok()) return status;
-  const double dx = mean.offset[0] * n, dy = mean.offset[1] * n;
+  const double shift = data.options.parallax ? double(n) : 0.0;
+  const double dx = mean.offset[0] * shift, dy = mean.offset[1] * shift;
   const Footprint shifted{p.x0 + dx, p.y0 + dy, p.x1 + dx, p.y1 + dy};
   reader::FootprintPlan plan;
   if (!reader::make_footprint_plan(shifted, n, &plan))
@@ -143,8 +144,23 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
       footprint_scale = Rgb(values[0], values[1], values[2]) / area * common;
       out->counters.table_queries += 1;
     }
+    // The unbiased form's G-bar_c: the SpongeCake attenuation at cluster c's representative texel
+    // (fibre directions, hence the projected areas of Eq. 10, differ by cluster far more than
+    // within one).
+    auto attenuation = [&](const model::ClothBsdf<double>& b) {
+      const double dh = b.sggx().D(frame.h);
+      const double fv =
+          reflect
+              ? model::spongecake_reflection(b.sggx(), b.optical_thickness(), frame.wi, frame.wo)
+              : model::spongecake_transmission(b.sggx(), b.optical_thickness(), frame.wi, frame.wo);
+      return dh > 0.0 ? fv / dh : 0.0;
+    };
     for (uint32_t c = 0; c < clusters; ++c) {
-      const Rgb scale = paper_form ? footprint_scale : data.cluster_albedo[c] * common;
+      const Rgb scale = paper_form ? footprint_scale
+                                   : data.cluster_albedo[c] * t_sheen *
+                                         (attenuation(model::ClothBsdf<double>(
+                                              data.texel_params(data.cluster_texel[c]))) *
+                                          cos_i);
       for (int ch = 0; ch < 3; ++ch)
         k.specular_scale[3 * c + ch] = scale[ch];
     }

@@ -54,6 +54,9 @@ struct EvalData {
   TableSource specular, gap;
   FootprintSums sums;
   std::vector<Rgb> cluster_albedo;  // mean specular albedo k of each cluster's texels (tile)
+  // A representative texel per cluster: the one whose fibre (tangent line and roughness) is
+  // nearest the cluster's mean, where the unbiased form evaluates the cluster's G-bar.
+  std::vector<uint64_t> cluster_texel;
 
   uint32_t cluster_count() const { return clusters.cluster_count(); }
   uint64_t texel(int64_t x, int64_t y) const {

@@ -1,6 +1,7 @@
 // Evaluator: opening an asset for evaluation and dispatching estimates (evaluator.hpp).
 #include "eval/evaluator.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <new>
@@ -211,6 +212,34 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   }
   for (uint32_t c = 0; c < clusters; ++c)
     if (count[c] > 0) d->cluster_albedo[c] = d->cluster_albedo[c] / count[c];
+  // The representative texel of each cluster: nearest to the cluster mean of (t t^T, roughness),
+  // t t^T being the sign-free description of a fibre line.
+  std::vector<std::array<double, 7>> mean(clusters, std::array<double, 7>{});
+  auto fibre = [&](uint64_t t) {
+    const float* v = d->maps.tangent.data + 3 * t;
+    const double len = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+    const double x = len > 0 ? v[0] / len : 0, y = len > 0 ? v[1] / len : 0,
+                 z = len > 0 ? v[2] / len : 1;
+    return std::array<double, 7>{
+        x * x, y * y, z * z, x * y, x * z, y * z, d->yarns[d->maps.yarn_id[t]].roughness};
+  };
+  const uint64_t texels = uint64_t(d->n) * d->n;
+  for (uint64_t t = 0; t < texels; ++t) {
+    const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
+    const auto f = fibre(t);
+    for (int k = 0; k < 7; ++k)
+      mean[label][k] += f[k] / count[label];
+  }
+  std::vector<double> best(clusters, INFINITY);
+  d->cluster_texel.assign(clusters, 0);
+  for (uint64_t t = 0; t < texels; ++t) {
+    const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
+    const auto f = fibre(t);
+    double dist = 0;
+    for (int k = 0; k < 7; ++k)
+      dist += (f[k] - mean[label][k]) * (f[k] - mean[label][k]);
+    if (dist < best[label]) best[label] = dist, d->cluster_texel[label] = t;
+  }
   data_ = std::move(d);
   return {};
 }
@@ -274,6 +303,29 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   }
   if (!s.ok()) return s;
   sum_value(out);
+  return {};
+}
+
+Status Evaluator::texel_value(int64_t x, int64_t y, const double wi[3], const double wo[3],
+                              double visibility, LobeMask lobes, Rgb* out) const noexcept {
+  if (data_ == nullptr || out == nullptr)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "evaluator is not open");
+  if (lobes == 0 || (lobes & ~kAllLobes) != 0)
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "lobe mask is empty or unknown");
+  if (!(visibility >= 0.0 && visibility <= 1.0))
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "visibility must be in [0, 1]");
+  ShadingFrame frame;
+  Status s;
+  if (!make_frame(*data_, wi, wo, lobes, &frame, &s)) return s;
+  Rgb lobes_value[model::kLobeCount];
+  integrand_lobes(frame,
+                  model::ClothBsdf<double>(data_->texel_params(data_->texel(x, y)))
+                      .eval(frame.wi, frame.wo, visibility),
+                  lobes_value);
+  Rgb value;
+  for (const Rgb& l : lobes_value)
+    value += l;
+  *out = value;
   return {};
 }
 

@@ -75,6 +75,9 @@ struct EvalOptions {
   // (`clothbake verify` reports the smallest side at which the compressed tables meet their error
   // target; 1 texel on the example fabrics). 0 disables the direct path.
   double direct_max_side = 1.0;
+  // false: the model without parallax (x'(p) = p, no footprint shift): for measuring what the
+  // parallax offsets are worth (the near-field report, docs/rendering.md).
+  bool parallax = true;
 };
 
 // The random source of the sampling methods: the project's SplitMix64 (model/splitmix64.hpp), bit
@@ -152,6 +155,13 @@ class Evaluator {
   // 1 - P(delta)).
   Status direction_pdf(const Footprint& footprint, const double wi[3], const double wo[3],
                        double* out) const noexcept;
+
+  // The integrand of Eq. 5 at one texel (x, y) (any integers: the tile wraps) for a visibility
+  // given by the caller instead of the stored ASG: f^(x, i, o) V |i_z| over the lobes of the mask
+  // (delta: its weight when i = -o). For ray-traced references whose visibility comes from real
+  // shadow rays. Errors: InvalidArgument for bad directions, mask or visibility outside [0, 1].
+  Status texel_value(int64_t x, int64_t y, const double wi[3], const double wo[3],
+                     double visibility, LobeMask lobes, Rgb* out) const noexcept;
 
   const EvalData* data() const noexcept { return data_.get(); }
 

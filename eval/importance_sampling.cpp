@@ -31,7 +31,7 @@ Status centre_texel(const EvalData& d, const Footprint& p, const model::Vec3d& o
       area ? d.parallax.footprint_depth(p, view, &s)
            : d.parallax.depth(int64_t(std::floor(p.x0)), int64_t(std::floor(p.y0)), view, &s);
   if (!status.ok()) return status;
-  const double n = d.n;
+  const double n = d.options.parallax ? double(d.n) : 0.0;
   const double cx = area ? 0.5 * (p.x0 + p.x1) : p.x0, cy = area ? 0.5 * (p.y0 + p.y1) : p.y0;
   *t =
       d.texel(int64_t(std::floor(cx + s.offset[0] * n)), int64_t(std::floor(cy + s.offset[1] * n)));

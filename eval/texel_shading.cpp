@@ -49,8 +49,9 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   }
   f.view = model::Vec3d(view[0], view[1], view[2]);
   const double n = double(data.n);
-  f.offset_per_depth[0] = n * f.view.x / f.view.z;
-  f.offset_per_depth[1] = n * f.view.y / f.view.z;
+  const double on = data.options.parallax ? n : 0.0;  // no parallax: x'(p) = p
+  f.offset_per_depth[0] = on * f.view.x / f.view.z;
+  f.offset_per_depth[1] = on * f.view.y / f.view.z;
   const model::DirectionGrid<double> parallax_grid{int(data.parallax.dirs()),
                                                    data.parallax.info().min_cos};
   f.parallax_bins = parallax_grid.bilinear(f.view);
@@ -71,6 +72,19 @@ double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, i
   return data.parallax.weighted_depth(frame.parallax_bins.index, frame.parallax_bins.weight, x, y);
 }
 
+void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>& f,
+                     Rgb out[model::kLobeCount]) noexcept {
+  for (int l = 0; l < model::kLobeCount; ++l) {
+    const model::Lobe lobe = model::Lobe(l);
+    if (!(frame.mask & lobe_bit(lobe)))
+      out[l] = Rgb();
+    else if (lobe == model::Lobe::DeltaTransmission)
+      out[l] = frame.delta ? f.delta_transmission : Rgb();
+    else
+      out[l] = f[lobe] * frame.cos_i;
+  }
+}
+
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept {
   const uint64_t t = data.texel(x, y);
@@ -79,17 +93,7 @@ void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int
   const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe(x, y));
   const double v = model::asg_eval(lobe, frame.wi_light);
   const double visibility = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
-  const model::LobeValues<double> f = bsdf.eval(frame.wi, frame.wo, visibility);
-  for (int l = 0; l < model::kLobeCount; ++l) {
-    const model::Lobe lobe_id = model::Lobe(l);
-    if (!(frame.mask & lobe_bit(lobe_id))) {
-      out->lobes[l] = Rgb();
-    } else if (lobe_id == model::Lobe::DeltaTransmission) {
-      out->lobes[l] = frame.delta ? f.delta_transmission : Rgb();
-    } else {
-      out->lobes[l] = f[lobe_id] * frame.cos_i;
-    }
-  }
+  integrand_lobes(frame, bsdf.eval(frame.wi, frame.wo, visibility), out->lobes);
   out->visibility = visibility;
   out->gap = bsdf.gap();
   out->sggx_d = bsdf.sggx().D(frame.h);

@@ -52,6 +52,11 @@ struct TexelShading {
   uint32_t label = 0;            // visibility cluster of t
 };
 
+// The integrand's lobes from the BSDF's values at (i, o): f_l |i_z| for the lobes of the frame's
+// mask, the delta lobe's weight when i = -o, 0 otherwise.
+void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>& f,
+                     Rgb out[model::kLobeCount]) noexcept;
+
 // g(t) of texel (x, y) (any integers: the tile wraps).
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept;

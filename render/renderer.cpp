@@ -79,6 +79,7 @@ Renderer::Renderer(const Scene& scene, const RenderOptions& options)
           std::make_unique<reader::Asset>(formats::open_asset(o.asset, reader::Verify::Checksums));
       eval::EvalOptions eo;
       eo.tables = options.tables;
+      eo.parallax = options.parallax;
       const reader::Status s = m.evaluator.open(*m.asset, eo);
       if (!s.ok())
         throw Error(

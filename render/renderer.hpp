@@ -32,6 +32,7 @@ struct RenderOptions {
   double time_budget = 0;  // seconds: render passes of `spp` until the budget is spent (at least
                            // one); 0: one pass
   eval::TableChoice tables = eval::TableChoice::Auto;
+  bool parallax = true;  // false: the model without parallax offsets (near-field comparison)
 };
 
 struct RenderStats {

@@ -125,6 +125,9 @@ Action setup_report(CLI::App& app) {
                  "lights (default 256)");
   app.add_option("--seed", et->seed, "error-time: seed of the renders (default 1)");
   app.add_option("--cache", et->cache, "error-time: asset and reference cache folder");
+  app.add_flag("--near-field", et->near_field,
+               "error-time: also ray-trace the first cloth plane's relief and compare the model "
+               "with and without parallax offsets against it");
   app.add_option("-o,--output", o->output, "output directory (created; other files kept)")
       ->required();
   app.add_option("--resolution", o->resolution, "texels per tile side (default: the fabric's)")
@@ -240,9 +243,8 @@ Action setup_report(CLI::App& app) {
     if (!o->no_plots) {
       // $CLOTHBAKE_PLOT_SCRIPT, else the source tree this file was compiled from.
       const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT");
-      const fs::path script = env ? fs::path(env)
-                                  : fs::path(__FILE__).parent_path().parent_path().parent_path() /
-                                        "scripts" / "plot_compression.py";
+      const fs::path script =
+          env ? fs::path(env) : fs::path(CLOTHBAKE_SOURCE_DIR) / "scripts" / "plot_compression.py";
       // Debian's interpreter (python3-matplotlib) when present, else whatever python3 is.
       const std::string python =
           fs::exists("/usr/bin/python3") ? std::string("/usr/bin/python3") : std::string("python3");

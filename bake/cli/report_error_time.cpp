@@ -20,6 +20,7 @@
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
 #include "common/version.hpp"
+#include "render/heightfield_reference.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
 
@@ -35,35 +36,56 @@ struct Row {
   render::RenderResult image;
 };
 
-// relMSE (mean over channels of pixels whose reference is not black of ((x - r) / r)^2) and RMSE.
+// relMSE = mean over pixels and channels of (x - r)^2 / (r^2 + eps^2), eps = 1 % of the reference's
+// mean (a floor, so that nearly black pixels do not dominate: docs/rendering.md), over the pixels
+// of `mask` (all when empty); and the absolute RMSE.
+double relmse_floor(const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t k = 0; k < ref.rgb.size(); ++k)
+    if (mask.empty() || mask[k / 3]) sum += ref.rgb[k], ++count;
+  const double eps = 0.01 * (count ? sum / count : 0.0);
+  return eps > 0 ? eps * eps : 1e-12;
+}
+double masked_relmse(const render::RenderResult& a, const render::RenderResult& ref,
+                     const std::vector<uint8_t>& mask) {
+  const double floor2 = relmse_floor(ref, mask);
+  double rel = 0;
+  std::size_t count = 0;
+  for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
+    if (!mask.empty() && !mask[k / 3]) continue;
+    const double d = double(a.rgb[k]) - ref.rgb[k];
+    rel += d * d / (double(ref.rgb[k]) * ref.rgb[k] + floor2);
+    ++count;
+  }
+  return count ? rel / count : 0;
+}
 void errors(const render::RenderResult& a, const render::RenderResult& ref, double* relmse,
             double* rmse) {
-  double rel = 0, abs2 = 0;
-  std::size_t count = 0;
+  double abs2 = 0;
   for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
     const double d = double(a.rgb[k]) - ref.rgb[k];
     abs2 += d * d;
-    if (ref.rgb[k] > 1e-6) {
-      rel += (d / ref.rgb[k]) * (d / ref.rgb[k]);
-      ++count;
-    }
   }
-  *relmse = count ? rel / count : 0;
+  *relmse = masked_relmse(a, ref, {});
   *rmse = ref.rgb.empty() ? 0 : std::sqrt(abs2 / ref.rgb.size());
 }
 
-// relMSE(spp) = bias^2 + c / spp, least squares over a method's sweep: the bias estimate b.
-double fitted_bias(const std::vector<const Row*>& rows) {
-  if (rows.size() < 2) return 0;
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = rows.size();
-  for (const Row* r : rows) {
-    const double x = 1.0 / r->spp, y = r->relmse;
-    sx += x, sy += y, sxx += x * x, sxy += x * y;
+// The relative bias of a method from two independent renders a, b at one spp: with weights
+// w = r^2 + eps^2 as relMSE uses, E[(a - r)^2 / w] = bias^2 + var and E[(a - b)^2 / w] = 2 var, so
+// bias^2 = relMSE(a) - mean((a - b)^2 / w) / 2 (clamped at 0; the estimate has the noise of the
+// two renders, so it is meaningful where bias^2 is not small against var / spp).
+double bias_estimate(const render::RenderResult& a, const render::RenderResult& b,
+                     const render::RenderResult& ref) {
+  const double floor2 = relmse_floor(ref, {});
+  double e_ar = 0, e_ab = 0;
+  for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
+    const double w = double(ref.rgb[k]) * ref.rgb[k] + floor2;
+    e_ar += std::pow(double(a.rgb[k]) - ref.rgb[k], 2) / w;
+    e_ab += std::pow(double(a.rgb[k]) - b.rgb[k], 2) / w;
   }
-  const double c = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-  const double b = (sy - c * sx) / n;
-  return b > 0 ? std::sqrt(b) : 0;
+  const double n = ref.rgb.empty() ? 1.0 : double(ref.rgb.size());
+  return std::sqrt(std::max(0.0, e_ar / n - 0.5 * e_ab / n));
 }
 
 // Value of y at x on the log-log polyline through (xs, ys) sorted by x; NaN outside.
@@ -172,11 +194,16 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       errors(row.image, reference, &row.relmse, &row.rmse);
       rows.push_back(std::move(row));
     }
+  // Each method's bias: its largest-spp render against a second one with another seed.
   for (eval::Method m : methods) {
-    std::vector<const Row*> of;
+    const Row* last = nullptr;
     for (const Row& r : rows)
-      if (r.method == eval::method_name(m)) of.push_back(&r);
-    const double bias = fitted_bias(of);
+      if (r.method == eval::method_name(m) && (!last || r.spp > last->spp)) last = &r;
+    render::RenderOptions ro;
+    ro.method = m;
+    ro.spp = last->spp;
+    ro.seed = o.seed + 7777;
+    const double bias = bias_estimate(last->image, render::Renderer(scene, ro).render(), reference);
     for (Row& r : rows)
       if (r.method == eval::method_name(m)) r.bias = bias;
   }
@@ -202,9 +229,25 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     std::vector<std::pair<double, double>> by_error = brute;
     std::sort(by_error.begin(), by_error.end(),
               [](const auto& a, const auto& b) { return a.second > b.second; });
-    const double t_equal = loglog_at(by_error, operating->relmse, true);
-    const bool reached = std::isfinite(t_equal);
-    const double t_brute = reached ? t_equal : brute.back().first;
+    // Brute force's time at a target error: interpolated inside its sweep; outside, a bound: its
+    // fastest render when even that is more accurate (an upper bound of the speedup), its slowest
+    // when even that is less accurate (a lower bound).
+    struct AtError {
+      double seconds;
+      const char* bound;  // "none", "upper" or "lower" (of the speedup)
+    };
+    auto brute_time_at = [&](double target) -> AtError {
+      const double t = loglog_at(by_error, target, true);
+      if (std::isfinite(t)) return {t, "none"};
+      double worst = 0, fastest = INFINITY, slowest = 0;
+      for (const auto& [sec, err] : brute) {
+        worst = std::max(worst, err);
+        fastest = std::min(fastest, sec);
+        slowest = std::max(slowest, sec);
+      }
+      return worst <= target ? AtError{fastest, "upper"} : AtError{slowest, "lower"};
+    };
+    const AtError at = brute_time_at(operating->relmse);
     const double e_equal_time = loglog_at(brute, operating->seconds, false);
     summary["operating_point"] = {{"method", "multiscale"},
                                   {"spp", operating->spp},
@@ -213,20 +256,23 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     summary["pairs"] = nlohmann::json::array();
     for (const Row& r : rows) {
       if (r.method == "brute" || r.spp != operating->spp) continue;
-      const double t = loglog_at(by_error, r.relmse, true);
+      const AtError a = brute_time_at(r.relmse);
       const double e = loglog_at(brute, r.seconds, false);
       summary["pairs"].push_back(
           {{"method", r.method},
            {"against", "brute"},
            {"spp", r.spp},
-           {"equal_error_speedup", (std::isfinite(t) ? t : brute.back().first) / r.seconds},
-           {"equal_error_speedup_is_lower_bound", !std::isfinite(t)},
+           {"equal_error_speedup", a.seconds / r.seconds},
+           {"equal_error_speedup_bound", a.bound},
            {"equal_time_error_ratio",
             std::isfinite(e) ? nlohmann::json(e / r.relmse) : nlohmann::json(nullptr)}});
     }
-    summary["equal_error_speedup"] = t_brute / operating->seconds;
-    summary["equal_error_speedup_is_lower_bound"] = !reached;
-    summary["brute_at_equal_error"] = {{"seconds", reached ? nlohmann::json(t_equal) : nullptr}};
+    summary["equal_error_speedup"] = at.seconds / operating->seconds;
+    // "none": interpolated; "lower": brute force never reached the error within the sweep (the
+    // speedup is at least this); "upper": even its fastest render was more accurate (at most this).
+    summary["equal_error_speedup_bound"] = at.bound;
+    summary["brute_at_equal_error"] = {
+        {"seconds", std::string(at.bound) == "none" ? nlohmann::json(at.seconds) : nullptr}};
     summary["equal_time_error_ratio"] = std::isfinite(e_equal_time)
                                             ? nlohmann::json(e_equal_time / operating->relmse)
                                             : nlohmann::json(nullptr);
@@ -263,6 +309,35 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     panel(equal_error, "brute-equal-error", "brute, equal error:");
   }
 
+  // Near field: the ray-traced relief against the model with and without parallax offsets.
+  nlohmann::json near_field = nullptr;
+  if (o.near_field) {
+    std::size_t object = scene.objects.size();
+    for (std::size_t k = 0; k < scene.objects.size(); ++k)
+      if (scene.objects[k].shape == render::ShapeType::Plane && !scene.objects[k].asset.empty()) {
+        object = k;
+        break;
+      }
+    if (object == scene.objects.size())
+      throw_input_error(o.scene + ": --near-field needs a plane with a fabric");
+    const render::HeightfieldReference traced =
+        render::render_heightfield_reference(scene, object, o.near_field_samples);
+    render::RenderOptions flat = ref_options;
+    flat.parallax = false;
+    const render::RenderResult no_offsets = render::Renderer(scene, flat).render();
+    write_png(out / "images" / "raytraced.png", traced.image);
+    write_png(out / "images" / "no-offsets.png", no_offsets);
+    near_field = {
+        {"object", scene.objects[object].name},
+        {"samples_per_pixel", o.near_field_samples * o.near_field_samples},
+        {"raytraced_seconds", traced.image.stats.seconds},
+        {"relmse_parallax_model", masked_relmse(reference, traced.image, traced.mask)},
+        {"relmse_without_offsets", masked_relmse(no_offsets, traced.image, traced.mask)},
+        {"images", {"images/raytraced.png", "images/reference.png", "images/no-offsets.png"}}};
+    if (!fs::exists(out / "images" / "reference.png"))
+      write_png(out / "images" / "reference.png", reference);
+  }
+
   // CSV and JSON.
   std::string csv = "scene,method,spp,seconds,rmse,relmse,bias_estimate\n";
   nlohmann::json jrows = nlohmann::json::array();
@@ -287,6 +362,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
                           {"file", cached.string()}}},
                         {"rows", jrows},
                         {"summary", summary},
+                        {"near_field", near_field},
                         {"grid", grid}};
   std::ofstream(out / "error-time.csv") << csv;
   std::ofstream(out / "error-time.json") << doc.dump(2) << "\n";
@@ -294,9 +370,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     // $CLOTHBAKE_PLOT_SCRIPT_DIR, else the source tree this file was compiled from.
     const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT_DIR");
     const fs::path script =
-        (env ? fs::path(env)
-             : fs::path(__FILE__).parent_path().parent_path().parent_path() / "scripts") /
-        "plot_error_time.py";
+        (env ? fs::path(env) : fs::path(CLOTHBAKE_SOURCE_DIR) / "scripts") / "plot_error_time.py";
     const std::string python =
         fs::exists("/usr/bin/python3") ? std::string("/usr/bin/python3") : std::string("python3");
     const std::string command = python + " '" + script.string() + "' '" + out.string() + "'";
@@ -316,11 +390,25 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   for (const Row& r : rows)
     std::printf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds, r.relmse,
                 r.bias);
-  if (summary.contains("equal_error_speedup"))
-    std::printf("  multi-scale at %u spp against brute force: %s%.2fx faster at equal error\n",
+  if (summary.contains("equal_error_speedup")) {
+    const std::string bound = summary["equal_error_speedup_bound"].get<std::string>();
+    std::printf("  multi-scale at %u spp against brute force: %s%.2fx the speed at equal error%s\n",
                 operating->spp,
-                summary["equal_error_speedup_is_lower_bound"].get<bool>() ? ">" : "",
-                summary["equal_error_speedup"].get<double>());
+                bound == "lower"   ? ">"
+                : bound == "upper" ? "<"
+                                   : "",
+                summary["equal_error_speedup"].get<double>(),
+                bound == "upper"   ? " (brute force's fastest render was already more accurate)"
+                : bound == "lower" ? " (brute force never got there in the sweep)"
+                                   : "");
+  }
+  if (!near_field.is_null())
+    std::printf(
+        "  near field (%s, ray-traced relief): relMSE %.4g with parallax offsets, %.4g "
+        "without\n",
+        near_field["object"].get<std::string>().c_str(),
+        near_field["relmse_parallax_model"].get<double>(),
+        near_field["relmse_without_offsets"].get<double>());
   std::printf("  %s/{error-time.csv,error-time.json,error-time.png,grid.png}\n", o.output.c_str());
   return 0;
 }

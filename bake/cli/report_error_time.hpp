@@ -19,6 +19,10 @@ struct ErrorTimeOptions {
   uint32_t reference_spp = 256;  // light samples of the reference with environment lights
   uint64_t seed = 1;
   bool no_plots = false, json = false;
+  // Also ray-trace the first cloth plane's real relief and report the error of the parallax-offset
+  // model and of the model without offsets against it (paper Fig. 6).
+  bool near_field = false;
+  uint32_t near_field_samples = 4;  // s x s sub-pixel rays of the ray-traced reference
 };
 
 // Throws CLI::ValidationError for bad options, clothbake::Error for a bad scene or output.

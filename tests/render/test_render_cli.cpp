@@ -2,6 +2,7 @@
 // written on failure.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -91,6 +92,42 @@ TEST(RenderCli, BadScenesNameTheKeyAndWriteNothing) {
             1);
   EXPECT_EQ(run_clothbake({"render", scene.string(), "-o", (assets().dir / "x.png").string()}).code,
             2);
+}
+
+}  // namespace
+}  // namespace clothbake::render
+
+namespace clothbake::render {
+namespace {
+
+TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
+  std::string scene = good_scene();
+  scene.replace(scene.find("resolution = [16, 12]"), 21, "resolution = [64, 64]");
+  const fs::path path = write_scene("tiny.toml", scene);
+  const fs::path out = assets().dir / "error-time";
+  const auto run = test_support::run_clothbake({"report", "error-time", path.string(), "-o",
+                                                out.string(), "--spp", "1,2,4,8", "--cache",
+                                                (assets().dir / "cache").string(), "--json"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  for (const char* f :
+       {"error-time.csv", "error-time.json", "error-time.png", "error-time.svg", "grid.png"})
+    EXPECT_GT(fs::file_size(out / f), 100u) << f;
+  // The PNGs are images OpenImageIO reads.
+  const auto info =
+      test_support::detail::spawn({"/usr/bin/oiiotool", "--info", (out / "grid.png").string()});
+  EXPECT_EQ(info.code, 0) << info.err;
+  EXPECT_EQ(j["rows"].size(), 3u * 4u);
+  const double speedup = j["summary"]["equal_error_speedup"].get<double>();
+  EXPECT_TRUE(std::isfinite(speedup) && speedup > 0) << speedup;
+  for (const auto& row : j["rows"])
+    EXPECT_GE(row["relmse"].get<double>(), 0.0);
+  // The reference is cached: a second report reuses it.
+  const auto again = test_support::run_clothbake(
+      {"report", "error-time", path.string(), "-o", out.string(), "--spp", "1,2", "--methods",
+       "multiscale,brute", "--cache", (assets().dir / "cache").string(), "--no-plots", "--json"});
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_TRUE(nlohmann::json::parse(again.out)["reference"]["cached"].get<bool>());
 }
 
 }  // namespace
