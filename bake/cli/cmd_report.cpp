@@ -125,6 +125,9 @@ Action setup_report(CLI::App& app) {
                  "lights (default 256)");
   app.add_option("--seed", et->seed, "error-time: seed of the renders (default 1)");
   app.add_option("--cache", et->cache, "error-time: asset and reference cache folder");
+  auto resolution = std::make_shared<std::string>();
+  app.add_option("--image-size", *resolution,
+                 "error-time: render at W,H pixels instead of the scene camera's resolution");
   app.add_flag("--near-field", et->near_field,
                "error-time: also ray-trace the first cloth plane's relief and compare the model "
                "with and without parallax offsets against it");
@@ -147,8 +150,19 @@ Action setup_report(CLI::App& app) {
   app.add_flag("--no-raw", o->no_raw, "skip the raw tables (built in memory: 2 GiB at 256^2)");
   app.add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
   add_json_flag(app, o->json, "print the rows as JSON on stdout");
-  return [o, et, m, s] {
+  return [o, et, m, s, resolution] {
     if (o->what == "error-time") {
+      if (!resolution->empty()) {
+        NumberListRule rule;
+        rule.expected = "W,H (integers in [1, 16384])";
+        rule.count = 2;
+        rule.integers = true;
+        rule.min = 1;
+        rule.max = 16384;
+        const std::vector<double> wh = parse_number_list(*resolution, "--image-size", rule);
+        et->width = int(wh[0]);
+        et->height = int(wh[1]);
+      }
       et->scene = o->fabric;
       et->output = o->output;
       et->no_plots = o->no_plots;

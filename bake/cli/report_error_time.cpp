@@ -146,6 +146,10 @@ int run_error_time_report(const ErrorTimeOptions& o) {
 
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
   bake_scene_fabrics(loaded, o.cache, true);
+  if (o.width > 0 && o.height > 0) {
+    loaded.scene.camera.width = o.width;
+    loaded.scene.camera.height = o.height;
+  }
   const render::Scene& scene = loaded.scene;
   bool environment = false;
   for (const render::Light& l : scene.lights)
