@@ -4,21 +4,13 @@
 
 #include "eval/eval_data.hpp"
 #include "eval/evaluator.hpp"
+#include "eval/texel_shading.hpp"
 
 namespace clothbake::eval {
 namespace {
 
 using reader::Check;
 using reader::ErrorCode;
-
-bool unit(const double v[3], model::Vec3d* out) {
-  if (v == nullptr || !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
-    return false;
-  const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  if (!(len > 0) || !std::isfinite(len)) return false;
-  *out = model::Vec3d(v[0] / len, v[1] / len, v[2] / len);
-  return true;
-}
 
 // The representative texel of a footprint for view direction o (unit).
 Status centre_texel(const EvalData& d, const Footprint& p, const model::Vec3d& o, uint64_t* t) {
@@ -45,7 +37,7 @@ Status Evaluator::sample_direction(const Footprint& footprint, const double wo[3
   if (!data_ || out == nullptr)
     return Status::error(ErrorCode::InvalidArgument, Check::None, "evaluator is not open");
   model::Vec3d o;
-  if (!unit(wo, &o))
+  if (!unit_vector(wo, &o))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "wo must be a finite non-zero vector");
   uint64_t t = 0;
@@ -68,7 +60,7 @@ Status Evaluator::direction_pdf(const Footprint& footprint, const double wi[3], 
   if (!data_ || out == nullptr)
     return Status::error(ErrorCode::InvalidArgument, Check::None, "evaluator is not open");
   model::Vec3d i, o;
-  if (!unit(wi, &i) || !unit(wo, &o))
+  if (!unit_vector(wi, &i) || !unit_vector(wo, &o))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "wi and wo must be finite non-zero vectors");
   uint64_t t = 0;

@@ -6,9 +6,8 @@
 #include "model/asg.hpp"
 
 namespace clothbake::eval {
-namespace {
 
-bool unit_vector(const double v[3], model::Vec3d* out) {
+bool unit_vector(const double v[3], model::Vec3d* out) noexcept {
   if (v == nullptr || !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
     return false;
   const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -16,8 +15,6 @@ bool unit_vector(const double v[3], model::Vec3d* out) {
   *out = model::Vec3d(v[0] / len, v[1] / len, v[2] / len);
   return true;
 }
-
-}  // namespace
 
 bool make_frame(const EvalData& data, const double wi[3], const double wo[3], LobeMask mask,
                 ShadingFrame* frame, Status* status) noexcept {

@@ -35,6 +35,9 @@ struct ShadingFrame {
   double mean_visibility[reader::kMaxVisibilityClusters];  // the first C entries are set
 };
 
+// v / |v| into *out; false for a null, non-finite or zero v.
+bool unit_vector(const double v[3], model::Vec3d* out) noexcept;
+
 // Builds the frame; false (with a message in *status) for a bad direction. wi, wo are normalised.
 bool make_frame(const EvalData& data, const double wi[3], const double wo[3], LobeMask mask,
                 ShadingFrame* frame, Status* status) noexcept;

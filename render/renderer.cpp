@@ -80,11 +80,8 @@ Renderer::Renderer(const Scene& scene, const RenderOptions& options)
       eval::EvalOptions eo;
       eo.tables = options.tables;
       eo.parallax = options.parallax;
-      const reader::Status s = m.evaluator.open(*m.asset, eo);
-      if (!s.ok())
-        throw Error(
-            s.code() == reader::ErrorCode::NotFound ? ExitCode::Input : formats::exit_code_of(s),
-            scene.path + ": " + o.name + ".asset: " + o.asset + ": " + formats::describe(s));
+      formats::throw_if_failed(m.evaluator.open(*m.asset, eo),
+                               scene.path + ": " + o.name + ".asset: " + o.asset);
       m.cloth = true;
       m.texels_per_unit = o.tiles_per_unit * m.evaluator.resolution();
     }

@@ -65,13 +65,6 @@ nlohmann::json rgb(const eval::Rgb& c) {
   return nlohmann::json::array({c.r, c.g, c.b});
 }
 
-void fail_on(const reader::Status& status, const std::string& asset) {
-  if (status.ok()) return;
-  if (status.code() == reader::ErrorCode::NotFound)
-    throw_input_error(asset + ": " + status.message());
-  throw Error(formats::exit_code_of(status), asset + ": " + formats::describe(status));
-}
-
 int run_eval(const EvalCliOptions& o) {
   eval::Method method;
   if (!eval::parse_method(o.method.c_str(), &method))
@@ -89,7 +82,7 @@ int run_eval(const EvalCliOptions& o) {
 
   const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
   eval::Evaluator evaluator;
-  fail_on(evaluator.open(asset, options), o.asset);
+  formats::throw_if_failed(evaluator.open(asset, options), o.asset);
   const eval::Footprint footprint{r[0], r[1], r[2], r[3]};
   eval::Rng rng(o.seed);
   eval::Rgb sum, sum2, lobes[model::kLobeCount];
@@ -100,7 +93,7 @@ int run_eval(const EvalCliOptions& o) {
         evaluator.estimate(footprint, wi.data(), wo.data(), method, o.spp, rng, mask, &e);
     if (s.code() == reader::ErrorCode::InvalidArgument)
       throw CLI::ValidationError("--rect", s.message());
-    fail_on(s, o.asset);
+    formats::throw_if_failed(s, o.asset);
     sum += e.value;
     sum2 += e.value * e.value;
     for (int l = 0; l < model::kLobeCount; ++l)

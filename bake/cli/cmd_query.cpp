@@ -55,13 +55,6 @@ nlohmann::json vec(const double* v, int n) {
   return a;
 }
 
-void fail_on(const reader::Status& status, const std::string& asset) {
-  if (status.ok()) return;
-  if (status.code() == reader::ErrorCode::NotFound)
-    throw_input_error(asset + ": " + status.message());
-  throw Error(formats::exit_code_of(status), asset + ": " + formats::describe(status));
-}
-
 int query_parallax(const QueryOptions& o) {
   if (o.dir.empty()) throw CLI::ValidationError("--dir", "parallax queries need --dir x,y,z");
   if (o.texel.empty() == o.rect.empty())
@@ -78,7 +71,7 @@ int query_parallax(const QueryOptions& o) {
   }
   const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
   reader::ParallaxView view;
-  fail_on(view.open(asset), o.asset);
+  formats::throw_if_failed(view.open(asset), o.asset);
   reader::ParallaxSample sample;
   reader::Status status;
   if (!texel.empty())
@@ -87,7 +80,7 @@ int query_parallax(const QueryOptions& o) {
     status = view.footprint_depth({rect[0], rect[1], rect[2], rect[3]}, dir.data(), &sample);
   if (status.code() == reader::ErrorCode::InvalidArgument)
     throw CLI::ValidationError(texel.empty() ? "--rect" : "--texel", status.message());
-  fail_on(status, o.asset);
+  formats::throw_if_failed(status, o.asset);
   const double n = view.resolution();
   const double len = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
   const bool clamped = dir[2] / len < view.info().min_cos;
@@ -135,13 +128,13 @@ int query_visibility(const QueryOptions& o) {
   const std::vector<double> texel = parse_number_list(o.texel, "--texel", kTexel);
   const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
   reader::VisibilityAsgView view;
-  fail_on(view.open(asset), o.asset);
+  formats::throw_if_failed(view.open(asset), o.asset);
   const int64_t x = int64_t(texel[0]), y = int64_t(texel[1]);
   double v = 0;
   reader::Status status = view.visibility(x, y, dir.data(), &v);
   if (status.code() == reader::ErrorCode::InvalidArgument)
     throw CLI::ValidationError("--dir", status.message());
-  fail_on(status, o.asset);
+  formats::throw_if_failed(status, o.asset);
   const model::AsgParams<double> p = view.lobe(x, y);
   const double error = view.fit_error(x, y);
   if (o.json) {

@@ -20,6 +20,13 @@ std::string describe(const reader::Status& status) {
   return id.empty() ? status.message() : id + ": " + status.message();
 }
 
+void throw_if_failed(const reader::Status& status, const std::string& context) {
+  if (status.ok()) return;
+  const ExitCode code =
+      status.code() == reader::ErrorCode::NotFound ? ExitCode::Input : exit_code_of(status);
+  throw Error(code, context + ": " + describe(status));
+}
+
 reader::Asset open_asset(const std::string& path, reader::Verify verify) {
   reader::Asset asset;
   const reader::Status status = asset.open_file(path.c_str(), {verify});

@@ -16,6 +16,11 @@ ExitCode exit_code_of(const reader::Status& status);
 // "CBK-E012: MESSAGE" (or MESSAGE when there is no check ID).
 std::string describe(const reader::Status& status);
 
+// Throws clothbake::Error for a failed reader call on an opened asset: Input (2) for NotFound (the
+// asset lacks a section the command needs), exit_code_of() otherwise; the message is
+// "CONTEXT: " + describe(). Returns when the status is Ok.
+void throw_if_failed(const reader::Status& status, const std::string& context);
+
 // Opens an asset or throws clothbake::Error with exit_code_of() and describe().
 reader::Asset open_asset(const std::string& path, reader::Verify verify);
 
