@@ -31,6 +31,57 @@ double append_image(const double* values, std::size_t bins, std::size_t stride,
   return peak;
 }
 
+// Decodes one texel's vector exactly as the reader computes it (float products of the scaled
+// basis, double accumulation). Shared by decompress_texels and the bake's error measurement,
+// which decodes block by block instead of holding a second copy of the tables.
+class TexelDecoder {
+ public:
+  explicit TexelDecoder(const CompressedTableSet& set) : set_(set) {
+    const std::size_t n = set.info.resolution, texels = n * n;
+    bins_ = std::size_t(set.info.bins_per_side) * set.info.bins_per_side;
+    const std::size_t images = set.scales.size();
+    if (set.cell_map.size() != texels || set.basis.size() != images * bins_)
+      throw_internal_error("decompress_texels: inconsistent set");
+    // Scaled basis, image-major, exactly as the reader computes it (float product).
+    scaled_.resize(images * bins_);
+    for (std::size_t i = 0; i < images; ++i)
+      for (std::size_t b = 0; b < bins_; ++b)
+        scaled_[i * bins_ + b] = set.scales[i] * reader::half_to_float(set.basis[i * bins_ + b]);
+    offset_.assign(texels + 1, 0);
+    for (std::size_t t = 0; t < texels; ++t) {
+      const uint8_t g = set.cell_map[t];
+      offset_[t + 1] = offset_[t] + (g == reader::kNoCell ? 0 : set.cells[g].rank);
+    }
+  }
+  std::size_t bins() const { return bins_; }
+  // Texel t's vector into out (bins floats; zeros for a texel without a cell); acc: bins doubles.
+  void decode(std::size_t t, double* acc, float* out) const {
+    const uint8_t g = set_.cell_map[t];
+    if (g == reader::kNoCell) {
+      std::fill(out, out + bins_, 0.0f);
+      return;
+    }
+    const auto& cell = set_.cells[g];
+    const float* mean = scaled_.data() + std::size_t(cell.first_image) * bins_;
+    for (std::size_t b = 0; b < bins_; ++b)
+      acc[b] = double(mean[b]);
+    for (uint32_t j = 0; j < cell.rank; ++j) {
+      const double w = set_.coefficients[offset_[t] + j];
+      const float* v = scaled_.data() + std::size_t(cell.first_image + 1 + j) * bins_;
+      for (std::size_t b = 0; b < bins_; ++b)
+        acc[b] += w * double(v[b]);
+    }
+    for (std::size_t b = 0; b < bins_; ++b)
+      out[b] = float(acc[b]);
+  }
+
+ private:
+  const CompressedTableSet& set_;
+  std::size_t bins_ = 0;
+  std::vector<float> scaled_;
+  std::vector<uint64_t> offset_;
+};
+
 }  // namespace
 
 uint64_t CompressedTableSet::payload_bytes() const {
@@ -123,20 +174,24 @@ CompressedTableSet compress_tables(const DirectionalTexels& data, const CpcaOpti
   info.lobes = data.lobes;
   info.min_roughness = data.min_roughness;
 
-  // Measure what is stored (the reader's arithmetic).
-  const std::vector<float> decoded = decompress_texels(set);
+  // Measure what is stored (the reader's arithmetic), decoding block by block.
+  const TexelDecoder decoder(set);
   const std::size_t blocks = (texels + 1023) / 1024;
   std::vector<double> err2(blocks, 0.0), sig2(blocks, 0.0), max_err(blocks, 0.0),
       max_val(blocks, 0.0);
   tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
-    for (std::size_t t = b * 1024; t < std::min(texels, (b + 1) * 1024); ++t)
+    std::vector<double> acc(bins);
+    std::vector<float> decoded(bins);
+    for (std::size_t t = b * 1024; t < std::min(texels, (b + 1) * 1024); ++t) {
+      decoder.decode(t, acc.data(), decoded.data());
       for (std::size_t k = 0; k < bins; ++k) {
-        const double x = data.values[t * bins + k], d = double(decoded[t * bins + k]) - x;
+        const double x = data.values[t * bins + k], d = double(decoded[k]) - x;
         err2[b] += d * d;
         sig2[b] += x * x;
         max_err[b] = std::max(max_err[b], std::fabs(d));
         max_val[b] = std::max(max_val[b], x);
       }
+    }
   });
   double e2 = 0.0, s2 = 0.0, me = 0.0, mv = 0.0;
   for (std::size_t b = 0; b < blocks; ++b) {
@@ -174,40 +229,13 @@ CompressedTableSet compress_tables(const DirectionalTexels& data, const CpcaOpti
 }
 
 std::vector<float> decompress_texels(const CompressedTableSet& set) {
-  const std::size_t n = set.info.resolution, texels = n * n;
-  const std::size_t bins = std::size_t(set.info.bins_per_side) * set.info.bins_per_side;
-  const std::size_t images = set.scales.size();
-  if (set.cell_map.size() != texels || set.basis.size() != images * bins)
-    throw_internal_error("decompress_texels: inconsistent set");
-  // Scaled basis, image-major, exactly as the reader computes it (float product).
-  std::vector<float> scaled(images * bins);
-  for (std::size_t i = 0; i < images; ++i)
-    for (std::size_t b = 0; b < bins; ++b)
-      scaled[i * bins + b] = set.scales[i] * reader::half_to_float(set.basis[i * bins + b]);
-  std::vector<uint64_t> offset(texels + 1, 0);
-  for (std::size_t t = 0; t < texels; ++t) {
-    const uint8_t g = set.cell_map[t];
-    offset[t + 1] = offset[t] + (g == reader::kNoCell ? 0 : set.cells[g].rank);
-  }
+  const TexelDecoder decoder(set);
+  const std::size_t texels = set.cell_map.size(), bins = decoder.bins();
   std::vector<float> out(texels * bins, 0.0f);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, texels, 256), [&](const auto& range) {
     std::vector<double> acc(bins);
-    for (std::size_t t = range.begin(); t != range.end(); ++t) {
-      const uint8_t g = set.cell_map[t];
-      if (g == reader::kNoCell) continue;
-      const auto& cell = set.cells[g];
-      const float* mean = scaled.data() + std::size_t(cell.first_image) * bins;
-      for (std::size_t b = 0; b < bins; ++b)
-        acc[b] = double(mean[b]);
-      for (uint32_t j = 0; j < cell.rank; ++j) {
-        const double w = set.coefficients[offset[t] + j];
-        const float* v = scaled.data() + std::size_t(cell.first_image + 1 + j) * bins;
-        for (std::size_t b = 0; b < bins; ++b)
-          acc[b] += w * double(v[b]);
-      }
-      for (std::size_t b = 0; b < bins; ++b)
-        out[t * bins + b] = float(acc[b]);
-    }
+    for (std::size_t t = range.begin(); t != range.end(); ++t)
+      decoder.decode(t, acc.data(), out.data() + t * bins);
   });
   return out;
 }

@@ -4,6 +4,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -99,6 +100,43 @@ DirectionalTexels directional_texels(const tables::RadianceSectionView& view,
           out.values[t * bins + b] = float(double(int64_t(q)) * view.units[b * columns + k]);
         }
       }
+  });
+  mark_zero_texels(&out);
+  return out;
+}
+
+DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill) {
+  const auto& info = fill.header().info;
+  DirectionalTexels out;
+  out.kind = reader::RadianceTableKind(info.kind);
+  out.resolution = int(info.resolution);
+  out.bins_per_side = int(info.bins_per_side);
+  out.cluster_count = int(info.cluster_count);
+  out.samples_per_bin_side = int(info.samples_per_bin_side);
+  out.lobes = info.lobes;
+  out.min_roughness = info.min_roughness;
+  const std::size_t texels = out.texels(), bins = std::size_t(out.bins());
+  const auto& columns = fill.columns();
+  const auto& stored = fill.header().clusters;
+  out.cluster.resize(texels);
+  for (std::size_t t = 0; t < texels; ++t)
+    out.cluster[t] = columns[t] < 0 ? kNoStratum : uint8_t(stored[std::size_t(columns[t])]);
+  out.values.assign(texels * bins, 0.0f);
+  // Blocks of 16 bins: one block writes 16 consecutive floats (a cache line) per texel.
+  constexpr std::size_t kBlock = 16;
+  const std::size_t blocks = (bins + kBlock - 1) / kBlock;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& range) {
+    std::vector<float> column(texels * kBlock);
+    for (std::size_t block = range.begin(); block != range.end(); ++block) {
+      const std::size_t b0 = block * kBlock, count = std::min(kBlock, bins - b0);
+      for (std::size_t i = 0; i < count; ++i)
+        fill.fill_bin(int(b0 + i), column.data() + i * texels);
+      for (std::size_t t = 0; t < texels; ++t) {
+        float* row = out.values.data() + t * bins + b0;
+        for (std::size_t i = 0; i < count; ++i)
+          row[i] = column[i * texels + t];
+      }
+    }
   });
   mark_zero_texels(&out);
   return out;

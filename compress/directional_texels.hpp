@@ -19,6 +19,7 @@
 namespace clothbake::tables {
 struct RadianceInputs;
 struct RadianceSectionView;
+class QuantisedRadianceFill;
 }  // namespace clothbake::tables
 
 namespace clothbake::compress {
@@ -48,6 +49,13 @@ struct DirectionalTexels {
 // out of range, a view that is not present.
 DirectionalTexels directional_texels(const tables::RadianceSectionView& view,
                                      std::span<const uint8_t> labels);
+
+// Straight from the streaming fill (tables::QuantisedRadianceFill): bit-identical to
+// directional_texels(view of the raw sets build_radiance_tables makes, their labels), without
+// any SAT; peak memory is the returned vectors plus one 16-bin block per thread. Parallel over
+// blocks of 16 bins (disjoint outputs): the same bytes for any thread count. A fill with no stored
+// cluster gives every texel kNoStratum and zero values.
+DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill);
 
 // Straight from the fill inputs (tables::radiance_bin_values with the default quadrature for
 // `bins_per_side`): what the raw tables would hold before fixed-point quantisation. For tests,

@@ -42,8 +42,8 @@ void build(int n, std::span<const float> values, std::span<const int16_t> column
     const int16_t* col = column.data() + std::size_t(y) * std::size_t(n);
     for (int x = 0; x < n; ++x) {
       const int k = col[x];
-      // Round half up (values are >= 0): a truncating conversion, no libm call in the loop.
-      if (k >= 0) row[std::size_t(k)] += E(double(v[x]) * scale[std::size_t(k)] + 0.5);
+      // The integer fits E: value * scale <= the range of scale_for.
+      if (k >= 0) row[std::size_t(k)] += E(fixed_point_quantise(v[x], scale[std::size_t(k)]));
       E* cell = dst + std::size_t(x) * columns;
       if (above)
         add_row(columns, above + std::size_t(x) * columns, row.data(), cell);
@@ -68,17 +68,22 @@ int sat_element_bits(int resolution, double max_relative_error) {
   return 64;
 }
 
-void build_fixed_point_sat(int resolution, std::span<const float> values,
-                           std::span<const int16_t> column, std::span<const double> totals,
-                           int element_bits, double* units, void* out) {
-  std::vector<double> scale(totals.size());
+void fixed_point_scales(int resolution, std::span<const double> totals, int element_bits,
+                        double* scales, double* units) {
   for (std::size_t k = 0; k < totals.size(); ++k) {
     if (!(totals[k] > 0.0) || !std::isfinite(totals[k]))
       throw_internal_error("fixed-point SAT: column " + std::to_string(k) + " total " +
                            std::to_string(totals[k]) + " is not finite and positive");
-    scale[k] = scale_for(resolution, totals[k], element_bits);
-    units[k] = 1.0 / scale[k];
+    scales[k] = scale_for(resolution, totals[k], element_bits);
+    units[k] = 1.0 / scales[k];
   }
+}
+
+void build_fixed_point_sat(int resolution, std::span<const float> values,
+                           std::span<const int16_t> column, std::span<const double> totals,
+                           int element_bits, double* units, void* out) {
+  std::vector<double> scale(totals.size());
+  fixed_point_scales(resolution, totals, element_bits, scale.data(), units);
   if (element_bits == 32)
     build(resolution, values, column, scale, static_cast<uint32_t*>(out));
   else

@@ -37,4 +37,18 @@ void build_fixed_point_sat(int resolution, std::span<const float> values,
                            std::span<const int16_t> column, std::span<const double> totals,
                            int element_bits, double* units, void* out);
 
+// The per-column scales and units (1 / scale) that build_fixed_point_sat uses for these totals:
+// the same formula and the same check (Error(Internal) for a total that is not finite and
+// positive). scales and units: totals.size() doubles each.
+void fixed_point_scales(int resolution, std::span<const double> totals, int element_bits,
+                        double* scales, double* units);
+
+// One texel's stored integer, q = round-half-up(value * scale), exactly as build_fixed_point_sat
+// adds it to the SAT (value >= 0). A rectangle of one texel read back from the SAT gives q
+// exactly, so q * unit is the value a raw table returns for the texel.
+inline uint64_t fixed_point_quantise(float value, double scale) {
+  // A truncating conversion (values are >= 0): no libm call in the fill loops.
+  return uint64_t(double(value) * scale + 0.5);
+}
+
 }  // namespace clothbake::tables

@@ -61,6 +61,12 @@ void specular_values(const std::vector<model::FibreSggxBatch<float>>& blocks,
   }
 }
 
+void gap_values(const RadianceInputs& in, float* out) {
+  const std::size_t texels = in.gap.size();
+  for (std::size_t t = 0; t < texels; ++t)
+    out[t] = 1.0f - in.gap[t];
+}
+
 // Clusters that get a table: those with a texel whose value can be non-zero.
 std::vector<uint32_t> stored_clusters(const RadianceInputs& in, RadianceTableKind kind) {
   std::vector<char> used(std::size_t(in.cluster_count), 0);
@@ -74,20 +80,33 @@ std::vector<uint32_t> stored_clusters(const RadianceInputs& in, RadianceTableKin
   return out;
 }
 
+// Per texel, the stored column of its cluster (index into set.clusters) or -1.
+std::vector<int16_t> stored_columns(const RadianceInputs& in, const RadianceTableSet& set) {
+  std::vector<int16_t> column_of(std::size_t(in.cluster_count), -1);
+  for (std::size_t k = 0; k < set.clusters.size(); ++k)
+    column_of[set.clusters[k]] = int16_t(k);
+  std::vector<int16_t> column(in.labels.size());
+  for (std::size_t t = 0; t < in.labels.size(); ++t)
+    column[t] = column_of[in.labels[t]];
+  return column;
+}
+
+// Per-column sums of one bin's values in texel order (double): the same order in the raw fill and
+// the streaming fill, so both get the same scales.
+void column_totals(std::span<const float> v, std::span<const int16_t> column,
+                   std::span<double> totals) {
+  std::fill(totals.begin(), totals.end(), 0.0);
+  for (std::size_t t = 0; t < v.size(); ++t)
+    if (column[t] >= 0) totals[std::size_t(column[t])] += double(v[t]);
+}
+
 // Fills the set for kind, bin by bin: values -> per-column totals -> fixed-point SAT.
 template <class ValuesFn>
 void fill_set(const RadianceInputs& in, RadianceTableSet& set, ValuesFn&& values) {
   const int n = in.resolution;
   const std::size_t texels = std::size_t(n) * std::size_t(n);
   const std::size_t columns = set.clusters.size();
-  std::vector<int16_t> column(texels, -1);
-  {
-    std::vector<int16_t> column_of(std::size_t(in.cluster_count), -1);
-    for (std::size_t k = 0; k < columns; ++k)
-      column_of[set.clusters[k]] = int16_t(k);
-    for (std::size_t t = 0; t < texels; ++t)
-      column[t] = column_of[in.labels[t]];
-  }
+  const std::vector<int16_t> column = stored_columns(in, set);
   const int bins = set.bins();
   const std::size_t element = set.info.element_bits / 8;
   const std::size_t bin_bytes = texels * columns * element;
@@ -98,9 +117,7 @@ void fill_set(const RadianceInputs& in, RadianceTableSet& set, ValuesFn&& values
     std::vector<double> totals(columns);
     for (int b = r.begin(); b != r.end(); ++b) {
       values(b, v.data());
-      std::fill(totals.begin(), totals.end(), 0.0);
-      for (std::size_t t = 0; t < texels; ++t)
-        if (column[t] >= 0) totals[std::size_t(column[t])] += double(v[t]);
+      column_totals(v, column, totals);
       build_fixed_point_sat(n, v, column, totals, int(set.info.element_bits),
                             &set.units[std::size_t(b) * columns],
                             set.sat.data() + std::size_t(b) * bin_bytes);
@@ -221,25 +238,24 @@ double min_roughness_in_use(const RadianceInputs& in) {
 
 void radiance_bin_values(RadianceTableKind kind, const RadianceInputs& in,
                          const HalfVectorBins& bins, int bin, float* out) {
-  const std::size_t texels = std::size_t(in.resolution) * std::size_t(in.resolution);
   if (kind == RadianceTableKind::Gap) {
-    for (std::size_t t = 0; t < texels; ++t)
-      out[t] = 1.0f - in.gap[t];
+    gap_values(in, out);
     return;
   }
   specular_values(sggx_blocks(in), in.gap, bins, bin, out);
 }
 
-RadianceTableSet build_specular_tables(const RadianceInputs& in, const RadianceOptions& options,
-                                       RadianceBuildReport* report) {
+namespace {
+
+// The specular set's records and the report (quadrature, resolution warning), without the fill.
+RadianceTableSet specular_header(const RadianceInputs& in, const RadianceOptions& options,
+                                 RadianceBuildReport& rep) {
   check_options(options);
   validate_radiance_inputs(in);
   const double min_sigma = min_roughness_in_use(in);
   const int n = options.bins_per_side;
   const int s = options.samples_per_side > 0 ? options.samples_per_side
                                              : default_samples_per_side(n, min_sigma);
-  RadianceBuildReport local;
-  RadianceBuildReport& rep = report ? *report : local;
   rep.samples_per_side = s;
   rep.min_roughness = min_sigma;
   rep.bins_needed = bins_per_side_for_roughness(min_sigma);
@@ -256,18 +272,28 @@ RadianceTableSet build_specular_tables(const RadianceInputs& in, const RadianceO
     rep.warnings.push_back(msg.str());
     if (options.warn_unresolved) warn(msg.str());
   }
-
   RadianceTableSet set = empty_set(in, RadianceTableKind::Specular, n, options);
   set.info.samples_per_bin_side = uint32_t(s);
   set.info.min_roughness = min_sigma;
   rep.element_bits = int(set.info.element_bits);
   rep.relative_error_bound = sat_relative_error_bound(in.resolution, rep.element_bits);
+  if (!set.clusters.empty())
+    rep.d_evaluations += uint64_t(in.resolution) * uint64_t(in.resolution) * uint64_t(set.bins()) *
+                         uint64_t(s) * uint64_t(s);
+  return set;
+}
+
+}  // namespace
+
+RadianceTableSet build_specular_tables(const RadianceInputs& in, const RadianceOptions& options,
+                                       RadianceBuildReport* report) {
+  RadianceBuildReport local;
+  RadianceTableSet set = specular_header(in, options, report ? *report : local);
   if (set.clusters.empty()) return set;
-  const HalfVectorBins bins = make_half_vector_bins(n, s);
+  const HalfVectorBins bins =
+      make_half_vector_bins(options.bins_per_side, int(set.info.samples_per_bin_side));
   const auto blocks = sggx_blocks(in);
   fill_set(in, set, [&](int b, float* out) { specular_values(blocks, in.gap, bins, b, out); });
-  rep.d_evaluations += uint64_t(in.resolution) * uint64_t(in.resolution) *
-                       uint64_t(bins.bin_count()) * uint64_t(bins.samples_per_bin());
   return set;
 }
 
@@ -276,12 +302,52 @@ RadianceTableSet build_gap_tables(const RadianceInputs& in, const RadianceOption
   validate_radiance_inputs(in);
   RadianceTableSet set = empty_set(in, RadianceTableKind::Gap, 1, options);
   if (set.clusters.empty()) return set;
-  fill_set(in, set, [&](int, float* out) {
-    const std::size_t texels = in.gap.size();
-    for (std::size_t t = 0; t < texels; ++t)
-      out[t] = 1.0f - in.gap[t];
-  });
+  fill_set(in, set, [&](int, float* out) { gap_values(in, out); });
   return set;
+}
+
+QuantisedRadianceFill::QuantisedRadianceFill(RadianceTableKind kind, const RadianceInputs& inputs,
+                                             const RadianceOptions& options,
+                                             RadianceBuildReport* report)
+    : inputs_(inputs) {
+  if (kind == RadianceTableKind::Specular) {
+    RadianceBuildReport local;
+    header_ = specular_header(inputs_, options, report ? *report : local);
+    if (!header_.clusters.empty()) {
+      quadrature_ =
+          make_half_vector_bins(options.bins_per_side, int(header_.info.samples_per_bin_side));
+      blocks_ = sggx_blocks(inputs_);
+    }
+  } else {
+    check_options(options);
+    validate_radiance_inputs(inputs_);
+    header_ = empty_set(inputs_, RadianceTableKind::Gap, 1, options);
+  }
+  column_ = stored_columns(inputs_, header_);
+}
+
+void QuantisedRadianceFill::fill_bin(int bin, float* out) const {
+  const std::size_t texels = column_.size(), columns = header_.clusters.size();
+  if (columns == 0) {
+    std::fill(out, out + texels, 0.0f);
+    return;
+  }
+  if (header_.kind() == RadianceTableKind::Gap)
+    gap_values(inputs_, out);
+  else
+    specular_values(blocks_, inputs_.gap, quadrature_, bin, out);
+  std::vector<double> totals(columns), scales(columns), units(columns);
+  column_totals(std::span<const float>(out, texels), column_, totals);
+  fixed_point_scales(inputs_.resolution, totals, int(header_.info.element_bits), scales.data(),
+                     units.data());
+  for (std::size_t t = 0; t < texels; ++t) {
+    const int k = column_[t];
+    // Exactly what RadianceTableSet::texel_value gives back (then stored as float, as
+    // compress::directional_texels does with the raw sets).
+    out[t] = k < 0 ? 0.0f
+                   : float(double(int64_t(fixed_point_quantise(out[t], scales[std::size_t(k)]))) *
+                           units[std::size_t(k)]);
+  }
 }
 
 std::vector<RadianceTableSet> build_radiance_tables(const RadianceInputs& inputs,

@@ -22,6 +22,7 @@
 
 #include "fabric/fabric.hpp"
 #include "formats/reader/radiance_layout.hpp"
+#include "model/sggx_batch.hpp"
 #include "tables/half_vector_bins.hpp"
 
 namespace clothbake::tables {
@@ -102,6 +103,47 @@ RadianceTableSet build_gap_tables(const RadianceInputs& inputs, const RadianceOp
 std::vector<RadianceTableSet> build_radiance_tables(const RadianceInputs& inputs,
                                                     const RadianceOptions& options,
                                                     RadianceBuildReport* report = nullptr);
+
+// The streaming form of a table set (docs/pipeline.md, "Streaming the tables into the
+// compression"): per bin, the value every texel would read back from the raw fixed-point SAT,
+// float(q * unit) with q = fixed_point_quantise(T(x), scale) and the bin's per-cluster scale, but
+// without building (or holding) any SAT. A bake that keeps only the compressed tables feeds these
+// values to the C-PCA bin by bin instead of materialising the raw sets (2 GiB for the twill); the
+// compressed result is bit-identical to compressing the raw sets.
+//
+// Constructing it is cheap (checks the inputs, picks the quadrature and element width, builds
+// the SoA blocks of the SGGX constants); the fill happens in fill_bin. Keeps references to
+// `inputs`' spans: they must outlive the object. Errors as build_specular_tables.
+class QuantisedRadianceFill {
+ public:
+  QuantisedRadianceFill(RadianceTableKind kind, const RadianceInputs& inputs,
+                        const RadianceOptions& options, RadianceBuildReport* report = nullptr);
+
+  // The set's records exactly as build_specular_tables / build_gap_tables make them (info,
+  // stored clusters), with `units` and `sat` empty.
+  const RadianceTableSet& header() const { return header_; }
+  // No stored cluster: the raw builder would return an empty set (nothing to fill).
+  bool empty() const { return header_.clusters.empty(); }
+  int bins() const { return header_.bins(); }
+  int resolution() const { return header_.resolution(); }
+  // Bytes the raw SATs of this set would take (what the streaming form saves).
+  std::size_t raw_sat_bytes() const {
+    return header_.element_count() * std::size_t(header_.info.element_bits / 8);
+  }
+  // Per texel, row-major (N * N floats): the raw table's value of the texel in bin `bin` in the
+  // column of its cluster (RadianceTableSet::texel_value, as float), 0 for a texel of no stored
+  // cluster. Thread-safe (const); bins are independent.
+  void fill_bin(int bin, float* out) const;
+  // Per texel: the stored column (index into header().clusters) or -1.
+  const std::vector<int16_t>& columns() const { return column_; }
+
+ private:
+  RadianceInputs inputs_;
+  RadianceTableSet header_;
+  std::vector<int16_t> column_;
+  HalfVectorBins quadrature_;  // Specular only
+  std::vector<model::FibreSggxBatch<float>> blocks_;
+};
 
 // The unquantised values T(x) of one bin for every texel (N * N floats, before the cluster mask):
 // I(x) times the bin average of D_x for Specular, 1 - I(x) for Gap. What the SAT sums (up to

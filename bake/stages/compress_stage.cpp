@@ -2,7 +2,8 @@
 // `tables` stage and the label map of the `cluster` stage (artifact "clusters") in, C-PCA
 // compressed sections out (compress/compressed_set.hpp), one kind after the other, with the
 // fabric's [bake] settings overridden by the bake command's request (artifact
-// kCompressSettingsArtifact, a CompressRequest).
+// kCompressSettingsArtifact, a CompressRequest). When the tables stage streamed (no raw SATs were
+// built), the values come from its fills (kStreamedTablesArtifact) instead of the raw sections.
 //
 // Unless the raw tables are kept, the stage also publishes "supersedes/compress" =
 // {"section/tables"} when it produced compressed tables: the write stage then leaves the raw
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/stages.hpp"
+#include "bake/stages/table_streaming.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -27,12 +29,7 @@ namespace {
 using namespace compress;  // the algorithm library this stage drives
 
 void run_compress(pipeline::StageContext& ctx) {
-  const Fabric& fabric = ctx.input<Fabric>("fabric");
-  const CompressSettings settings =
-      ctx.has_input(kCompressSettingsArtifact)
-          ? resolve_compress_settings(fabric.bake,
-                                      ctx.input<CompressRequest>(kCompressSettingsArtifact))
-          : settings_from_bake(fabric.bake);
+  const CompressSettings settings = compress_settings(ctx);
   nlohmann::json meta;
   meta["enabled"] = settings.enabled;
   meta["keep_raw"] = settings.keep_raw || !settings.enabled;
@@ -46,14 +43,26 @@ void run_compress(pipeline::StageContext& ctx) {
   }
   const auto& raw = ctx.input<std::vector<formats::Section>>("section/tables");
   const auto& labels = ctx.input<cluster::VisibilityClusters>("clusters").labels;
+  const StreamedTablesArtifact& streamed =
+      ctx.input<StreamedTablesArtifact>(kStreamedTablesArtifact);
+  // The streaming fill of a kind, or null (then the raw sections are read).
+  auto fill_of = [&](reader::RadianceTableKind kind) -> const tables::QuantisedRadianceFill* {
+    if (!streamed) return nullptr;
+    for (const auto& fill : streamed->fills)
+      if (fill.header().kind() == kind) return &fill;
+    return nullptr;
+  };
   nlohmann::json kinds = nlohmann::json::array();
   const reader::RadianceTableKind order[] = {reader::RadianceTableKind::Specular,
                                              reader::RadianceTableKind::Gap};
   for (int i = 0; i < 2; ++i) {
+    const tables::QuantisedRadianceFill* fill = fill_of(order[i]);
     const auto view = tables::find_radiance_sections(raw, order[i]);
-    if (!view.present()) continue;
+    if (fill == nullptr && !view.present()) continue;
     const auto start = std::chrono::steady_clock::now();
-    const DirectionalTexels data = directional_texels(view, labels);
+    // Bit-identical either way (compress/directional_texels.hpp).
+    const DirectionalTexels data =
+        fill ? directional_texels(*fill) : directional_texels(view, labels);
     ctx.progress(0.5 * i + 0.1);
     CompressionStats stats;
     const CompressedTableSet set = compress_tables(data, settings.cpca(), &stats);
@@ -100,7 +109,7 @@ pipeline::Stage compress_stage() {
   pipeline::Stage s;
   s.name = "compress";
   s.description = "C-PCA compression of the Integral-Radiance tables (paper Sec. 4.4)";
-  s.inputs = {"fabric", "section/tables", "clusters"};
+  s.inputs = {"fabric", "section/tables", "clusters", kStreamedTablesArtifact};
   s.outputs = {"section/compress", "metadata/compress", kCompressSupersedesArtifact};
   s.collects = {kCompressSettingsArtifact};
   s.run = run_compress;

@@ -9,7 +9,9 @@
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
 #include "bake/stages/stages.hpp"
+#include "bake/stages/table_streaming.hpp"
 #include "cluster/visibility_clusters.hpp"
+#include "compress/compress_settings.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -83,4 +85,62 @@ TEST(TablesStages, ProduceReadableSectionsDeterministically) {
   const auto& nmeta = narrow.artifacts.get<nlohmann::json>("metadata/tables");
   EXPECT_EQ(nmeta["resolved"], false);
   EXPECT_EQ(nmeta["radiance_dirs_needed"], 26);
+}
+
+namespace {
+
+// A compressing bake of the seeded fabric up to the compress stage, with some texels partly gap
+// so that both table kinds exist; keep_raw asks for the raw tables too (no streaming).
+pipeline::RunResult compress_run(bool keep_raw, int threads) {
+  pipeline::Artifacts a = seeded(0.3);
+  {
+    Fabric f = a.get<Fabric>("fabric");
+    for (std::size_t t = 0; t < f.maps.gap.size(); t += 5)
+      f.maps.gap[t] = 0.25f * float(t % 4);
+    pipeline::Artifacts b;
+    b.put("fabric", std::move(f));
+    b.put("visibility/asg_params",
+          a.get<std::vector<model::AsgParams<float>>>("visibility/asg_params"));
+    a = std::move(b);
+  }
+  if (keep_raw) {
+    compress::CompressRequest request;
+    request.keep_raw = true;
+    a.put(stages::kCompressSettingsArtifact, request);
+  }
+  pipeline::RunOptions options;
+  options.threads = threads;
+  const std::vector<pipeline::Stage> stages = {stages::cluster_stage(), stages::tables_stage(),
+                                               stages::compress_stage()};
+  return pipeline::run_pipeline({"compress"}, std::move(a), options, stages);
+}
+
+std::vector<std::byte> section_bytes(const pipeline::RunResult& r, const char* name) {
+  return formats::serialize_asset(r.artifacts.get<std::vector<formats::Section>>(name));
+}
+
+}  // namespace
+
+// Without --keep-raw the raw SATs are never built (an empty raw section list, the streaming fills
+// instead), and the compressed sections are the bytes the raw path gives, for 1 and 2 threads.
+TEST(TablesStages, StreamingIntoTheCompressionGivesTheRawPathsBytes) {
+  const auto streamed = compress_run(false, 2);
+  const auto streamed1 = compress_run(false, 1);
+  const auto raw = compress_run(true, 2);
+  EXPECT_TRUE(streamed.artifacts.get<std::vector<formats::Section>>("section/tables").empty());
+  EXPECT_FALSE(raw.artifacts.get<std::vector<formats::Section>>("section/tables").empty());
+  const auto& plan =
+      streamed.artifacts.get<stages::StreamedTablesArtifact>(stages::kStreamedTablesArtifact);
+  ASSERT_TRUE(plan);
+  EXPECT_EQ(plan->fills.size(), 2u);  // specular and gap
+  EXPECT_FALSE(raw.artifacts.get<stages::StreamedTablesArtifact>(stages::kStreamedTablesArtifact));
+  const auto compressed = section_bytes(streamed, "section/compress");
+  EXPECT_GT(compressed.size(), 1000u);
+  EXPECT_TRUE(compressed == section_bytes(raw, "section/compress"));
+  EXPECT_TRUE(compressed == section_bytes(streamed1, "section/compress"));
+  // The table metadata does not depend on the path (it is part of the asset's bytes).
+  EXPECT_EQ(streamed.artifacts.get<nlohmann::json>("metadata/tables"),
+            raw.artifacts.get<nlohmann::json>("metadata/tables"));
+  EXPECT_EQ(streamed.artifacts.get<std::vector<std::string>>(stages::kCompressSupersedesArtifact),
+            std::vector<std::string>{"section/tables"});
 }
