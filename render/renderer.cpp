@@ -14,6 +14,7 @@
 #include "model/splitmix64.hpp"
 #include "render/camera.hpp"
 #include "render/environment.hpp"
+#include "render/shading_frame.hpp"
 #include "render/shapes.hpp"
 
 namespace clothbake::render {
@@ -31,21 +32,7 @@ struct Material {
   double texels_per_unit = 0;  // tiles_per_unit * N
 };
 
-// The shading frame of a hit: z = the geometric normal, x along dP/du.
-struct Frame {
-  Vec3 x, y, z;
-  explicit Frame(const SurfaceHit& h) : z(h.normal) {
-    x = normalize(h.dpdu - z * dot(z, h.dpdu));
-    if (!(length(x) > 0.5)) {
-      Vec3 s, t;
-      model::orthonormal_basis(z, s, t);
-      x = s;
-    }
-    y = cross(z, x);
-  }
-  Vec3 local(const Vec3& v) const { return {dot(v, x), dot(v, y), dot(v, z)}; }
-  Vec3 world(const Vec3& v) const { return x * v.x + y * v.y + z * v.z; }
-};
+using Frame = ShadingFrame;
 
 uint64_t pixel_seed(uint64_t seed, uint32_t pass, uint64_t pixel) {
   uint64_t s = seed ^ 0x243f6a8885a308d3ull;
@@ -152,11 +139,7 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
         counters.max_texels = std::max(counters.max_texels, texels);
       }
     }
-    const double eps = 1e-7 * (1.0 + std::abs(hit.point.x) + std::abs(hit.point.y) +
-                               std::abs(hit.point.z) + hit.t);
-    auto shadow_origin = [&](const Vec3& wi) {
-      return hit.point + hit.normal * (dot(hit.normal, wi) > 0 ? eps : -eps);
-    };
+    auto shadow_origin = [&](const Vec3& wi) { return shadow_ray_origin(hit, wi); };
     // The integrand of the rendering equation for light from world direction wi: f^ V |cos|.
     auto bsdf = [&](const Vec3& wi_world, eval::LobeMask mask, uint32_t samples) -> Rgb {
       const Vec3 wi = frame.local(wi_world);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "tests/eval/eval_fixtures.hpp"
@@ -128,6 +129,36 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
        "multiscale,brute", "--cache", (assets().dir / "cache").string(), "--no-plots", "--json"});
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_TRUE(nlohmann::json::parse(again.out)["reference"]["cached"].get<bool>());
+}
+
+}  // namespace
+}  // namespace clothbake::render
+
+namespace clothbake::render {
+namespace {
+
+// `clothbake plan` on the far swatch: a distant, front-lit, fixed view of the twill. The rules
+// leave out the transmission tables (no light behind), reduce the half-vector bins to a few, and
+// report footprints of hundreds of texels; a missing scene is exit 2 naming it.
+TEST(PlanCli, FarSwatchLeavesOutWhatTheSceneCannotSee) {
+  const std::string scene = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/scenes/far-swatch.toml";
+  const auto run = run_clothbake({"plan", scene, "--json"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  ASSERT_EQ(j["fabrics"].size(), 1u);
+  const auto& f = j["fabrics"][0];
+  EXPECT_GT(f["usage"]["footprint_texels"]["min"].get<double>(), 100.0);
+  EXPECT_EQ(f["usage"]["lit_opposite_side"], 0);
+  std::map<std::string, std::string> decision;
+  for (const auto& d : f["decisions"])
+    decision[d["item"]] = d["decision"];
+  EXPECT_EQ(decision["transmission and gap tables"], "left out");
+  EXPECT_EQ(decision["half-vector bins"], "reduced");
+  EXPECT_LT(f["usage"]["half_vector_bins_used"].get<int>(), 64);
+  EXPECT_EQ(f["usage"]["half_vector_bins_total"], 1024);
+  const auto missing = run_clothbake({"plan", "/nonexistent/scene.toml"});
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.err.find("/nonexistent/scene.toml"), std::string::npos) << missing.err;
 }
 
 }  // namespace

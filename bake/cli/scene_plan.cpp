@@ -1,0 +1,182 @@
+// Bake plans from a scene (scene_plan.hpp).
+#include "bake/cli/scene_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "bake/inputs/fabric_load.hpp"
+#include "tables/half_vector_bins.hpp"
+
+namespace clothbake::cli {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// The parallax table's directions stop at this cosine (raycast/): views below it use its rim.
+constexpr double kMinViewCos = 0.05;
+
+std::string fmt(const char* format, double a, double b = 0, double c = 0, double d = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, format, a, b, c, d);
+  return buf;
+}
+
+}  // namespace
+
+FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, double max_error) {
+  FabricPlan p;
+  p.usage = u;
+  p.resolution = fabric.maps.resolution;
+  p.radiance_dirs = fabric.bake.radiance_dirs;
+  p.half_vector_bins_total = p.radiance_dirs * p.radiance_dirs;
+  if (u.pixels == 0) {
+    p.warnings.push_back("no pixel sees this object: the scene needs nothing of its fabric");
+    return p;
+  }
+  // Per-texel parallax: within one footprint the offsets differ by at most the largest offset
+  // r_max = (height range) N tan(theta_view), so the footprint-averaged offset (the parallax
+  // SAT) alone moves the footprint's edge by at most r_max texels: a relative error r_max / side.
+  const auto [lo, hi] = std::minmax_element(fabric.maps.height.begin(), fabric.maps.height.end());
+  const double range = fabric.maps.height.empty() ? 0.0 : double(*hi - *lo);
+  const double c = std::max(u.min_view_cos, kMinViewCos);
+  p.max_parallax_offset = range * p.resolution * std::sqrt(std::max(0.0, 1 - c * c)) / c;
+  if (p.max_parallax_offset <= max_error * u.footprint_min)
+    p.decisions.push_back(
+        {"per-texel parallax", "left out",
+         fmt("no footprint below %.3g texels and offsets of at most %.3g texels (%.3g %% of the "
+             "smallest footprint, budget %.3g %%): the parallax SAT alone is kept",
+             u.footprint_min, p.max_parallax_offset, 100 * p.max_parallax_offset / u.footprint_min,
+             100 * max_error)});
+  else
+    p.decisions.push_back(
+        {"per-texel parallax", "kept",
+         fmt("footprints from %.3g texels and offsets up to %.3g texels (%.3g %% of the smallest "
+             "footprint, above the budget %.3g %%)",
+             u.footprint_min, p.max_parallax_offset, 100 * p.max_parallax_offset / u.footprint_min,
+             100 * max_error)});
+  // Transmission: only light on the side opposite to the viewer uses the transmission lobes, the
+  // gap table and the delta lobe.
+  if (!u.back_lit())
+    p.decisions.push_back(
+        {"transmission and gap tables", "left out",
+         fmt("no light behind the cloth (%.0f lit pixel-light pairs, all on the viewer's side): "
+             "specular and diffuse transmission, the delta lobe and the gap table left out",
+             double(u.lit_same_side))});
+  else
+    p.decisions.push_back(
+        {"transmission and gap tables", "kept",
+         fmt("light reaches the side opposite to the viewer (%.0f of %.0f lit pixel-light pairs)",
+             double(u.lit_opposite_side), double(u.lit_opposite_side + u.lit_same_side))});
+  // Half-vector bins: those whose bilinear support some lit (wi, wo) pair touches.
+  const double used = double(u.half_vector_bins_used());
+  const double angle = u.max_half_vector_angle * 180 / kPi;
+  if (used < p.half_vector_bins_total)
+    p.decisions.push_back({"half-vector bins", "reduced",
+                           fmt("half vectors within %.3g deg of the normal: %.0f of %.0f bins kept",
+                               angle, used, double(p.half_vector_bins_total))});
+  else
+    p.decisions.push_back(
+        {"half-vector bins", "kept",
+         fmt("half vectors up to %.3g deg from the normal reach all %.0f bins", angle, used)});
+  // Sheen: strongest at grazing views and lights; its table is a few kilobytes, so it is always
+  // kept and the reason says how much of the picture it matters for.
+  if (u.grazing_view_fraction > 0 || u.min_light_cos < render::kGrazingCos)
+    p.decisions.push_back({"sheen", "kept",
+                           fmt("grazing views on %.3g %% of the pixels (smallest view cosine "
+                               "%.3g), smallest light cosine %.3g",
+                               100 * u.grazing_view_fraction, u.min_view_cos, u.min_light_cos)});
+  else
+    p.decisions.push_back(
+        {"sheen", "kept",
+         fmt("no grazing view or light (view cosines from %.3g, light cosines from %.3g): the "
+             "sheen contributes little, kept for its size (one small table)",
+             u.min_view_cos, u.min_light_cos)});
+  // Directional resolution: the 2-sigma rule on the narrowest roughness the fabric uses.
+  double sigma = 1.0;
+  std::vector<char> in_use(fabric.yarns.size(), 0);
+  for (uint16_t id : fabric.maps.yarn_id)
+    if (id < in_use.size()) in_use[id] = 1;
+  for (std::size_t y = 0; y < fabric.yarns.size(); ++y)
+    if (in_use[y]) sigma = std::min(sigma, fabric.yarns[y].roughness);
+  const int needed = tables::bins_per_side_for_roughness(sigma);
+  if (p.radiance_dirs >= needed)
+    p.decisions.push_back({"radiance_dirs", "kept",
+                           fmt("%.0f^2 bins resolve the narrowest roughness %.3g (2-sigma rule: "
+                               "at least %.0f per side)",
+                               p.radiance_dirs, sigma, needed)});
+  else {
+    p.decisions.push_back({"radiance_dirs", "kept",
+                           fmt("%.0f^2 bins cannot resolve the narrowest roughness %.3g "
+                               "(2-sigma rule: at least %.0f per side)",
+                               p.radiance_dirs, sigma, needed)});
+    p.warnings.push_back(
+        fmt("[bake] radiance_dirs = %.0f cannot resolve roughness %.3g; "
+            "radiance_dirs = %.0f would",
+            p.radiance_dirs, sigma, needed));
+  }
+  p.decisions.push_back(
+      {"compression target", "kept",
+       fmt("the scene's error budget [render] max_error = %.3g %%: compressed tables at "
+           "max_error = %.3g",
+           100 * max_error, max_error)});
+  return p;
+}
+
+ScenePlan plan_scene(const inputs::LoadedScene& loaded) {
+  ScenePlan plan;
+  plan.scene = loaded.scene.path;
+  plan.max_error = loaded.scene.max_error;
+  std::vector<Fabric> fabrics(loaded.scene.objects.size());
+  std::vector<render::FabricShape> shapes(loaded.scene.objects.size());
+  for (std::size_t k = 0; k < loaded.scene.objects.size(); ++k) {
+    if (loaded.fabrics[k].empty()) continue;
+    fabrics[k] = load_fabric(loaded.fabrics[k]);
+    shapes[k] = {fabrics[k].maps.resolution, fabrics[k].bake.radiance_dirs};
+  }
+  const render::SceneUsage usage = render::analyse_usage(loaded.scene, shapes);
+  for (std::size_t k = 0; k < loaded.scene.objects.size(); ++k) {
+    if (loaded.fabrics[k].empty()) continue;
+    FabricPlan p = plan_fabric(fabrics[k], usage.objects[k], plan.max_error);
+    p.object = int(k);
+    p.object_name = loaded.scene.objects[k].name;
+    p.fabric_path = loaded.fabrics[k];
+    plan.fabrics.push_back(std::move(p));
+  }
+  return plan;
+}
+
+nlohmann::json plan_json(const ScenePlan& plan) {
+  nlohmann::json fabrics = nlohmann::json::array();
+  for (const FabricPlan& p : plan.fabrics) {
+    const render::ObjectUsage& u = p.usage;
+    nlohmann::json decisions = nlohmann::json::array();
+    for (const auto& d : p.decisions)
+      decisions.push_back({{"item", d.item}, {"decision", d.decision}, {"reason", d.reason}});
+    fabrics.push_back({{"object", p.object_name},
+                       {"fabric", p.fabric_path},
+                       {"resolution", p.resolution},
+                       {"usage",
+                        {{"pixels", u.pixels},
+                         {"footprint_texels",
+                          {{"min", u.footprint_min},
+                           {"p05", u.footprint_p05},
+                           {"median", u.footprint_median},
+                           {"max", u.footprint_max}}},
+                         {"min_view_cos", u.min_view_cos},
+                         {"grazing_view_fraction", u.grazing_view_fraction},
+                         {"views_front", u.views_front},
+                         {"views_back", u.views_back},
+                         {"lit_same_side", u.lit_same_side},
+                         {"lit_opposite_side", u.lit_opposite_side},
+                         {"min_light_cos", u.min_light_cos},
+                         {"half_vector_bins_used", u.half_vector_bins_used()},
+                         {"half_vector_bins_total", p.half_vector_bins_total},
+                         {"max_half_vector_angle_deg", u.max_half_vector_angle * 180 / kPi},
+                         {"max_parallax_offset_texels", p.max_parallax_offset}}},
+                       {"decisions", decisions},
+                       {"warnings", p.warnings}});
+  }
+  return {{"scene", plan.scene}, {"max_error", plan.max_error}, {"fabrics", fabrics}};
+}
+
+}  // namespace clothbake::cli
