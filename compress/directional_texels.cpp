@@ -21,6 +21,19 @@ std::string texel_name(std::size_t t, int n) {
          std::to_string(t / std::size_t(n)) + ")";
 }
 
+// The shape and provenance fields of a table set's info record; no texels yet.
+DirectionalTexels empty_like(const reader::RadianceTableInfoRecord& info) {
+  DirectionalTexels out;
+  out.kind = reader::RadianceTableKind(info.kind);
+  out.resolution = int(info.resolution);
+  out.bins_per_side = int(info.bins_per_side);
+  out.cluster_count = int(info.cluster_count);
+  out.samples_per_bin_side = int(info.samples_per_bin_side);
+  out.lobes = info.lobes;
+  out.min_roughness = info.min_roughness;
+  return out;
+}
+
 }  // namespace
 
 void mark_zero_texels(DirectionalTexels* data) {
@@ -51,14 +64,7 @@ DirectionalTexels directional_texels(const tables::RadianceSectionView& view,
                                      std::span<const uint8_t> labels) {
   if (!view.present()) throw_input_error("compress: the raw tables are not present");
   const auto& info = *view.info;
-  DirectionalTexels out;
-  out.kind = reader::RadianceTableKind(info.kind);
-  out.resolution = int(info.resolution);
-  out.bins_per_side = int(info.bins_per_side);
-  out.cluster_count = int(info.cluster_count);
-  out.samples_per_bin_side = int(info.samples_per_bin_side);
-  out.lobes = info.lobes;
-  out.min_roughness = info.min_roughness;
+  DirectionalTexels out = empty_like(info);
   const std::size_t n = info.resolution, texels = n * n, bins = std::size_t(out.bins());
   const std::size_t columns = view.clusters.size();
   if (labels.size() != texels)
@@ -107,14 +113,7 @@ DirectionalTexels directional_texels(const tables::RadianceSectionView& view,
 
 DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill) {
   const auto& info = fill.header().info;
-  DirectionalTexels out;
-  out.kind = reader::RadianceTableKind(info.kind);
-  out.resolution = int(info.resolution);
-  out.bins_per_side = int(info.bins_per_side);
-  out.cluster_count = int(info.cluster_count);
-  out.samples_per_bin_side = int(info.samples_per_bin_side);
-  out.lobes = info.lobes;
-  out.min_roughness = info.min_roughness;
+  DirectionalTexels out = empty_like(info);
   const std::size_t texels = out.texels(), bins = std::size_t(out.bins());
   const auto& columns = fill.columns();
   const auto& stored = fill.header().clusters;
