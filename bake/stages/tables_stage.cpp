@@ -54,17 +54,16 @@ void run_tables(pipeline::StageContext& ctx) {
   if (stream_into_compression(ctx)) {
     // The same records and report as the raw build; the values are produced by the compress
     // stage, bin by bin, from these fills.
-    auto plan = std::make_shared<StreamedTables>();
-    plan->inputs = radiance_inputs(fabric, clusters.labels, clusters.clusters);
-    for (const RadianceTableKind kind : {RadianceTableKind::Specular, RadianceTableKind::Gap}) {
-      QuantisedRadianceFill fill(kind, plan->inputs.view, options,
-                                 kind == RadianceTableKind::Specular ? &report : nullptr);
-      if (fill.empty()) continue;
+    std::vector<double> roughness;
+    for (const auto& yarn : fabric.yarns)
+      roughness.push_back(yarn.roughness);
+    streamed = make_streamed_tables(fabric.maps.resolution, fabric.maps.tangent, fabric.maps.gap,
+                                    fabric.maps.yarn_id, std::move(roughness), clusters.labels,
+                                    clusters.clusters, options, &report);
+    for (const auto& fill : streamed->fills) {
       bytes += fill.raw_sat_bytes();
       kinds.push_back(kind_summary(fill.header(), fill.raw_sat_bytes()));
-      plan->fills.push_back(std::move(fill));
     }
-    streamed = std::move(plan);
   } else {
     auto inputs = radiance_inputs(fabric, clusters.labels, clusters.clusters);
     std::vector<RadianceTableSet> sets = build_radiance_tables(inputs.view, options, &report);
