@@ -11,8 +11,6 @@
 
 #include "common/error.hpp"
 #include "compress/randomized_svd.hpp"
-#include "formats/reader/parallax_sections.hpp"
-#include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
 
 namespace clothbake::compress {
@@ -41,7 +39,7 @@ std::vector<double> parallax_offset_weights(int resolution, int dirs, double min
   return w;
 }
 
-void measure_parallax_error(const ParallaxCodes& raw, CompressedParallax* p) {
+void measure_parallax_pca_error(const ParallaxCodes& raw, ParallaxPca* p) {
   const std::size_t n = std::size_t(raw.resolution), texels = n * n;
   const std::size_t d = std::size_t(raw.dirs) * raw.dirs;
   const int k = p->rank;
@@ -99,8 +97,7 @@ namespace {
 
 // Quantises the projections of every texel on basis columns [0, rank) and fills `p`.
 void store(const ParallaxCodes& raw, const std::vector<double>& w, const std::vector<float>& mean,
-           const Eigen::MatrixXd& basis, const RowMatrixF& coeffs, int rank,
-           CompressedParallax* p) {
+           const Eigen::MatrixXd& basis, const RowMatrixF& coeffs, int rank, ParallaxPca* p) {
   const std::size_t texels = std::size_t(raw.resolution) * raw.resolution;
   const std::size_t d = w.size();
   p->rank = rank;
@@ -126,20 +123,20 @@ void store(const ParallaxCodes& raw, const std::vector<double>& w, const std::ve
 
 }  // namespace
 
-CompressedParallax compress_parallax(const ParallaxCodes& raw, const ParallaxPcaOptions& options) {
+ParallaxPca fit_parallax_pca(const ParallaxCodes& raw, const ParallaxPcaOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   if (!(options.max_error > 0.0 && options.max_error <= 1.0))
     throw_input_error("bake.parallax_max_error must be in (0, 1] texels, got " +
                       std::to_string(options.max_error));
-  if (options.rank_cap < 0 || options.rank_cap > int(reader::kMaxParallaxRank) ||
-      options.fixed_rank > int(reader::kMaxParallaxRank))
+  if (options.rank_cap < 0 || options.rank_cap > int(kMaxParallaxPcaRank) ||
+      options.fixed_rank > int(kMaxParallaxPcaRank))
     throw_input_error("parallax compression: rank out of range 0.." +
-                      std::to_string(reader::kMaxParallaxRank));
+                      std::to_string(kMaxParallaxPcaRank));
   if (raw.resolution < 1 || raw.dirs < 1 || raw.codes == nullptr)
     throw_input_error("parallax compression: empty table");
   const std::size_t n = std::size_t(raw.resolution), texels = n * n;
   const std::size_t d = std::size_t(raw.dirs) * raw.dirs;
-  CompressedParallax p;
+  ParallaxPca p;
   p.resolution = raw.resolution;
   p.dirs = raw.dirs;
   p.min_cos = raw.min_cos;
@@ -192,37 +189,12 @@ CompressedParallax compress_parallax(const ParallaxCodes& raw, const ParallaxPca
   if (have > 0) project_rows(a, svd.basis, &coeffs);
   for (;;) {
     store(raw, w, mean, svd.basis, coeffs, rank, &p);
-    measure_parallax_error(raw, &p);
+    measure_parallax_pca_error(raw, &p);
     if (options.fixed_rank >= 0 || p.rms_offset_error <= options.max_error || rank >= have) break;
     ++rank;  // quantisation pushed the error above the target
   }
   p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return p;
-}
-
-std::vector<formats::Section> compressed_parallax_sections(const CompressedParallax& p) {
-  const uint32_t n = uint32_t(p.resolution), d = uint32_t(p.dirs * p.dirs), k = uint32_t(p.rank);
-  reader::CompressedParallaxInfoRecord info{};
-  info.resolution = n;
-  info.dirs = uint32_t(p.dirs);
-  info.rank = k;
-  info.min_cos = p.min_cos;
-  info.reference_height = p.reference_height;
-  info.max_offset = p.max_offset;
-  info.rms_offset_error = p.rms_offset_error;
-  info.max_offset_error = p.max_offset_error;
-  std::vector<formats::Section> out;
-  out.push_back(formats::make_record_section(
-      reader::SectionType::ParallaxCompressed, reader::kCompressedParallaxInfoInstance,
-      std::span<const reader::CompressedParallaxInfoRecord>(&info, 1)));
-  out.push_back(formats::make_array_section<float>(reader::SectionType::ParallaxCompressed,
-                                                   reader::kCompressedParallaxBasisInstance,
-                                                   p.basis, {k + 1, d}));
-  // Rank 0: a zero-length coefficient section of shape {N, N, 0}.
-  out.push_back(formats::make_array_section<int16_t>(reader::SectionType::ParallaxCompressed,
-                                                     reader::kCompressedParallaxCoeffsInstance,
-                                                     p.coefficients, {n, n, k}));
-  return out;
 }
 
 }  // namespace clothbake::compress

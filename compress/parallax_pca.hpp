@@ -1,6 +1,8 @@
-// Compression of the parallax table (paper Sec. 3.2, Eq. 2) by principal components of the
-// per-texel directional vectors, into the sections of formats/reader/parallax_compressed.hpp
-// (docs/compression.md, "Compressed parallax", has the measurements behind every choice).
+// Principal components of the parallax table's per-texel directional vectors (paper Sec. 3.2,
+// Eq. 2): the candidate form that docs/compression.md, "Compressed parallax", measured and did not
+// choose (occlusion edges keep the RMS offset error near 1 texel at any affordable rank). Kept for
+// benchmarks/compress/parallax_study (the measurement is reproducible); the asset's compressed
+// form is compress/parallax_codes.hpp.
 //
 // What is compressed. Per texel x the table holds D = n^2 depths r(x, d) <= 0 (one per view bin).
 // r is smooth in the direction except at occlusion edges, so the D-vectors of all texels lie close
@@ -28,37 +30,24 @@
 #include <cstdint>
 #include <vector>
 
-namespace clothbake::formats {
-struct Section;
-}
+#include "compress/parallax_codes.hpp"  // ParallaxCodes
 
 namespace clothbake::compress {
 
-// Default [bake] parallax_max_error: RMS Eq. 2 offset error in texels (docs/compression.md).
-inline constexpr double kDefaultParallaxMaxError = 0.04;
+inline constexpr double kDefaultParallaxPcaError = 0.05;  // texels
 inline constexpr int kDefaultParallaxRankCap = 64;
+inline constexpr int kMaxParallaxPcaRank = 255;
 inline constexpr double kParallaxMinWeight = 0.1;  // floor of tan(theta) in the PCA weights
 
 struct ParallaxPcaOptions {
-  double max_error = kDefaultParallaxMaxError;  // texels, (0, 1]
+  double max_error = kDefaultParallaxPcaError;  // texels, (0, 1]
   int rank_cap = kDefaultParallaxRankCap;       // 0..255
   int fixed_rank = -1;                          // >= 0: exactly this rank (studies, tests)
   int power_iterations = 2;
   uint64_t seed = 1;
 };
 
-// The raw table as the parallax stage produces it (raycast::ParallaxTable without the dependency).
-struct ParallaxCodes {
-  const uint16_t* codes = nullptr;  // [dir][y][x], dir = j * n + i
-  int resolution = 0;               // N
-  int dirs = 0;                     // n
-  double min_cos = 0.6;
-  double depth_scale = 0.0;  // r = -code * depth_scale
-  double reference_height = 0.0;
-  double max_offset = 0.0;  // tile units (information)
-};
-
-struct CompressedParallax {
+struct ParallaxPca {
   int resolution = 0, dirs = 0, rank = 0;
   double min_cos = 0.6, reference_height = 0.0, max_offset = 0.0;
   std::vector<float> basis;           // (rank + 1) x D, row 0 the mean
@@ -77,12 +66,9 @@ struct CompressedParallax {
 std::vector<double> parallax_offset_weights(int resolution, int dirs, double min_cos);
 
 // Compresses the raw codes. Throws Error(Input) for options or shapes out of range.
-CompressedParallax compress_parallax(const ParallaxCodes& raw, const ParallaxPcaOptions& options);
+ParallaxPca fit_parallax_pca(const ParallaxCodes& raw, const ParallaxPcaOptions& options);
 
 // Measures the stored form against the raw codes (fills the four error fields of `packed`).
-void measure_parallax_error(const ParallaxCodes& raw, CompressedParallax* packed);
-
-// ParallaxCompressed instances 0 (info), 1 (basis), 2 (coefficients).
-std::vector<formats::Section> compressed_parallax_sections(const CompressedParallax& packed);
+void measure_parallax_pca_error(const ParallaxCodes& raw, ParallaxPca* packed);
 
 }  // namespace clothbake::compress

@@ -4,16 +4,18 @@
 //
 // Form (docs/compression.md, "Compressed parallax"): when compression is on (the default; the
 // bake's compress request, artifact kCompressSettingsArtifact, or [bake] compress), the table is
-// compressed (compress/parallax_pca.hpp) for [bake] parallax_max_error, and the raw codes and
-// their SATs are written only with --keep-raw. `--no-compress` (or compress = false) writes the
-// raw codes and SATs alone, exactly as format 1.0 did.
+// requantised to 8 bits per direction (compress/parallax_codes.hpp) if that meets [bake]
+// parallax_max_error (RMS offset error, texels; otherwise a warning and the raw form), and the
+// raw codes and their SATs are written only with --keep-raw. `--no-compress` (or compress = false)
+// writes the raw codes and SATs alone, exactly as format 1.0 did.
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
 #include "compress/compress_settings.hpp"
-#include "compress/parallax_pca.hpp"
+#include "compress/parallax_codes.hpp"
 #include "fabric/fabric.hpp"
+#include "formats/reader/parallax_sections.hpp"
 #include "raycast/parallax.hpp"
 #include "raycast/raycast_sections.hpp"
 
@@ -51,22 +53,22 @@ void run_parallax(pipeline::StageContext& ctx) {
                 fabric.bake, ctx.input<compress::CompressRequest>(kCompressSettingsArtifact))
           : compress::settings_from_bake(fabric.bake);
   std::vector<formats::Section> sections;
+  bool compressed = false;
   if (form.enabled) {
-    compress::ParallaxCodes raw{table.depth.data(), table.resolution,  table.dirs,
-                                table.min_cos,      table.depth_scale, table.reference_height,
-                                stats.max_sideways};
-    compress::ParallaxPcaOptions options;
-    options.max_error = fabric.bake.parallax_max_error;
-    options.seed = fabric.bake.seed;
-    const compress::CompressedParallax packed = compress::compress_parallax(raw, options);
+    const compress::ParallaxCodes raw{table.depth.data(), table.resolution,  table.dirs,
+                                      table.min_cos,      table.depth_scale, table.reference_height,
+                                      stats.max_sideways};
+    const double max_error = fabric.bake.parallax_max_error;
+    compress::QuantisedParallax packed = compress::quantise_parallax(raw);
     ctx.progress(0.99);
-    if (packed.rms_offset_error > options.max_error * 1.0001)
-      warn("parallax: the compressed table reaches an RMS offset error of " +
-           std::to_string(packed.rms_offset_error) + " texels at the rank cap " +
-           std::to_string(options.rank_cap) + ", above parallax_max_error " +
-           std::to_string(options.max_error));
-    meta["compressed"] = {{"max_error", options.max_error},
-                          {"rank", packed.rank},
+    compressed = packed.rms_offset_error <= max_error;
+    if (!compressed)
+      warn("parallax: 8-bit codes would reach an RMS offset error of " +
+           std::to_string(packed.rms_offset_error) + " texels, above parallax_max_error " +
+           std::to_string(max_error) + ": the raw 16-bit codes and SATs are written instead");
+    meta["compressed"] = {{"max_error", max_error},
+                          {"written", compressed},
+                          {"bits", reader::kCompressedParallaxBits},
                           {"rms_offset_error_texels", packed.rms_offset_error},
                           {"max_offset_error_texels", packed.max_offset_error},
                           {"share_above_quarter_texel", packed.share_above_quarter},
@@ -74,14 +76,12 @@ void run_parallax(pipeline::StageContext& ctx) {
                           {"compressed_bytes", packed.payload_bytes()},
                           {"raw_bytes", uint64_t(table.depth.size()) * 6},
                           {"seconds", ctx.options().record_timings ? packed.seconds : 0.0}};
-    meta["keep_raw"] = form.keep_raw;
-    sections = compress::compressed_parallax_sections(packed);
-    if (form.keep_raw)
-      for (auto& s : parallax_sections(std::move(table)))
-        sections.push_back(std::move(s));
-  } else {
-    sections = parallax_sections(std::move(table));
+    meta["keep_raw"] = form.keep_raw || !compressed;
+    if (compressed) sections = compress::compressed_parallax_sections(packed);
   }
+  if (!compressed || form.keep_raw)
+    for (auto& s : parallax_sections(std::move(table)))
+      sections.push_back(std::move(s));
   ctx.output("section/parallax", std::move(sections));
   ctx.progress(1.0);
   ctx.output("metadata/parallax", std::move(meta));

@@ -1,11 +1,14 @@
 // Study behind the compressed parallax form (docs/compression.md, "Compressed parallax"): one
 // asset's raw parallax codes (bake with --keep-raw or --no-compress), compared in three forms:
 //
-//   parallax_study ASSET pca RANK...     per-texel directional PCA at fixed ranks: stored size,
-//                                        offset errors, compression time, open time (prefix sums
-//                                        built), texel and footprint query rates
-//   parallax_study ASSET codes BITS...   codes requantised to BITS bits with a per-direction step
-//                                        in offset units, zstd -19 size (zstd CLI), errors
+//   parallax_study ASSET pca RANK...     per-texel directional PCA (compress/parallax_pca.hpp) at
+//                                        fixed ranks: stored size, offset errors, fit time
+//   parallax_study ASSET codes BITS...   codes requantised to BITS bits with a per-direction step,
+//                                        zstd -19 size (zstd CLI), errors
+//   parallax_study ASSET form            the asset's compressed form (compress/parallax_codes.hpp)
+//                                        through the reader: size, errors, open+checksum time,
+//                                        first-footprint (SAT build) cost, footprint errors
+//                                        against the raw table per size class, query rates
 //   parallax_study ASSET sat             raw codes without stored SATs: time to build the SATs
 //
 // Not part of the product; random texels/footprints from SplitMix64 (seed 3).
@@ -20,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "compress/parallax_codes.hpp"
 #include "compress/parallax_pca.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/parallax_sections.hpp"
@@ -31,13 +35,13 @@
 using namespace clothbake;
 
 static double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: parallax_study ASSET (pca RANK... | codes BITS... | sat)\n");
+    std::fprintf(stderr,
+                 "usage: parallax_study ASSET (pca RANK... | codes BITS... | form | sat)\n");
     return 2;
   }
   reader::Asset asset;
@@ -113,75 +117,88 @@ int main(int argc, char** argv) {
       const std::string cmd = "zstd -q -f -19 -T2 " + path + " -o " + path + ".zst";
       if (std::system(cmd.c_str()) != 0) return 1;
       const double tz = now() - t0;
-      std::printf("codes %2d bits: zstd -19 %.2f MB (%.1f s), RMS offset error %.4f texel, max "
-                  "%.3f; SATs at open as for 'sat'\n",
-                  param, std::filesystem::file_size(path + ".zst") / 1e6, tz,
-                  std::sqrt(sum2 / double(texels * d)), mx);
+      std::printf(
+          "codes %2d bits: zstd -19 %.2f MB (%.1f s), RMS offset error %.4f texel, max "
+          "%.3f; SATs at open as for 'sat'\n",
+          param, std::filesystem::file_size(path + ".zst") / 1e6, tz,
+          std::sqrt(sum2 / double(texels * d)), mx);
       continue;
     }
     compress::ParallaxPcaOptions options;
     options.fixed_rank = param;
-    const compress::CompressedParallax packed = compress::compress_parallax(pc, options);
-    // Serialise and open as a reader does.
-    std::vector<formats::Section> sections = compress::compressed_parallax_sections(packed);
-    const auto bytes = formats::serialize_asset(sections);
-    reader::Asset small;
-    double t0 = now();
-    st = small.open_memory(bytes.data(), bytes.size(), {reader::Verify::Checksums});
-    reader::ParallaxView view;
-    if (st.ok()) st = view.open(small);
-    const double t_open = now() - t0;
-    if (!st.ok()) {
-      std::fprintf(stderr, "%s\n", st.message());
-      return 1;
-    }
-    // Footprint errors against the raw table's exact footprint means (same direction), 4^2..
-    model::SplitMix64 rng(3);
-    auto uni = [&] { return double(rng.next() >> 11) * 0x1.0p-53; };
-    double fsum2[4] = {}, fmax[4] = {};
-    const int fsize[4] = {1, 4, 16, 64};
-    const int samples = 4000;
-    for (int c = 0; c < 4; ++c)
-      for (int s = 0; s < samples; ++s) {
-        const double x0 = uni() * n, y0 = uni() * n;
-        const double v[3] = {uni() * 2 - 1, uni() * 2 - 1, 0.6 + uni()};
-        reader::ParallaxSample a, b;
-        (void)raw.footprint_depth({x0, y0, x0 + fsize[c], y0 + fsize[c]}, v, &a);
-        (void)view.footprint_depth({x0, y0, x0 + fsize[c], y0 + fsize[c]}, v, &b);
-        const double e = std::hypot(a.offset[0] - b.offset[0], a.offset[1] - b.offset[1]) * n;
-        fsum2[c] += e * e;
-        fmax[c] = std::max(fmax[c], e);
-      }
-    // Query rates (1 thread).
-    const int queries = 2000000;
-    std::vector<double> pos(2 * 4096);
-    for (double& p : pos)
-      p = uni() * n;
-    const double v[3] = {0.3, -0.2, 0.9};
-    reader::ParallaxSample sample;
-    double acc = 0;
-    t0 = now();
-    for (int i = 0; i < queries; ++i) {
-      (void)view.depth(int64_t(pos[2 * (i & 4095)]), int64_t(pos[2 * (i & 4095) + 1]), v, &sample);
-      acc += sample.r;
-    }
-    const double t_texel = now() - t0;
-    t0 = now();
-    for (int i = 0; i < queries / 4; ++i) {
-      const double x0 = pos[2 * (i & 4095)], y0 = pos[2 * (i & 4095) + 1];
-      (void)view.footprint_depth({x0, y0, x0 + 6.5, y0 + 6.5}, v, &sample);
-      acc += sample.r;
-    }
-    const double t_fp = now() - t0;
-    std::printf("pca rank %3d: %.2f MB, RMS offset error %.4f texel (max %.2f, %.4f%% > 0.25), "
-                "compress %.2f s, open+checksums %.1f ms; footprint RMS error 1^2 %.4f 4^2 %.4f "
-                "16^2 %.4f 64^2 %.4f texel; texel queries %.1f M/s, footprint %.1f M/s (%g)\n",
-                packed.rank, packed.payload_bytes() / 1e6, packed.rms_offset_error,
-                packed.max_offset_error, 100 * packed.share_above_quarter, packed.seconds,
-                1e3 * t_open, std::sqrt(fsum2[0] / samples), std::sqrt(fsum2[1] / samples),
-                std::sqrt(fsum2[2] / samples), std::sqrt(fsum2[3] / samples),
-                queries / t_texel / 1e6, queries / 4 / t_fp / 1e6, acc * 0);
+    const compress::ParallaxPca packed = compress::fit_parallax_pca(pc, options);
+    std::printf(
+        "pca rank %3d: %.2f MB, RMS offset error %.4f texel (max %.2f, %.2f%% > 0.25), "
+        "fit %.2f s\n",
+        packed.rank, packed.payload_bytes() / 1e6, packed.rms_offset_error, packed.max_offset_error,
+        100 * packed.share_above_quarter, packed.seconds);
     std::fflush(stdout);
   }
+  if (mode != "form") return 0;
+  const compress::QuantisedParallax packed = compress::quantise_parallax(pc);
+  std::vector<formats::Section> sections = compress::compressed_parallax_sections(packed);
+  const auto bytes = formats::serialize_asset(sections);
+  reader::Asset small;
+  double t0 = now();
+  st = small.open_memory(bytes.data(), bytes.size(), {reader::Verify::Checksums});
+  reader::ParallaxView view;
+  if (st.ok()) st = view.open(small);
+  const double t_open = now() - t0;
+  if (!st.ok()) {
+    std::fprintf(stderr, "%s\n", st.message());
+    return 1;
+  }
+  t0 = now();
+  (void)view.ensure_sat(0);
+  const double t_sat = now() - t0;
+  model::SplitMix64 rng(3);
+  auto uni = [&] { return rng.uniform(); };
+  double fsum2[5] = {}, fmax[5] = {};
+  const int fsize[5] = {1, 2, 4, 16, 64};
+  const int samples = 20000;
+  for (int c = 0; c < 5; ++c)
+    for (int s = 0; s < samples; ++s) {
+      const double x0 = uni() * n, y0 = uni() * n;
+      const double v[3] = {uni() * 2 - 1, uni() * 2 - 1, 0.6 + uni()};
+      reader::ParallaxSample a, b;
+      (void)raw.footprint_depth({x0, y0, x0 + fsize[c], y0 + fsize[c]}, v, &a);
+      (void)view.footprint_depth({x0, y0, x0 + fsize[c], y0 + fsize[c]}, v, &b);
+      const double e = std::hypot(a.offset[0] - b.offset[0], a.offset[1] - b.offset[1]) * n;
+      fsum2[c] += e * e;
+      fmax[c] = std::max(fmax[c], e);
+    }
+  for (uint32_t b = 0; b < d; ++b)
+    (void)view.ensure_sat(b);
+  const int queries = 4000000;
+  std::vector<double> pos(2 * 4096);
+  for (double& p : pos)
+    p = uni() * n;
+  const double v[3] = {0.3, -0.2, 0.9};
+  reader::ParallaxSample sample;
+  double acc = 0;
+  t0 = now();
+  for (int i = 0; i < queries; ++i) {
+    (void)view.depth(int64_t(pos[2 * (i & 4095)]), int64_t(pos[2 * (i & 4095) + 1]), v, &sample);
+    acc += sample.r;
+  }
+  const double t_texel = now() - t0;
+  t0 = now();
+  for (int i = 0; i < queries; ++i) {
+    const double x0 = pos[2 * (i & 4095)], y0 = pos[2 * (i & 4095) + 1];
+    (void)view.footprint_depth({x0, y0, x0 + 6.5, y0 + 6.5}, v, &sample);
+    acc += sample.r;
+  }
+  const double t_fp = now() - t0;
+  std::printf(
+      "form: %.2f MB (8-bit codes), quantise %.2f s; RMS offset error %.4f texel (max "
+      "%.3f, %.4f%% > 0.25); open+checksums %.1f ms, first footprint in a direction "
+      "+%.2f ms (its SAT)\n",
+      packed.payload_bytes() / 1e6, packed.seconds, packed.rms_offset_error,
+      packed.max_offset_error, 100 * packed.share_above_quarter, 1e3 * t_open, 1e3 * t_sat);
+  for (int c = 0; c < 5; ++c)
+    std::printf("  footprint %2d^2: offset error against raw RMS %.5f, max %.4f texel\n", fsize[c],
+                std::sqrt(fsum2[c] / samples), fmax[c]);
+  std::printf("  queries (1 thread): texel %.1f M/s, footprint 6.5^2 %.1f M/s (checksum %g)\n",
+              queries / t_texel / 1e6, queries / t_fp / 1e6, acc * 0);
   return 0;
 }

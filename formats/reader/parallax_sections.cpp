@@ -19,15 +19,25 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 
 }  // namespace
 
-// The compressed form, decoded by open(): bin-major basis (bin b's K + 1 values contiguous) and
-// the exclusive prefix sums of the coefficients, sat[(j * (N + 1) + i) * K + k] = sum of q_k over
-// texels [0, i) x [0, j) (|sum| <= 32768 * 2^28 < 2^63: exact for any N).
+// The compressed form's on-demand SATs: one u32 inclusive SAT per direction (the ParallaxSat
+// layout), built once under its flag and published through the atomic pointer.
 struct ParallaxView::Packed {
-  uint32_t n = 0, k = 0;
-  std::unique_ptr<double[]> basis;        // D x (K + 1)
-  std::unique_ptr<int64_t[]> sat;         // (N + 1)^2 x K
-  const int16_t* coefficients = nullptr;  // N x N x K, in the asset
-  uint64_t bytes = 0;
+  explicit Packed(uint64_t dirs)
+      : flags(new std::once_flag[dirs]), sats(new std::atomic<uint32_t*>[dirs]) {
+    for (uint64_t d = 0; d < dirs; ++d)
+      sats[d].store(nullptr, std::memory_order_relaxed);
+    count = dirs;
+  }
+  ~Packed() {
+    for (uint64_t d = 0; d < count; ++d)
+      delete[] sats[d].load(std::memory_order_relaxed);
+  }
+  Packed(const Packed&) = delete;
+  Packed& operator=(const Packed&) = delete;
+  uint64_t count = 0;
+  std::unique_ptr<std::once_flag[]> flags;
+  std::unique_ptr<std::atomic<uint32_t*>[]> sats;
+  std::atomic<uint64_t> bytes{0};
 };
 
 Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
@@ -38,14 +48,12 @@ Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
   } else {
     s = open_raw(asset);
     if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound) {
-      SectionInfo unused;
-      if (asset.find(SectionType::ParallaxCompressed, kCompressedParallaxInfoInstance, &unused)
-              .ok() ||
-          asset.find(SectionType::ParallaxCompressed, kCompressedParallaxBasisInstance, &unused)
-              .ok() ||
-          asset.find(SectionType::ParallaxCompressed, kCompressedParallaxCoeffsInstance, &unused)
-              .ok())
-        s = open_compressed(asset);
+      bool any = false;
+      for (uint32_t i = 0; i < 3 && !any; ++i) {
+        SectionInfo unused;
+        any = asset.find(SectionType::ParallaxCompressed, i, &unused).ok();
+      }
+      if (any) s = open_compressed(asset);
     }
   }
   if (!s.ok()) *this = ParallaxView();
@@ -53,29 +61,33 @@ Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
 }
 
 uint64_t ParallaxView::decoded_bytes() const noexcept {
-  return packed_ ? packed_->bytes : 0;
+  return packed_ ? packed_->bytes.load(std::memory_order_relaxed) : 0;
+}
+
+double ParallaxView::depth_step(uint32_t bin) const noexcept {
+  return steps_ ? steps_[bin] : info_.depth_scale;
 }
 
 Status ParallaxView::open_compressed(const Asset& asset) noexcept {
   ArrayView<uint8_t> info_bytes;
-  ArrayView<float> basis;
+  ArrayView<double> steps;
   Status s = detail::view_required_pair(
       asset, {SectionType::ParallaxCompressed, kCompressedParallaxInfoInstance},
-      {SectionType::ParallaxCompressed, kCompressedParallaxBasisInstance},
+      {SectionType::ParallaxCompressed, kCompressedParallaxStepsInstance},
       "this asset has no compressed parallax table (parallax_compressed instances 0, 1 and 2)",
       "parallax_compressed: payload version must be 1 (this reader knows version 1)", &info_bytes,
-      &basis);
+      &steps);
   if (!s.ok()) return s;
-  ArrayView<int16_t> coeffs;
-  bool have_coeffs = false;
-  s = detail::view_optional(
-      asset, {SectionType::ParallaxCompressed, kCompressedParallaxCoeffsInstance},
-      "parallax_compressed: payload version must be 1", &coeffs, &have_coeffs);
+  ArrayView<uint8_t> codes;
+  bool have_codes = false;
+  s = detail::view_optional(asset,
+                            {SectionType::ParallaxCompressed, kCompressedParallaxCodesInstance},
+                            "parallax_compressed: payload version must be 1", &codes, &have_codes);
   if (!s.ok()) return s;
-  if (!have_coeffs)
+  if (!have_codes)
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
                          "this asset has no compressed parallax table (parallax_compressed "
-                         "instance 2, the coefficients, is missing)");
+                         "instance 2, the codes, is missing)");
   if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
       info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
@@ -83,18 +95,18 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
                          "CompressedParallaxInfoRecord)");
   CompressedParallaxInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
-  if (info.flags != 0)
+  if (info.flags != 0 || info.bits != kCompressedParallaxBits)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "parallax_compressed: flags %u unknown to this reader (version 1 has 0)",
-                         unsigned(info.flags));
+                         "parallax_compressed: bits %u / flags %u unknown to this reader (version "
+                         "1 has 8 / 0)",
+                         unsigned(info.bits), unsigned(info.flags));
   if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
-      info.dirs > kMaxParallaxDirs || info.rank > kMaxParallaxRank)
+      info.dirs > kMaxParallaxDirs)
     return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                         "parallax_compressed: resolution %u, directions %u or rank %u out of "
-                         "range (1..%u, 1..%u, 0..%u)",
-                         unsigned(info.resolution), unsigned(info.dirs), unsigned(info.rank),
-                         unsigned(kMaxParallaxResolution), unsigned(kMaxParallaxDirs),
-                         unsigned(kMaxParallaxRank));
+                         "parallax_compressed: resolution %u or directions %u out of range "
+                         "(1..%u, 1..%u)",
+                         unsigned(info.resolution), unsigned(info.dirs),
+                         unsigned(kMaxParallaxResolution), unsigned(kMaxParallaxDirs));
   if (!(info.min_cos >= 0.0 && info.min_cos < 1.0) || !std::isfinite(info.reference_height) ||
       !(info.max_offset >= 0.0 && std::isfinite(info.max_offset)) ||
       !(info.rms_offset_error >= 0.0 && std::isfinite(info.rms_offset_error)) ||
@@ -103,78 +115,67 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
     return Status::error(ErrorCode::Malformed, Check::ValueRange,
                          "parallax_compressed: min_cos, reference height, max offset or an error "
                          "out of range");
-  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs, k = info.rank;
-  if (basis.rank != 2 || basis.dims[0] != k + 1 || basis.dims[1] != d)
+  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
+  if (steps.rank != 1 || steps.dims[0] != d)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_compressed instance 1 must be f32 {%llu, %llu} (rank + 1, "
-                         "directions)",
-                         static_cast<unsigned long long>(k + 1),
+                         "parallax_compressed instance 1 must be f64 {%llu} (one step per "
+                         "direction)",
                          static_cast<unsigned long long>(d));
-  if (coeffs.rank != 3 || coeffs.dims[0] != n || coeffs.dims[1] != n || coeffs.dims[2] != k)
+  if (codes.rank != 3 || codes.dims[0] != d || codes.dims[1] != n || codes.dims[2] != n)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_compressed instance 2 must be i16 {%llu, %llu, %llu} (N, N, "
-                         "rank)",
-                         static_cast<unsigned long long>(n), static_cast<unsigned long long>(n),
-                         static_cast<unsigned long long>(k));
-  for (uint64_t i = 0; i < basis.size; ++i)
-    if (!std::isfinite(basis.data[i]))
-      return Status::error(ErrorCode::Malformed, Check::NonFinite,
-                           "parallax_compressed: basis value %llu (row %llu, direction %llu) is "
-                           "not finite",
-                           static_cast<unsigned long long>(i),
-                           static_cast<unsigned long long>(i / d),
-                           static_cast<unsigned long long>(i % d));
-  const uint64_t sat_count = (n + 1) * (n + 1) * k;
-  const uint64_t bytes = sat_count * 8 + d * (k + 1) * 8;
-  if (bytes > kMaxParallaxDecodedBytes)
+                         "parallax_compressed instance 2 must be u8 {%llu, %llu, %llu} "
+                         "(directions, N, N)",
+                         static_cast<unsigned long long>(d), static_cast<unsigned long long>(n),
+                         static_cast<unsigned long long>(n));
+  for (uint64_t i = 0; i < d; ++i)
+    if (!(steps.data[i] >= 0.0 && steps.data[i] <= 1.0))  // also NaN
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "parallax_compressed: step of direction %llu is not in [0, 1] "
+                           "tile-side units",
+                           static_cast<unsigned long long>(i));
+  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
+  if (!packed)
     return Status::error(ErrorCode::Unsupported, Check::None,
-                         "parallax_compressed: the decoded table would need %llu bytes (limit "
-                         "%llu)",
-                         static_cast<unsigned long long>(bytes),
-                         static_cast<unsigned long long>(kMaxParallaxDecodedBytes));
-  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed);
-  if (packed) {
-    packed->basis.reset(new (std::nothrow) double[d * (k + 1)]);
-    if (k) packed->sat.reset(new (std::nothrow) int64_t[sat_count]);
-  }
-  if (!packed || !packed->basis || (k && !packed->sat))
-    return Status::error(ErrorCode::Unsupported, Check::None,
-                         "parallax_compressed: cannot allocate %llu bytes for the decoded table",
-                         static_cast<unsigned long long>(bytes));
-  packed->n = uint32_t(n);
-  packed->k = uint32_t(k);
-  packed->coefficients = coeffs.data;
-  packed->bytes = bytes;
-  for (uint64_t row = 0; row <= k; ++row)
-    for (uint64_t b = 0; b < d; ++b)
-      packed->basis[b * (k + 1) + row] = double(basis.data[row * d + b]);
-  if (k) {
-    int64_t* sat = packed->sat.get();
-    const uint64_t stride = (n + 1) * k;
-    std::memset(sat, 0, sizeof(int64_t) * stride);  // row j = 0
-    for (uint64_t y = 0; y < n; ++y) {
-      const int64_t* above = sat + y * stride;
-      int64_t* row = sat + (y + 1) * stride;
-      for (uint64_t c = 0; c < k; ++c)
-        row[c] = 0;  // column i = 0
-      const int16_t* q = coeffs.data + y * n * k;
-      for (uint64_t x = 0; x < n; ++x)
-        for (uint64_t c = 0; c < k; ++c)  // P(x+1, y+1) = q + P(x, y+1) + P(x+1, y) - P(x, y)
-          row[(x + 1) * k + c] =
-              int64_t(q[x * k + c]) + row[x * k + c] + above[(x + 1) * k + c] - above[x * k + c];
-    }
-  }
+                         "parallax_compressed: cannot allocate the SAT directory");
   info_ = ParallaxInfoRecord{};
   info_.resolution = info.resolution;
   info_.dirs = info.dirs;
   info_.min_cos = info.min_cos;
   info_.reference_height = info.reference_height;
-  info_.depth_scale = 0.0;  // no codes
+  info_.depth_scale = 0.0;  // per direction: depth_step()
   info_.max_quantization_error = info.max_depth_error;
   info_.max_offset = info.max_offset;
   packed_info_ = info;
+  codes8_ = codes.data;
+  steps_ = steps.data;
   packed_ = std::move(packed);
   return {};
+}
+
+bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
+  if (!packed_) return true;
+  Packed& p = *packed_;
+  std::call_once(p.flags[bin], [&] {
+    const uint64_t n = info_.resolution;
+    uint32_t* sat = new (std::nothrow) uint32_t[n * n];
+    if (!sat) return;  // stays null: the query reports it
+    const uint8_t* src = codes8_ + uint64_t(bin) * n * n;
+    for (uint64_t y = 0; y < n; ++y) {
+      uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
+      for (uint64_t x = 0; x < n; ++x) {
+        row += src[y * n + x];
+        sat[y * n + x] = row + (y > 0 ? sat[(y - 1) * n + x] : 0u);
+      }
+    }
+    p.bytes.fetch_add(n * n * 4, std::memory_order_relaxed);
+    p.sats[bin].store(sat, std::memory_order_release);
+  });
+  return p.sats[bin].load(std::memory_order_acquire) != nullptr;
+}
+
+const uint32_t* ParallaxView::bin_sat(uint32_t bin) const noexcept {
+  if (!packed_) return sat_ + uint64_t(bin) * info_.resolution * info_.resolution;
+  return packed_->sats[bin].load(std::memory_order_acquire);
 }
 
 Status ParallaxView::open_raw(const Asset& asset) noexcept {
@@ -234,19 +235,9 @@ Status ParallaxView::open_raw(const Asset& asset) noexcept {
 
 double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
-  if (packed_) {
-    const uint32_t k = packed_->k;
-    const double* b = packed_->basis.get() + uint64_t(bin) * (k + 1);
-    const int16_t* q =
-        packed_->coefficients + (uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n))) * k;
-    double r = b[0];
-    for (uint32_t c = 0; c < k; ++c)
-      r += double(q[c]) * b[c + 1];
-    return r;
-  }
   const uint64_t index =
       (uint64_t(bin) * uint64_t(n) + uint64_t(wrap(y, n))) * uint64_t(n) + uint64_t(wrap(x, n));
-  return -double(codes_[index]) * info_.depth_scale;
+  return -double(code(index)) * depth_step(bin);
 }
 
 Status ParallaxView::view_direction(const double view[3], double o[3]) const noexcept {
@@ -276,28 +267,13 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
                                     int64_t y) const noexcept {
   const uint64_t n = info_.resolution;
   const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
-  if (packed_) {
-    const uint32_t k = packed_->k;
-    const double* rows[4];
-    double w[4];
-    int m = 0;
-    for (int j = 0; j < 4; ++j)
-      if (weight[j] > 0.0) {
-        rows[m] = packed_->basis.get() + uint64_t(bin[j]) * (k + 1);
-        w[m++] = weight[j];
-      }
-    for (int j = m; j < 4; ++j) {  // pad with zero weights on the first row
-      rows[j] = m ? rows[0] : packed_->basis.get();
-      w[j] = 0.0;
-    }
-    const int16_t* q = packed_->coefficients + texel * k;
-    double r = w[0] * rows[0][0] + w[1] * rows[1][0] + w[2] * rows[2][0] + w[3] * rows[3][0];
-    for (uint32_t c = 1; c <= k; ++c)
-      r += double(q[c - 1]) *
-           (w[0] * rows[0][c] + w[1] * rows[1][c] + w[2] * rows[2][c] + w[3] * rows[3][c]);
+  double r = 0.0;
+  if (codes8_) {
+    for (int k = 0; k < 4; ++k)
+      if (weight[k] > 0.0)
+        r += weight[k] * (-double(codes8_[uint64_t(bin[k]) * n * n + texel]) * steps_[bin[k]]);
     return r;
   }
-  double r = 0.0;
   for (int k = 0; k < 4; ++k)
     if (weight[k] > 0.0)
       r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) * info_.depth_scale);
@@ -327,7 +303,8 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
 uint64_t ParallaxView::code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
   if (x == 0 || y == 0) return 0;
   const uint64_t n = info_.resolution;
-  const uint32_t* table = sat_ + uint64_t(bin) * n * n;
+  const uint32_t* table = bin_sat(bin);
+  if (table == nullptr) return 0;
   auto s = [&](uint64_t i, uint64_t j) -> uint32_t {  // exclusive prefix, modulo 2^32
     return (i == 0 || j == 0) ? 0u : table[(j - 1) * n + (i - 1)];
   };
@@ -359,7 +336,7 @@ double ParallaxView::prefix_integral(uint32_t bin, double x, double y) const noe
   if (fx > 0.0 && fy > 0.0) {
     // The texel (i, j) itself: its code times the covered fraction fx * fy.
     const uint64_t texel = (uint64_t(bin) * n + j) * n + i;
-    value += fx * fy * double(codes_[texel]);
+    value += fx * fy * double(code(texel));
   }
   return value;
 }
@@ -374,63 +351,6 @@ double ParallaxView::footprint_code_sum(uint32_t bin, const FootprintPlan& p) co
   return f;
 }
 
-// The compressed footprint mean: the coefficient integrals W_k over the plan (the raw form's
-// formula with K values at once; the integral of piecewise-constant q over [0, x) x [0, y) is
-// exactly the bilinear interpolation of the integer prefix sums at the 4 surrounding corners),
-// then r = sum_b w_b (B[0][b] + sum_k W_k / area B[k][b]).
-double ParallaxView::packed_footprint(const FootprintPlan& p, const int bin[4],
-                                      const double weight[4], double area) const noexcept {
-  const Packed& pk = *packed_;
-  const uint32_t k = pk.k, n = pk.n;
-  double integral[kMaxParallaxRank];
-  for (uint32_t c = 0; c < k; ++c)
-    integral[c] = 0.0;
-  const uint64_t stride = uint64_t(n + 1) * k;
-  auto add = [&](double x, double y, double scale) {
-    if (scale == 0.0) return;
-    uint32_t i = uint32_t(x), j = uint32_t(y);
-    if (i > n) i = n;
-    if (j > n) j = n;
-    const double fx = i < n ? x - double(i) : 0.0, fy = j < n ? y - double(j) : 0.0;
-    const uint32_t i1 = i < n ? i + 1 : n, j1 = j < n ? j + 1 : n;
-    const int64_t* p00 = pk.sat.get() + uint64_t(j) * stride + uint64_t(i) * k;
-    const int64_t* p10 = pk.sat.get() + uint64_t(j) * stride + uint64_t(i1) * k;
-    const int64_t* p01 = pk.sat.get() + uint64_t(j1) * stride + uint64_t(i) * k;
-    const int64_t* p11 = pk.sat.get() + uint64_t(j1) * stride + uint64_t(i1) * k;
-    const double w00 = scale * (1 - fx) * (1 - fy), w10 = scale * fx * (1 - fy),
-                 w01 = scale * (1 - fx) * fy, w11 = scale * fx * fy;
-    for (uint32_t c = 0; c < k; ++c)
-      integral[c] +=
-          w00 * double(p00[c]) + w10 * double(p10[c]) + w01 * double(p01[c]) + w11 * double(p11[c]);
-  };
-  const double nd = double(n);
-  if (k) {
-    add(p.rx1, p.ry1, 1.0);
-    add(p.x0, p.ry1, -1.0);
-    add(p.rx1, p.y0, -1.0);
-    add(p.x0, p.y0, 1.0);
-    if (p.qx > 0) {
-      add(nd, p.ry1, p.qx);
-      add(nd, p.y0, -p.qx);
-    }
-    if (p.qy > 0) {
-      add(p.rx1, nd, p.qy);
-      add(p.x0, nd, -p.qy);
-    }
-    if (p.qx > 0 && p.qy > 0) add(nd, nd, p.qx * p.qy);
-  }
-  double r = 0.0;
-  for (int b = 0; b < 4; ++b) {
-    if (!(weight[b] > 0.0)) continue;
-    const double* row = pk.basis.get() + uint64_t(bin[b]) * (k + 1);
-    double v = row[0] * area;
-    for (uint32_t c = 0; c < k; ++c)
-      v += integral[c] * row[c + 1];
-    r += weight[b] * v;
-  }
-  return r / area;
-}
-
 Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3],
                                      ParallaxSample* out) const noexcept {
   if (!is_open() || out == nullptr)
@@ -438,7 +358,7 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   if (!has_sat())
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
                          "this asset has no parallax_sat section (footprint queries need it)");
-  // (The compressed form always answers footprints: its prefix sums are built by open().)
+
   FootprintPlan plan;
   Status s = plan_footprint(rect, info_.resolution, &plan);
   if (!s.ok()) return s;
@@ -450,15 +370,21 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
-  double r;
-  if (packed_) {
-    r = packed_footprint(plan, w.index, w.weight, area);
-  } else {
-    double sum = 0.0;
+  double sum = 0.0;
+  if (steps_ == nullptr) {  // raw: one depth scale
     for (int k = 0; k < 4; ++k)
       if (w.weight[k] > 0.0) sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan);
-    r = -sum * info_.depth_scale / area;
+    sum *= info_.depth_scale;
+  } else {
+    for (int k = 0; k < 4; ++k)
+      if (w.weight[k] > 0.0) {
+        if (!ensure_sat(uint32_t(w.index[k])))
+          return Status::error(ErrorCode::Unsupported, Check::None,
+                               "parallax: cannot allocate the SAT of direction %d", w.index[k]);
+        sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan) * steps_[w.index[k]];
+      }
   }
+  const double r = -sum / area;
   out->r = r;
   out->offset[0] = r / o[2] * o[0];
   out->offset[1] = r / o[2] * o[1];

@@ -18,16 +18,16 @@
 // With 16-bit codes a sum over any rectangle of at most 65537 texels is below 2^32, so modular
 // differences of four SAT values are exact; larger rectangles are summed in bands (exact too).
 //
-// Compressed form (format 1.1; compress/parallax_pca.hpp writes it, docs/compression.md says why):
-//   ParallaxCompressed instance 0: u8 {1, 64}    one CompressedParallaxInfoRecord
-//   ParallaxCompressed instance 1: f32 {K+1, D}  B: row 0 the mean, rows 1..K the scaled basis
-//   ParallaxCompressed instance 2: i16 {N, N, K} q: texel (x, y)'s K coefficients at [y][x][.]
-//   r(x, y, d) = B[0][d] + sum_{k=1..K} q[y][x][k-1] B[k][d]   (double accumulation)
-// open() builds the exact integer prefix sums of the K coefficients ((N+1)^2 K int64, interleaved
-// per SAT point): a footprint mean is then B[0] + sum_k (integral of q_k / area) B[k], the same
-// linear form as a texel, in O(K) whatever the footprint size. Unlike raw codes, decoded r can
-// be slightly above 0 (within the stored error); nothing clamps it, so that footprint means stay
-// the exact means of the per-texel values.
+// Compressed form (format 1.1; compress/parallax_codes.hpp writes it, docs/compression.md says
+// why this form and not a directional PCA):
+//   ParallaxCompressed instance 0: u8 {1, 64}   one CompressedParallaxInfoRecord
+//   ParallaxCompressed instance 1: f64 {D}      step[d]: tile-side units per code of direction d
+//   ParallaxCompressed instance 2: u8 {D, N, N} codes: r = -code * step[d], same order as above
+// No SAT is stored: the view builds a direction's u32 SAT (the ParallaxSat layout) the first time
+// a footprint query needs that direction (thread-safe, once per direction), so that opening costs
+// nothing and a renderer that looks from a few directions builds only those. 8-bit codes sum to
+// at most 255 * 2^24 < 2^32 over any rectangle for N <= 4096: the SAT is exact there (larger N
+// is summed in bands like the raw form).
 //
 // Queries take the view direction as any finite non-zero vector; it is normalised and, below the
 // cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
@@ -38,9 +38,11 @@
 // Asset::open accepted (shapes and parameter ranges are checked by ParallaxView::open).
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 
 #include "formats/reader/asset.hpp"
 #include "formats/reader/radiance_query.hpp"  // Footprint, plan_footprint
@@ -52,11 +54,9 @@ inline constexpr uint32_t kParallaxCodesInstance = 1;
 inline constexpr uint32_t kMaxParallaxDirs = 256;
 inline constexpr uint32_t kMaxParallaxResolution = 16384;
 inline constexpr uint32_t kCompressedParallaxInfoInstance = 0;
-inline constexpr uint32_t kCompressedParallaxBasisInstance = 1;
-inline constexpr uint32_t kCompressedParallaxCoeffsInstance = 2;
-inline constexpr uint32_t kMaxParallaxRank = 255;
-// Largest decoded prefix-sum table open() allocates for a compressed table (bytes).
-inline constexpr uint64_t kMaxParallaxDecodedBytes = uint64_t(4) << 30;
+inline constexpr uint32_t kCompressedParallaxStepsInstance = 1;
+inline constexpr uint32_t kCompressedParallaxCodesInstance = 2;
+inline constexpr uint32_t kCompressedParallaxBits = 8;
 
 // Info v1: one record, shape {1, 64}.
 struct ParallaxInfoRecord {
@@ -84,7 +84,7 @@ static_assert(offsetof(ParallaxInfoRecord, reserved) == 48);
 struct CompressedParallaxInfoRecord {
   uint32_t resolution;      // N, 1..16384
   uint32_t dirs;            // n: n x n view directions, 1..256
-  uint32_t rank;            // K, 0..255
+  uint32_t bits;            // bits per code: 8 (the only value of version 1)
   uint32_t flags;           // 0 in version 1
   double min_cos;           // the cap, [0, 1)
   double reference_height;  // z_ref, tile-side units (finite)
@@ -97,7 +97,7 @@ static_assert(sizeof(CompressedParallaxInfoRecord) == 64);
 static_assert(alignof(CompressedParallaxInfoRecord) == 8);
 static_assert(offsetof(CompressedParallaxInfoRecord, resolution) == 0);
 static_assert(offsetof(CompressedParallaxInfoRecord, dirs) == 4);
-static_assert(offsetof(CompressedParallaxInfoRecord, rank) == 8);
+static_assert(offsetof(CompressedParallaxInfoRecord, bits) == 8);
 static_assert(offsetof(CompressedParallaxInfoRecord, flags) == 12);
 static_assert(offsetof(CompressedParallaxInfoRecord, min_cos) == 16);
 static_assert(offsetof(CompressedParallaxInfoRecord, reference_height) == 24);
@@ -125,30 +125,30 @@ struct ParallaxSample {
 class ParallaxView {
  public:
   // Errors: NotFound (CBK-E019: no parallax table of the form asked for), WrongType/Unsupported
-  // (CBK-E015: version, element type, shape, SAT shape differing from the table's, flags),
-  // Malformed (CBK-E021: a parameter out of range; CBK-E017: a NaN/Inf basis value), Unsupported
-  // (the compressed table's prefix sums would exceed kMaxParallaxDecodedBytes or cannot be
-  // allocated). The raw SAT is optional (has_sat()); the compressed form always has footprints.
+  // (CBK-E015: version, element type, shape, SAT shape differing from the table's, bits, flags),
+  // Malformed (CBK-E021: a parameter or step out of range, NaN/Inf included). The raw SAT is
+  // optional (has_sat()); the compressed form always answers footprints (SATs built on demand;
+  // footprint_depth returns Unsupported if one cannot be allocated).
   Status open(const Asset& asset, ParallaxSource source = ParallaxSource::Auto) noexcept;
   bool is_open() const noexcept { return codes_ != nullptr || packed_ != nullptr; }
   bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
   bool is_compressed() const noexcept { return packed_ != nullptr; }
-  // Compressed form: its record and rank K (0 for the raw form).
+  // Compressed form: its record (zero for the raw form).
   const CompressedParallaxInfoRecord& compressed_info() const noexcept { return packed_info_; }
-  uint32_t rank() const noexcept { return packed_info_.rank; }
-  // Bytes of the decoded prefix sums and basis held by the compressed form (0 for raw).
+  // Bytes of the SATs the compressed form has built so far (0 for raw).
   uint64_t decoded_bytes() const noexcept;
+  // The depth step of `bin` (tile-side units per code; the raw form's depth_scale for every bin).
+  double depth_step(uint32_t bin) const noexcept;
 
   const ParallaxInfoRecord& info() const noexcept { return info_; }
   uint32_t resolution() const noexcept { return info_.resolution; }
   uint32_t dirs() const noexcept { return info_.dirs; }
 
   // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2.
-  // Compressed form: O(K).
   double bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept;
   // sum over k < 4 with weight[k] > 0 of weight[k] * bin_depth(bin[k], x, y), wrapping (x, y)
   // once: the per-texel depth for bilinear weights computed once per view (the evaluator's hot
-  // path). Precondition: every bin with a positive weight < dirs^2. Compressed form: O(4 K).
+  // path). Precondition: every bin with a positive weight < dirs^2.
   double weighted_depth(const int bin[4], const double weight[4], int64_t x,
                         int64_t y) const noexcept;
 
@@ -162,32 +162,39 @@ class ParallaxView {
 
   // The mean of r over a footprint rectangle (texel units, any size and position; the tile wraps;
   // partially covered texels count with their covered area), from the SATs in O(1) for N <= 256
-  // (4 to 9 lookups per bin, at most 4 bins; compressed: 4 to 9 prefix points of K coefficients
-  // each, whatever N), and the Eq. 2 offset of that mean. A zero-area
+  // (4 to 9 lookups per bin, at most 4 bins), and the Eq. 2 offset of that mean. A zero-area
   // rectangle gives the texel that contains (x0, y0). Errors: NotFound (no SAT), InvalidArgument
   // (rectangle as for plan_footprint, view).
   Status footprint_depth(const Footprint& rect, const double view[3],
                          ParallaxSample* out) const noexcept;
 
   // The exact sum of the codes of `bin` over texels [0, x) x [0, y), 0 <= x, y <= N (from the
-  // SAT; exact for any N). Precondition: the raw form with a SAT (!is_compressed()), bin < dirs^2.
+  // SAT; exact for any N). Precondition: has_sat(), bin < dirs^2; compressed form: the bin's SAT
+  // built (footprint_depth or ensure_sat did), else 0.
   uint64_t code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
+  // Builds the compressed form's SAT of `bin` now (no-op for raw); false if it cannot be allocated.
+  // Thread-safe. Precondition: bin < dirs^2.
+  bool ensure_sat(uint32_t bin) const noexcept;
 
  private:
   double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
   double prefix_integral(uint32_t bin, double x, double y) const noexcept;
+  const uint32_t* bin_sat(uint32_t bin) const noexcept;
+  uint32_t code(uint64_t index) const noexcept {
+    return codes_ ? uint32_t(codes_[index]) : uint32_t(codes8_[index]);
+  }
 
-  struct Packed;  // the compressed form's decoded tables
+  struct Packed;  // the compressed form's steps and on-demand SATs
   Status open_raw(const Asset& asset) noexcept;
   Status open_compressed(const Asset& asset) noexcept;
-  double packed_footprint(const FootprintPlan& plan, const int bin[4], const double weight[4],
-                          double area) const noexcept;
 
   ParallaxInfoRecord info_{};
   const uint16_t* codes_ = nullptr;
   const uint32_t* sat_ = nullptr;
+  const uint8_t* codes8_ = nullptr;  // compressed form
+  const double* steps_ = nullptr;    // compressed form, D values in the asset
   CompressedParallaxInfoRecord packed_info_{};
-  std::shared_ptr<const Packed> packed_;
+  std::shared_ptr<Packed> packed_;
 };
 
 }  // namespace clothbake::reader
