@@ -102,19 +102,27 @@ void footprint_query(benchmark::State& state, bool compressed) {
   state.SetItemsProcessed(int64_t(state.iterations()));
 }
 
-void BM_TexelRaw(benchmark::State& s) { texel_query(s, false); }
-void BM_TexelCompressed(benchmark::State& s) { texel_query(s, true); }
-void BM_FootprintRaw(benchmark::State& s) { footprint_query(s, false); }
-void BM_FootprintCompressed(benchmark::State& s) { footprint_query(s, true); }
+void BM_TexelRaw(benchmark::State& s) {
+  texel_query(s, false);
+}
+void BM_TexelCompressed(benchmark::State& s) {
+  texel_query(s, true);
+}
+void BM_FootprintRaw(benchmark::State& s) {
+  footprint_query(s, false);
+}
+void BM_FootprintCompressed(benchmark::State& s) {
+  footprint_query(s, true);
+}
 
 void BM_OpenCompressedWithChecksums(benchmark::State& state) {
   Fixture& f = fixture();
   for (auto _ : state) {
     reader::Asset a;
     reader::ParallaxView v;
-    benchmark::DoNotOptimize(a.open_memory(f.packed_bytes.data(), f.packed_size,
-                                           {reader::Verify::Checksums}).ok() &&
-                             v.open(a).ok());
+    benchmark::DoNotOptimize(
+        a.open_memory(f.packed_bytes.data(), f.packed_size, {reader::Verify::Checksums}).ok() &&
+        v.open(a).ok());
   }
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(f.packed_size));
 }
@@ -122,8 +130,8 @@ void BM_OpenCompressedWithChecksums(benchmark::State& state) {
 void BM_Quantise(benchmark::State& state) {
   Fixture& f = fixture();
   for (auto _ : state) {
-    auto q = compress::quantise_parallax({f.table.depth.data(), kN, kDirs, f.table.min_cos,
-                                          f.table.depth_scale, 0.0, 0.0});
+    auto q = compress::quantise_parallax(
+        {f.table.depth.data(), kN, kDirs, f.table.min_cos, f.table.depth_scale, 0.0, 0.0});
     benchmark::DoNotOptimize(q.codes.data());
   }
 }

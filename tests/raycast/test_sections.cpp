@@ -423,7 +423,7 @@ TEST(RaycastStages, BakeWritesQueryableSectionsIdenticallyForAnyThreadCount) {
   {
     pipeline::BakeRequest request;
     request.fabric = fabric;
-    request.fabric.bake.compress = false;
+    request.fabric->bake.compress = false;
     request.output_path = (dir / "raw.cbk").string();
     request.stages = {"parallax"};
     pipeline::bake(request, stages::bake_stages());
