@@ -24,10 +24,13 @@ std::vector<double> parallax_offset_per_depth(int resolution, int dirs, double m
   return out;
 }
 
-QuantisedParallax quantise_parallax(const ParallaxCodes& raw) {
+QuantisedParallax quantise_parallax(const ParallaxCodes& raw, double max_error) {
   const auto start = std::chrono::steady_clock::now();
   if (raw.codes == nullptr || raw.resolution < 1 || raw.dirs < 1)
     throw_input_error("parallax compression: empty parallax table");
+  if (!(max_error > 0.0 && max_error <= 1.0))
+    throw_input_error("bake.parallax_max_error = " + std::to_string(max_error) +
+                      " is out of range; valid range is (0, 1]");
   const std::size_t texels = std::size_t(raw.resolution) * raw.resolution;
   const std::size_t d = std::size_t(raw.dirs) * raw.dirs;
   const double levels = double((1u << reader::kCompressedParallaxBits) - 1);
@@ -64,6 +67,17 @@ QuantisedParallax quantise_parallax(const ParallaxCodes& raw) {
   const double entries = double(texels) * double(d);
   p.rms_offset_error = std::sqrt(sum2 / entries);
   p.share_above_quarter = double(above) / entries;
+  p.rms_offset_error_8bit = p.rms_offset_error;
+  if (p.rms_offset_error > max_error) {  // 16 bits: the raw codes, exactly
+    p.bits = 16;
+    std::vector<uint8_t>().swap(p.codes);
+    p.codes16.assign(raw.codes, raw.codes + d * texels);
+    for (std::size_t e = 0; e < d; ++e) {
+      const uint16_t* src = raw.codes + e * texels;
+      p.steps[e] = *std::max_element(src, src + texels) ? raw.depth_scale : 0.0;
+    }
+    p.rms_offset_error = p.max_offset_error = p.share_above_quarter = p.max_depth_error = 0.0;
+  }
   p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return p;
 }
@@ -73,7 +87,7 @@ std::vector<formats::Section> compressed_parallax_sections(const QuantisedParall
   reader::CompressedParallaxInfoRecord info{};
   info.resolution = n;
   info.dirs = uint32_t(p.dirs);
-  info.bits = reader::kCompressedParallaxBits;
+  info.bits = uint32_t(p.bits);
   info.min_cos = p.min_cos;
   info.reference_height = p.reference_height;
   info.max_offset = p.max_offset;
@@ -87,9 +101,14 @@ std::vector<formats::Section> compressed_parallax_sections(const QuantisedParall
   out.push_back(formats::make_array_section<double>(reader::SectionType::ParallaxCompressed,
                                                     reader::kCompressedParallaxStepsInstance,
                                                     p.steps, {d}));
-  out.push_back(formats::make_array_section<uint8_t>(reader::SectionType::ParallaxCompressed,
-                                                     reader::kCompressedParallaxCodesInstance,
-                                                     p.codes, {d, n, n}));
+  if (p.bits == 8)
+    out.push_back(formats::make_array_section<uint8_t>(reader::SectionType::ParallaxCompressed,
+                                                       reader::kCompressedParallaxCodesInstance,
+                                                       p.codes, {d, n, n}));
+  else
+    out.push_back(formats::make_array_section<uint16_t>(reader::SectionType::ParallaxCompressed,
+                                                        reader::kCompressedParallaxCodesInstance,
+                                                        p.codes16, {d, n, n}));
   return out;
 }
 

@@ -5,9 +5,9 @@
 // Form (docs/compression.md, "Compressed parallax"): when compression is on (the default; the
 // bake's compress request, artifact kCompressSettingsArtifact, or [bake] compress), the table is
 // requantised to 8 bits per direction (compress/parallax_codes.hpp) if that meets [bake]
-// parallax_max_error (RMS offset error, texels; otherwise a warning and the raw form), and the
-// raw codes and their SATs are written only with --keep-raw. `--no-compress` (or compress = false)
-// writes the raw codes and SATs alone, exactly as format 1.0 did.
+// parallax_max_error (RMS offset error, texels; otherwise a warning and 16-bit codes, still
+// without SATs), and the raw codes and their SATs are written only with --keep-raw. `--no-compress`
+// (or compress = false) writes the raw codes and SATs alone, exactly as format 1.0 did.
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/stages.hpp"
@@ -59,16 +59,18 @@ void run_parallax(pipeline::StageContext& ctx) {
                                       table.min_cos,      table.depth_scale, table.reference_height,
                                       stats.max_sideways};
     const double max_error = fabric.bake.parallax_max_error;
-    compress::QuantisedParallax packed = compress::quantise_parallax(raw);
+    compress::QuantisedParallax packed = compress::quantise_parallax(raw, max_error);
     ctx.progress(0.99);
-    compressed = packed.rms_offset_error <= max_error;
-    if (!compressed)
+    compressed = true;
+    if (packed.bits == 16)
       warn("parallax: 8-bit codes would reach an RMS offset error of " +
-           std::to_string(packed.rms_offset_error) + " texels, above parallax_max_error " +
-           std::to_string(max_error) + ": the raw 16-bit codes and SATs are written instead");
+           std::to_string(packed.rms_offset_error_8bit) + " texels, above parallax_max_error " +
+           std::to_string(max_error) +
+           ": the compressed table keeps 16-bit codes (2 bytes per "
+           "texel and direction)");
     meta["compressed"] = {{"max_error", max_error},
-                          {"written", compressed},
-                          {"bits", reader::kCompressedParallaxBits},
+                          {"bits", packed.bits},
+                          {"rms_offset_error_8bit_texels", packed.rms_offset_error_8bit},
                           {"rms_offset_error_texels", packed.rms_offset_error},
                           {"max_offset_error_texels", packed.max_offset_error},
                           {"share_above_quarter_texel", packed.share_above_quarter},
@@ -76,8 +78,8 @@ void run_parallax(pipeline::StageContext& ctx) {
                           {"compressed_bytes", packed.payload_bytes()},
                           {"raw_bytes", uint64_t(table.depth.size()) * 6},
                           {"seconds", ctx.options().record_timings ? packed.seconds : 0.0}};
-    meta["keep_raw"] = form.keep_raw || !compressed;
-    if (compressed) sections = compress::compressed_parallax_sections(packed);
+    meta["keep_raw"] = form.keep_raw;
+    sections = compress::compressed_parallax_sections(packed);
   }
   if (!compressed || form.keep_raw)
     for (auto& s : parallax_sections(std::move(table)))

@@ -78,16 +78,6 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
       "parallax_compressed: payload version must be 1 (this reader knows version 1)", &info_bytes,
       &steps);
   if (!s.ok()) return s;
-  ArrayView<uint8_t> codes;
-  bool have_codes = false;
-  s = detail::view_optional(asset,
-                            {SectionType::ParallaxCompressed, kCompressedParallaxCodesInstance},
-                            "parallax_compressed: payload version must be 1", &codes, &have_codes);
-  if (!s.ok()) return s;
-  if (!have_codes)
-    return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "this asset has no compressed parallax table (parallax_compressed "
-                         "instance 2, the codes, is missing)");
   if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
       info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
@@ -95,11 +85,33 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
                          "CompressedParallaxInfoRecord)");
   CompressedParallaxInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
-  if (info.flags != 0 || info.bits != kCompressedParallaxBits)
+  if (info.flags != 0 || (info.bits != 8 && info.bits != 16))
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
                          "parallax_compressed: bits %u / flags %u unknown to this reader (version "
-                         "1 has 8 / 0)",
+                         "1 has 8 or 16 / 0)",
                          unsigned(info.bits), unsigned(info.flags));
+  // The codes, as u8 or u16 by `bits`.
+  ArrayView<uint8_t> codes;
+  ArrayView<uint16_t> codes16;
+  bool have_codes = false;
+  const detail::SectionKey codes_key{SectionType::ParallaxCompressed,
+                                     kCompressedParallaxCodesInstance};
+  s = info.bits == 8 ? detail::view_optional(asset, codes_key,
+                                             "parallax_compressed: payload version must be 1",
+                                             &codes, &have_codes)
+                     : detail::view_optional(asset, codes_key,
+                                             "parallax_compressed: payload version must be 1",
+                                             &codes16, &have_codes);
+  if (!s.ok()) return s;
+  if (!have_codes)
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no compressed parallax table (parallax_compressed "
+                         "instance 2, the codes, is missing)");
+  if (info.bits == 16) {
+    codes.rank = codes16.rank;
+    for (int i = 0; i < 4; ++i)
+      codes.dims[i] = codes16.dims[i];
+  }
   if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
       info.dirs > kMaxParallaxDirs)
     return Status::error(ErrorCode::Malformed, Check::ValueRange,
@@ -123,10 +135,10 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
                          static_cast<unsigned long long>(d));
   if (codes.rank != 3 || codes.dims[0] != d || codes.dims[1] != n || codes.dims[2] != n)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_compressed instance 2 must be u8 {%llu, %llu, %llu} "
+                         "parallax_compressed instance 2 must be u%u {%llu, %llu, %llu} "
                          "(directions, N, N)",
-                         static_cast<unsigned long long>(d), static_cast<unsigned long long>(n),
-                         static_cast<unsigned long long>(n));
+                         unsigned(info.bits), static_cast<unsigned long long>(d),
+                         static_cast<unsigned long long>(n), static_cast<unsigned long long>(n));
   for (uint64_t i = 0; i < d; ++i)
     if (!(steps.data[i] >= 0.0 && steps.data[i] <= 1.0))  // also NaN
       return Status::error(ErrorCode::Malformed, Check::ValueRange,
@@ -146,7 +158,10 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
   info_.max_quantization_error = info.max_depth_error;
   info_.max_offset = info.max_offset;
   packed_info_ = info;
-  codes8_ = codes.data;
+  if (info.bits == 8)
+    codes8_ = codes.data;
+  else
+    codes_ = codes16.data;
   steps_ = steps.data;
   packed_ = std::move(packed);
   return {};
@@ -159,11 +174,11 @@ bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
     const uint64_t n = info_.resolution;
     uint32_t* sat = new (std::nothrow) uint32_t[n * n];
     if (!sat) return;  // stays null: the query reports it
-    const uint8_t* src = codes8_ + uint64_t(bin) * n * n;
+    const uint64_t first = uint64_t(bin) * n * n;
     for (uint64_t y = 0; y < n; ++y) {
       uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
       for (uint64_t x = 0; x < n; ++x) {
-        row += src[y * n + x];
+        row += code(first + y * n + x);
         sat[y * n + x] = row + (y > 0 ? sat[(y - 1) * n + x] : 0u);
       }
     }
@@ -276,7 +291,8 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
   }
   for (int k = 0; k < 4; ++k)
     if (weight[k] > 0.0)
-      r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) * info_.depth_scale);
+      r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) *
+                        (steps_ ? steps_[bin[k]] : info_.depth_scale));
   return r;
 }
 

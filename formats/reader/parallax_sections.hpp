@@ -22,7 +22,7 @@
 // why this form and not a directional PCA):
 //   ParallaxCompressed instance 0: u8 {1, 64}   one CompressedParallaxInfoRecord
 //   ParallaxCompressed instance 1: f64 {D}      step[d]: tile-side units per code of direction d
-//   ParallaxCompressed instance 2: u8 {D, N, N} codes: r = -code * step[d], same order as above
+//   ParallaxCompressed instance 2: u8 or u16 {D, N, N} codes (bits 8 or 16): r = -code * step[d]
 // No SAT is stored: the view builds a direction's u32 SAT (the ParallaxSat layout) the first time
 // a footprint query needs that direction (thread-safe, once per direction), so that opening costs
 // nothing and a renderer that looks from a few directions builds only those. 8-bit codes sum to
@@ -56,7 +56,7 @@ inline constexpr uint32_t kMaxParallaxResolution = 16384;
 inline constexpr uint32_t kCompressedParallaxInfoInstance = 0;
 inline constexpr uint32_t kCompressedParallaxStepsInstance = 1;
 inline constexpr uint32_t kCompressedParallaxCodesInstance = 2;
-inline constexpr uint32_t kCompressedParallaxBits = 8;
+inline constexpr uint32_t kCompressedParallaxBits = 8;  // the small form; 16 is the fallback
 
 // Info v1: one record, shape {1, 64}.
 struct ParallaxInfoRecord {
@@ -84,7 +84,7 @@ static_assert(offsetof(ParallaxInfoRecord, reserved) == 48);
 struct CompressedParallaxInfoRecord {
   uint32_t resolution;      // N, 1..16384
   uint32_t dirs;            // n: n x n view directions, 1..256
-  uint32_t bits;            // bits per code: 8 (the only value of version 1)
+  uint32_t bits;            // bits per code: 8 (codes u8) or 16 (codes u16)
   uint32_t flags;           // 0 in version 1
   double min_cos;           // the cap, [0, 1)
   double reference_height;  // z_ref, tile-side units (finite)

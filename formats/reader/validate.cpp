@@ -402,20 +402,25 @@ void check_parallax_sat(const Asset& asset, const ParallaxView& view, Reporter& 
 // error (CBK-E022); codes of an all-zero direction (step 0) must be 0. O(D N^2).
 void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, Reporter& r) {
   SectionInfo codes_info;
-  ArrayView<uint8_t> codes;
+  ArrayView<uint8_t> codes8;
+  ArrayView<uint16_t> codes16;
   if (!asset.find(SectionType::ParallaxCompressed, kCompressedParallaxCodesInstance, &codes_info)
            .ok() ||
-      !asset.view_of(codes_info, &codes).ok())
+      (packed.compressed_info().bits == 8 ? !asset.view_of(codes_info, &codes8).ok()
+                                          : !asset.view_of(codes_info, &codes16).ok()))
     return;
+  auto code = [&](uint64_t i) -> unsigned {
+    return codes8.data ? unsigned(codes8.data[i]) : unsigned(codes16.data[i]);
+  };
   const uint64_t n = packed.resolution(), dirs = uint64_t(packed.dirs()) * packed.dirs();
   for (uint64_t d = 0; d < dirs; ++d)
     if (packed.depth_step(uint32_t(d)) == 0.0)
       for (uint64_t t = 0; t < n * n; ++t)
-        if (codes.data[d * n * n + t] != 0) {
+        if (code(d * n * n + t) != 0) {
           r.report(Check::ValueRange, codes_info.index,
                    "parallax_compressed: direction %" PRIu64 " has step 0 but texel (%" PRIu64
                    ", %" PRIu64 ") has code %u",
-                   d, t % n, t / n, unsigned(codes.data[d * n * n + t]));
+                   d, t % n, t / n, code(d * n * n + t));
           return;
         }
   ParallaxView raw;

@@ -11,6 +11,7 @@
 #include <set>
 #include <string>
 
+#include "common/error.hpp"
 #include "compress/parallax_codes.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/validate.hpp"
@@ -299,6 +300,46 @@ TEST(CompressedParallax, HostileSectionsFailWithStableIds) {
     EXPECT_TRUE(st.ok());
     EXPECT_NE(ids.find("CBK-E022"), std::string::npos) << ids;
   }
+}
+
+TEST(CompressedParallax, SixteenBitFormWhenEightBitsMissTheTarget) {
+  const ParallaxTable table = baked(rctest::plain_weave_maps(16, 2, 0.4, 0.1));
+  const compress::QuantisedParallax eight = compress::quantise_parallax(codes_of(table), 1.0);
+  ASSERT_EQ(eight.bits, 8);
+  ASSERT_GT(eight.rms_offset_error, 0.0);
+  // A target below what 8 bits reach: the raw codes, exactly, as 16-bit compressed codes.
+  const compress::QuantisedParallax p =
+      compress::quantise_parallax(codes_of(table), eight.rms_offset_error / 2);
+  EXPECT_EQ(p.bits, 16);
+  EXPECT_EQ(p.rms_offset_error_8bit, eight.rms_offset_error);
+  auto s = compress::compressed_parallax_sections(p);
+  ParallaxTable copy = table;
+  for (auto& x : parallax_sections(std::move(copy)))
+    s.push_back(std::move(x));
+  s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
+  MemoryAsset m(s);
+  reader::ParallaxView view, raw;
+  ASSERT_TRUE(view.open(m.asset, reader::ParallaxSource::Compressed).ok());
+  ASSERT_TRUE(raw.open(m.asset, reader::ParallaxSource::Raw).ok());
+  EXPECT_EQ(view.compressed_info().bits, 16u);
+  for (uint32_t bin = 0; bin < 64; ++bin)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x)
+        ASSERT_EQ(view.bin_depth(bin, x, y), table.r(int(bin), x, y));
+  const double v[3] = {0.4, 0.3, 0.7};
+  reader::ParallaxSample a, b;
+  ASSERT_TRUE(view.footprint_depth({-5.25, 3, 30, 17.5}, v, &a).ok());
+  ASSERT_TRUE(raw.footprint_depth({-5.25, 3, 30, 17.5}, v, &b).ok());
+  EXPECT_NEAR(a.r, b.r, 1e-15);
+  struct Sink {
+    int errors = 0;
+  } sink;
+  reader::validate_asset(
+      m.asset,
+      [](void* u, reader::Check, uint32_t, const char*) { ++static_cast<Sink*>(u)->errors; },
+      &sink);
+  EXPECT_EQ(sink.errors, 0);
+  EXPECT_THROW(compress::quantise_parallax(codes_of(table), 0.0), Error);
 }
 
 TEST(CompressedParallax, WriterStampsTheMinorTheSectionsNeed) {
