@@ -60,7 +60,8 @@ struct BakeSettings {
   int resolution = 256;              // texels per tile side of the baked maps
   int parallax_dirs = 32;            // parallax table: dirs x dirs view directions
   double parallax_min_cos = 0.6;     // parallax cap: directions with cos(theta) > this
-  double parallax_max_error = 0.04;  // compressed parallax: RMS Eq. 2 offset error, texels
+  double parallax_max_error = 0.05;  // compressed parallax: RMS Eq. 2 offset error, texels
+                                     // (= compress::kDefaultParallaxMaxError)
   int visibility_dirs = 32;          // visibility sampling: dirs x dirs light directions
   int radiance_dirs = 32;            // Integral-Radiance half-vector bins: dirs x dirs
   int clusters = 8;                  // N_c visibility clusters
