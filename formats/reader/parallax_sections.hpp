@@ -23,6 +23,7 @@
 //   ParallaxCompressed instance 0: u8 {1, 64}   one CompressedParallaxInfoRecord
 //   ParallaxCompressed instance 1: f64 {D}      step[d]: tile-side units per code of direction d
 //   ParallaxCompressed instance 2: u8 or u16 {D, N, N} codes (bits 8 or 16): r = -code * step[d]
+// (bits = 16: u16 codes, the bake's fallback when 8 bits miss parallax_max_error.)
 // No SAT is stored: the view builds a direction's u32 SAT (the ParallaxSat layout) the first time
 // a footprint query needs that direction (thread-safe, once per direction), so that opening costs
 // nothing and a renderer that looks from a few directions builds only those. 8-bit codes sum to
