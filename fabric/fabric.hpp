@@ -57,16 +57,18 @@ struct SheenParams {
 
 // Settings of the bake (defaults follow the paper, Sec. 3.2, 4.2-4.4, 6).
 struct BakeSettings {
-  int resolution = 256;           // texels per tile side of the baked maps
-  int parallax_dirs = 32;         // parallax table: dirs x dirs view directions
-  double parallax_min_cos = 0.6;  // parallax cap: directions with cos(theta) > this
-  int visibility_dirs = 32;       // visibility sampling: dirs x dirs light directions
-  int radiance_dirs = 32;         // Integral-Radiance half-vector bins: dirs x dirs
-  int clusters = 8;               // N_c visibility clusters
-  bool compress = true;           // C-PCA compress the Integral-Radiance tables
-  int compress_clusters = 0;      // C-PCA clusters k per visibility cluster; 0: auto (1)
-  int compress_rank = 0;          // C-PCA rank r (fixed shape); 0: auto (ranks for a target error)
-  uint64_t seed = 1;              // seed of every randomised step (k-means++, verify sampling)
+  int resolution = 256;              // texels per tile side of the baked maps
+  int parallax_dirs = 32;            // parallax table: dirs x dirs view directions
+  double parallax_min_cos = 0.6;     // parallax cap: directions with cos(theta) > this
+  double parallax_max_error = 0.05;  // compressed parallax: RMS Eq. 2 offset error, texels
+                                     // (= compress::kDefaultParallaxMaxError)
+  int visibility_dirs = 32;          // visibility sampling: dirs x dirs light directions
+  int radiance_dirs = 32;            // Integral-Radiance half-vector bins: dirs x dirs
+  int clusters = 8;                  // N_c visibility clusters
+  bool compress = true;              // C-PCA compress the Integral-Radiance tables
+  int compress_clusters = 0;         // C-PCA clusters k per visibility cluster; 0: auto (1)
+  int compress_rank = 0;  // C-PCA rank r (fixed shape); 0: auto (ranks for a target error)
+  uint64_t seed = 1;      // seed of every randomised step (k-means++, verify sampling)
 };
 
 // One input file the fabric was built from, with its content hash (provenance in the asset).

@@ -6,6 +6,7 @@ nlohmann::json bake_settings_json(const BakeSettings& b) {
   return {{"resolution", b.resolution},
           {"parallax_dirs", b.parallax_dirs},
           {"parallax_min_cos", b.parallax_min_cos},
+          {"parallax_max_error", b.parallax_max_error},
           {"visibility_dirs", b.visibility_dirs},
           {"radiance_dirs", b.radiance_dirs},
           {"clusters", b.clusters},

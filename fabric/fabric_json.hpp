@@ -9,9 +9,10 @@
 
 namespace clothbake {
 
-// {"resolution", "parallax_dirs", "parallax_min_cos", "visibility_dirs", "radiance_dirs",
-// "clusters", "compress", "compress_clusters", "compress_rank", "seed"}: every BakeSettings field
-// under its [bake] key, unconverted. Deterministic (keys sorted, as nlohmann::json stores them).
+// {"resolution", "parallax_dirs", "parallax_min_cos", "parallax_max_error", "visibility_dirs",
+// "radiance_dirs", "clusters", "compress", "compress_clusters", "compress_rank", "seed"}: every
+// BakeSettings field under its [bake] key, unconverted. Deterministic (keys sorted, as
+// nlohmann::json stores them).
 nlohmann::json bake_settings_json(const BakeSettings& bake);
 
 }  // namespace clothbake

@@ -79,6 +79,31 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
     nlohmann::json metadata = nlohmann::json::parse(text, nullptr, false);
     doc["metadata"] = metadata.is_discarded() ? nlohmann::json("(not valid JSON)") : metadata;
   }
+  // Bytes per section name, and what the asset would weigh with the raw forms of the compressed
+  // sections instead (from the sizes the parallax and compress stages recorded in the metadata).
+  nlohmann::json by_name = nlohmann::json::object();
+  for (const auto& s : sections) {
+    const std::string name = s["name"].get<std::string>();
+    by_name[name] = by_name.value(name, uint64_t(0)) + s["bytes"].get<uint64_t>();
+  }
+  int64_t raw_total = int64_t(asset.file_size());
+  const nlohmann::json* params = nullptr;
+  if (doc.contains("metadata") && doc["metadata"].is_object() &&
+      doc["metadata"].contains("parameters"))
+    params = &doc["metadata"]["parameters"];
+  if (params && by_name.contains("parallax_compressed") && !by_name.contains("parallax") &&
+      params->contains("parallax") && (*params)["parallax"].contains("compressed"))
+    raw_total += int64_t((*params)["parallax"]["compressed"].value("raw_bytes", uint64_t(0))) -
+                 int64_t(by_name["parallax_compressed"].get<uint64_t>());
+  if (params && by_name.contains("radiance_compressed") && !by_name.contains("radiance_tables") &&
+      params->contains("compress") && (*params)["compress"].contains("kinds")) {
+    raw_total -= int64_t(by_name["radiance_compressed"].get<uint64_t>());
+    for (const auto& k : (*params)["compress"]["kinds"])
+      raw_total += int64_t(k.value("raw_float_bytes", uint64_t(0)));
+  }
+  doc["sizes"] = {{"by_name", by_name},
+                  {"total_bytes", asset.file_size()},
+                  {"raw_forms_total_bytes", raw_total}};
   return doc;
 }
 
@@ -134,6 +159,16 @@ void print_text(const nlohmann::json& doc) {
         << s["element"].get<std::string>() << std::setw(18) << (shape.empty() ? "-" : shape)
         << std::right << std::setw(12) << s["bytes"].get<uint64_t>() << '\n';
   }
+  const auto& sizes = doc["sizes"];
+  const double total = double(sizes["total_bytes"].get<uint64_t>());
+  out << "sizes:    per section name (share of the file)\n";
+  for (const auto& [name, bytes] : sizes["by_name"].items())
+    out << "  " << std::left << std::setw(26) << name << std::right << std::setw(12)
+        << bytes.get<uint64_t>() << std::setw(8) << std::fixed << std::setprecision(1)
+        << (total > 0 ? 100.0 * double(bytes.get<uint64_t>()) / total : 0.0) << " %\n";
+  out << std::defaultfloat << "  total " << sizes["total_bytes"].get<uint64_t>()
+      << " bytes; with the raw forms of its compressed sections "
+      << sizes["raw_forms_total_bytes"].get<int64_t>() << " bytes\n";
   out.flush();
 }
 

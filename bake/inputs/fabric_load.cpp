@@ -107,14 +107,17 @@ SheenParams parse_sheen(const TomlSection& s) {
 }
 
 BakeSettings parse_bake(const TomlSection& s) {
-  s.check_keys({"resolution", "parallax_dirs", "parallax_min_cos", "visibility_dirs",
-                "radiance_dirs", "clusters", "compress", "compress_clusters", "compress_rank",
-                "seed"});
+  s.check_keys({"resolution", "parallax_dirs", "parallax_min_cos", "parallax_max_error",
+                "visibility_dirs", "radiance_dirs", "clusters", "compress", "compress_clusters",
+                "compress_rank", "seed"});
   BakeSettings b;
   b.resolution =
       int(s.integer("resolution", kMinResolution, kMaxResolution).value_or(b.resolution));
   b.parallax_dirs = int(s.integer("parallax_dirs", 2, 256).value_or(b.parallax_dirs));
   b.parallax_min_cos = s.real("parallax_min_cos", kMinCos).value_or(b.parallax_min_cos);
+  // (0, 1] texels (compress/parallax_pca.hpp; docs/compression.md, "Compressed parallax").
+  b.parallax_max_error =
+      s.real("parallax_max_error", Range{0, 1, true, false}).value_or(b.parallax_max_error);
   b.visibility_dirs = int(s.integer("visibility_dirs", 2, 256).value_or(b.visibility_dirs));
   b.radiance_dirs = int(s.integer("radiance_dirs", 2, 256).value_or(b.radiance_dirs));
   b.clusters = int(s.integer("clusters", 1, 64).value_or(b.clusters));

@@ -195,6 +195,7 @@ std::string fabric_toml_text(const Fabric& f, const std::string& comment) {
   t += fmt::format("resolution = {}\n", b.resolution);
   t += fmt::format("parallax_dirs = {}\n", b.parallax_dirs);
   t += fmt::format("parallax_min_cos = {}\n", number(b.parallax_min_cos));
+  t += fmt::format("parallax_max_error = {}\n", number(b.parallax_max_error));
   t += fmt::format("visibility_dirs = {}\n", b.visibility_dirs);
   t += fmt::format("radiance_dirs = {}\n", b.radiance_dirs);
   t += fmt::format("clusters = {}\n", b.clusters);

@@ -2,6 +2,7 @@
 // artifact of the stages that ran, adds the metadata section (provenance, stage order, each
 // stage's parameters) and writes the asset atomically through formats/writer; publishes the
 // asset's summary ("asset", pipeline::AssetSummary) for the bake report.
+#include <algorithm>
 #include <map>
 
 #include "bake/pipeline/bake.hpp"
@@ -24,11 +25,11 @@ using pipeline::SectionSummary;
 using pipeline::StageContext;
 
 // Metadata: provenance and parameters, deterministic unless timings are asked for.
-nlohmann::json metadata(StageContext& ctx) {
+// `minor`: the format minor the writer stamps (the largest its sections need).
+nlohmann::json metadata(StageContext& ctx, uint16_t minor) {
   nlohmann::json m;
   m["format"] = "clothbake-asset";
-  m["format_version"] =
-      std::to_string(reader::kFormatMajor) + "." + std::to_string(reader::kFormatMinor);
+  m["format_version"] = std::to_string(reader::kFormatMajor) + "." + std::to_string(minor);
   m["tool"] = {{"name", "clothbake"}, {"version", CLOTHBAKE_VERSION_STRING}};
   m["fabric"] = fabric_metadata(ctx.input<Fabric>("fabric"));
   m["stages"] = ctx.stage_order();
@@ -79,7 +80,10 @@ void run_write(StageContext& ctx) {
     for (const Section& s : ctx.input<std::vector<Section>>(name))
       sections.push_back(&s);
   }
-  nlohmann::json meta = metadata(ctx);
+  uint16_t minor = 0;
+  for (const Section* s : sections)
+    minor = std::max(minor, reader::format_minor_of(uint32_t(s->type)));
+  nlohmann::json meta = metadata(ctx, minor);
   if (!omitted.empty()) meta["omitted_sections"] = omitted;
   const Section metadata_section = formats::make_metadata_section(meta);
   sections.push_back(&metadata_section);

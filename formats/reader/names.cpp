@@ -23,6 +23,7 @@ constexpr SectionName kSectionNames[] = {
     {SectionType::AlbedoMap, "albedo"},
     {SectionType::ParallaxTable, "parallax"},
     {SectionType::ParallaxSat, "parallax_sat"},
+    {SectionType::ParallaxCompressed, "parallax_compressed"},
     {SectionType::VisibilityAsg, "visibility_asg"},
     {SectionType::AsgFitError, "asg_fit_error"},
     {SectionType::ClusterLabels, "cluster_labels"},

@@ -19,8 +19,181 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 
 }  // namespace
 
-Status ParallaxView::open(const Asset& asset) noexcept {
+// The compressed form's on-demand SATs: one u32 inclusive SAT per direction (the ParallaxSat
+// layout), built once under its flag and published through the atomic pointer.
+struct ParallaxView::Packed {
+  explicit Packed(uint64_t dirs)
+      : flags(new std::once_flag[dirs]), sats(new std::atomic<uint32_t*>[dirs]) {
+    for (uint64_t d = 0; d < dirs; ++d)
+      sats[d].store(nullptr, std::memory_order_relaxed);
+    count = dirs;
+  }
+  ~Packed() {
+    for (uint64_t d = 0; d < count; ++d)
+      delete[] sats[d].load(std::memory_order_relaxed);
+  }
+  Packed(const Packed&) = delete;
+  Packed& operator=(const Packed&) = delete;
+  uint64_t count = 0;
+  std::unique_ptr<std::once_flag[]> flags;
+  std::unique_ptr<std::atomic<uint32_t*>[]> sats;
+  std::atomic<uint64_t> bytes{0};
+};
+
+Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
   *this = ParallaxView();
+  Status s;
+  if (source == ParallaxSource::Compressed) {
+    s = open_compressed(asset);
+  } else {
+    s = open_raw(asset);
+    if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound) {
+      bool any = false;
+      for (uint32_t i = 0; i < 3 && !any; ++i) {
+        SectionInfo unused;
+        any = asset.find(SectionType::ParallaxCompressed, i, &unused).ok();
+      }
+      if (any) s = open_compressed(asset);
+    }
+  }
+  if (!s.ok()) *this = ParallaxView();
+  return s;
+}
+
+uint64_t ParallaxView::decoded_bytes() const noexcept {
+  return packed_ ? packed_->bytes.load(std::memory_order_relaxed) : 0;
+}
+
+double ParallaxView::depth_step(uint32_t bin) const noexcept {
+  return steps_ ? steps_[bin] : info_.depth_scale;
+}
+
+Status ParallaxView::open_compressed(const Asset& asset) noexcept {
+  ArrayView<uint8_t> info_bytes;
+  ArrayView<double> steps;
+  Status s = detail::view_required_pair(
+      asset, {SectionType::ParallaxCompressed, kCompressedParallaxInfoInstance},
+      {SectionType::ParallaxCompressed, kCompressedParallaxStepsInstance},
+      "this asset has no compressed parallax table (parallax_compressed instances 0, 1 and 2)",
+      "parallax_compressed: payload version must be 1 (this reader knows version 1)", &info_bytes,
+      &steps);
+  if (!s.ok()) return s;
+  if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
+      info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_compressed instance 0 must be u8 {1, 64} (one "
+                         "CompressedParallaxInfoRecord)");
+  CompressedParallaxInfoRecord info;
+  std::memcpy(&info, info_bytes.data, sizeof info);
+  if (info.flags != 0 || (info.bits != 8 && info.bits != 16))
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "parallax_compressed: bits %u / flags %u unknown to this reader (version "
+                         "1 has 8 or 16 / 0)",
+                         unsigned(info.bits), unsigned(info.flags));
+  // The codes, as u8 or u16 by `bits`.
+  ArrayView<uint8_t> codes;
+  ArrayView<uint16_t> codes16;
+  bool have_codes = false;
+  const detail::SectionKey codes_key{SectionType::ParallaxCompressed,
+                                     kCompressedParallaxCodesInstance};
+  s = info.bits == 8 ? detail::view_optional(asset, codes_key,
+                                             "parallax_compressed: payload version must be 1",
+                                             &codes, &have_codes)
+                     : detail::view_optional(asset, codes_key,
+                                             "parallax_compressed: payload version must be 1",
+                                             &codes16, &have_codes);
+  if (!s.ok()) return s;
+  if (!have_codes)
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no compressed parallax table (parallax_compressed "
+                         "instance 2, the codes, is missing)");
+  if (info.bits == 16) {
+    codes.rank = codes16.rank;
+    for (int i = 0; i < 4; ++i)
+      codes.dims[i] = codes16.dims[i];
+  }
+  if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
+      info.dirs > kMaxParallaxDirs)
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "parallax_compressed: resolution %u or directions %u out of range "
+                         "(1..%u, 1..%u)",
+                         unsigned(info.resolution), unsigned(info.dirs),
+                         unsigned(kMaxParallaxResolution), unsigned(kMaxParallaxDirs));
+  if (!(info.min_cos >= 0.0 && info.min_cos < 1.0) || !std::isfinite(info.reference_height) ||
+      !(info.max_offset >= 0.0 && std::isfinite(info.max_offset)) ||
+      !(info.rms_offset_error >= 0.0 && std::isfinite(info.rms_offset_error)) ||
+      !(info.max_offset_error >= 0.0 && std::isfinite(info.max_offset_error)) ||
+      !(info.max_depth_error >= 0.0 && std::isfinite(info.max_depth_error)))
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "parallax_compressed: min_cos, reference height, max offset or an error "
+                         "out of range");
+  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
+  if (steps.rank != 1 || steps.dims[0] != d)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_compressed instance 1 must be f64 {%llu} (one step per "
+                         "direction)",
+                         static_cast<unsigned long long>(d));
+  if (codes.rank != 3 || codes.dims[0] != d || codes.dims[1] != n || codes.dims[2] != n)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_compressed instance 2 must be u%u {%llu, %llu, %llu} "
+                         "(directions, N, N)",
+                         unsigned(info.bits), static_cast<unsigned long long>(d),
+                         static_cast<unsigned long long>(n), static_cast<unsigned long long>(n));
+  for (uint64_t i = 0; i < d; ++i)
+    if (!(steps.data[i] >= 0.0 && steps.data[i] <= 1.0))  // also NaN
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "parallax_compressed: step of direction %llu is not in [0, 1] "
+                           "tile-side units",
+                           static_cast<unsigned long long>(i));
+  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
+  if (!packed)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "parallax_compressed: cannot allocate the SAT directory");
+  info_ = ParallaxInfoRecord{};
+  info_.resolution = info.resolution;
+  info_.dirs = info.dirs;
+  info_.min_cos = info.min_cos;
+  info_.reference_height = info.reference_height;
+  info_.depth_scale = 0.0;  // per direction: depth_step()
+  info_.max_quantization_error = info.max_depth_error;
+  info_.max_offset = info.max_offset;
+  packed_info_ = info;
+  if (info.bits == 8)
+    codes8_ = codes.data;
+  else
+    codes_ = codes16.data;
+  steps_ = steps.data;
+  packed_ = std::move(packed);
+  return {};
+}
+
+bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
+  if (!packed_) return true;
+  Packed& p = *packed_;
+  std::call_once(p.flags[bin], [&] {
+    const uint64_t n = info_.resolution;
+    uint32_t* sat = new (std::nothrow) uint32_t[n * n];
+    if (!sat) return;  // stays null: the query reports it
+    const uint64_t first = uint64_t(bin) * n * n;
+    for (uint64_t y = 0; y < n; ++y) {
+      uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
+      for (uint64_t x = 0; x < n; ++x) {
+        row += code(first + y * n + x);
+        sat[y * n + x] = row + (y > 0 ? sat[(y - 1) * n + x] : 0u);
+      }
+    }
+    p.bytes.fetch_add(n * n * 4, std::memory_order_relaxed);
+    p.sats[bin].store(sat, std::memory_order_release);
+  });
+  return p.sats[bin].load(std::memory_order_acquire) != nullptr;
+}
+
+const uint32_t* ParallaxView::bin_sat(uint32_t bin) const noexcept {
+  if (!packed_) return sat_ + uint64_t(bin) * info_.resolution * info_.resolution;
+  return packed_->sats[bin].load(std::memory_order_acquire);
+}
+
+Status ParallaxView::open_raw(const Asset& asset) noexcept {
   ArrayView<uint8_t> info_bytes;
   ArrayView<uint16_t> codes;
   Status s = detail::view_required_pair(
@@ -79,7 +252,7 @@ double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcep
   const int64_t n = info_.resolution;
   const uint64_t index =
       (uint64_t(bin) * uint64_t(n) + uint64_t(wrap(y, n))) * uint64_t(n) + uint64_t(wrap(x, n));
-  return -double(codes_[index]) * info_.depth_scale;
+  return -double(code(index)) * depth_step(bin);
 }
 
 Status ParallaxView::view_direction(const double view[3], double o[3]) const noexcept {
@@ -110,9 +283,16 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
   const uint64_t n = info_.resolution;
   const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
   double r = 0.0;
+  if (codes8_) {
+    for (int k = 0; k < 4; ++k)
+      if (weight[k] > 0.0)
+        r += weight[k] * (-double(codes8_[uint64_t(bin[k]) * n * n + texel]) * steps_[bin[k]]);
+    return r;
+  }
   for (int k = 0; k < 4; ++k)
     if (weight[k] > 0.0)
-      r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) * info_.depth_scale);
+      r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) *
+                        (steps_ ? steps_[bin[k]] : info_.depth_scale));
   return r;
 }
 
@@ -139,7 +319,8 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
 uint64_t ParallaxView::code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
   if (x == 0 || y == 0) return 0;
   const uint64_t n = info_.resolution;
-  const uint32_t* table = sat_ + uint64_t(bin) * n * n;
+  const uint32_t* table = bin_sat(bin);
+  if (table == nullptr) return 0;
   auto s = [&](uint64_t i, uint64_t j) -> uint32_t {  // exclusive prefix, modulo 2^32
     return (i == 0 || j == 0) ? 0u : table[(j - 1) * n + (i - 1)];
   };
@@ -171,7 +352,7 @@ double ParallaxView::prefix_integral(uint32_t bin, double x, double y) const noe
   if (fx > 0.0 && fy > 0.0) {
     // The texel (i, j) itself: its code times the covered fraction fx * fy.
     const uint64_t texel = (uint64_t(bin) * n + j) * n + i;
-    value += fx * fy * double(codes_[texel]);
+    value += fx * fy * double(code(texel));
   }
   return value;
 }
@@ -193,6 +374,7 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   if (!has_sat())
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
                          "this asset has no parallax_sat section (footprint queries need it)");
+
   FootprintPlan plan;
   Status s = plan_footprint(rect, info_.resolution, &plan);
   if (!s.ok()) return s;
@@ -205,9 +387,20 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
   double sum = 0.0;
-  for (int k = 0; k < 4; ++k)
-    if (w.weight[k] > 0.0) sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan);
-  const double r = -sum * info_.depth_scale / area;
+  if (steps_ == nullptr) {  // raw: one depth scale
+    for (int k = 0; k < 4; ++k)
+      if (w.weight[k] > 0.0) sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan);
+    sum *= info_.depth_scale;
+  } else {
+    for (int k = 0; k < 4; ++k)
+      if (w.weight[k] > 0.0) {
+        if (!ensure_sat(uint32_t(w.index[k])))
+          return Status::error(ErrorCode::Unsupported, Check::None,
+                               "parallax: cannot allocate the SAT of direction %d", w.index[k]);
+        sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan) * steps_[w.index[k]];
+      }
+  }
+  const double r = -sum / area;
   out->r = r;
   out->offset[0] = r / o[2] * o[0];
   out->offset[1] = r / o[2] * o[1];

@@ -8,7 +8,7 @@
 //   u_new = u + (r / o.z) (o.x, o.y)      (u in tile units, [0, 1) over one tile)
 // is the first visible point (model/parallax.hpp applies it).
 //
-// Sections (all version 1):
+// Sections (all version 1), raw form (format 1.0):
 //   ParallaxTable instance 0: u8 {1, 64}   one ParallaxInfoRecord
 //   ParallaxTable instance 1: u16 {D, N, N} depth codes: r = -code * depth_scale, D = n^2 view
 //                                          directions (bin (i, j) of DirectionGrid{n, min_cos} at
@@ -17,6 +17,18 @@
 //                                          sat[d][y][x] = sum of code[d][y'][x'], y' <= y, x' <= x
 // With 16-bit codes a sum over any rectangle of at most 65537 texels is below 2^32, so modular
 // differences of four SAT values are exact; larger rectangles are summed in bands (exact too).
+//
+// Compressed form (format 1.1; compress/parallax_codes.hpp writes it, docs/compression.md says
+// why this form and not a directional PCA):
+//   ParallaxCompressed instance 0: u8 {1, 64}   one CompressedParallaxInfoRecord
+//   ParallaxCompressed instance 1: f64 {D}      step[d]: tile-side units per code of direction d
+//   ParallaxCompressed instance 2: u8 or u16 {D, N, N} codes (bits 8 or 16): r = -code * step[d]
+// (bits = 16: u16 codes, the bake's fallback when 8 bits miss parallax_max_error.)
+// No SAT is stored: the view builds a direction's u32 SAT (the ParallaxSat layout) the first time
+// a footprint query needs that direction (thread-safe, once per direction), so that opening costs
+// nothing and a renderer that looks from a few directions builds only those. 8-bit codes sum to
+// at most 255 * 2^24 < 2^32 over any rectangle for N <= 4096: the SAT is exact there (larger N
+// is summed in bands like the raw form).
 //
 // Queries take the view direction as any finite non-zero vector; it is normalised and, below the
 // cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
@@ -27,8 +39,11 @@
 // Asset::open accepted (shapes and parameter ranges are checked by ParallaxView::open).
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 
 #include "formats/reader/asset.hpp"
 #include "formats/reader/radiance_query.hpp"  // Footprint, plan_footprint
@@ -39,6 +54,10 @@ inline constexpr uint32_t kParallaxInfoInstance = 0;
 inline constexpr uint32_t kParallaxCodesInstance = 1;
 inline constexpr uint32_t kMaxParallaxDirs = 256;
 inline constexpr uint32_t kMaxParallaxResolution = 16384;
+inline constexpr uint32_t kCompressedParallaxInfoInstance = 0;
+inline constexpr uint32_t kCompressedParallaxStepsInstance = 1;
+inline constexpr uint32_t kCompressedParallaxCodesInstance = 2;
+inline constexpr uint32_t kCompressedParallaxBits = 8;  // the small form; 16 is the fallback
 
 // Info v1: one record, shape {1, 64}.
 struct ParallaxInfoRecord {
@@ -62,6 +81,39 @@ static_assert(offsetof(ParallaxInfoRecord, max_quantization_error) == 32);
 static_assert(offsetof(ParallaxInfoRecord, max_offset) == 40);
 static_assert(offsetof(ParallaxInfoRecord, reserved) == 48);
 
+// Compressed info v1: one record, shape {1, 64}.
+struct CompressedParallaxInfoRecord {
+  uint32_t resolution;      // N, 1..16384
+  uint32_t dirs;            // n: n x n view directions, 1..256
+  uint32_t bits;            // bits per code: 8 (codes u8) or 16 (codes u16)
+  uint32_t flags;           // 0 in version 1
+  double min_cos;           // the cap, [0, 1)
+  double reference_height;  // z_ref, tile-side units (finite)
+  double max_offset;        // max |Eq. 2 offset| of the raw table's bin centres, tile units
+  double rms_offset_error;  // bake-time RMS |Eq. 2 offset error| over texels x bins, texels
+  double max_offset_error;  // bake-time max of the same, texels
+  double max_depth_error;   // bake-time max |r - decoded r|, tile-side units
+};
+static_assert(sizeof(CompressedParallaxInfoRecord) == 64);
+static_assert(alignof(CompressedParallaxInfoRecord) == 8);
+static_assert(offsetof(CompressedParallaxInfoRecord, resolution) == 0);
+static_assert(offsetof(CompressedParallaxInfoRecord, dirs) == 4);
+static_assert(offsetof(CompressedParallaxInfoRecord, bits) == 8);
+static_assert(offsetof(CompressedParallaxInfoRecord, flags) == 12);
+static_assert(offsetof(CompressedParallaxInfoRecord, min_cos) == 16);
+static_assert(offsetof(CompressedParallaxInfoRecord, reference_height) == 24);
+static_assert(offsetof(CompressedParallaxInfoRecord, max_offset) == 32);
+static_assert(offsetof(CompressedParallaxInfoRecord, rms_offset_error) == 40);
+static_assert(offsetof(CompressedParallaxInfoRecord, max_offset_error) == 48);
+static_assert(offsetof(CompressedParallaxInfoRecord, max_depth_error) == 56);
+
+// Which form ParallaxView::open uses.
+enum class ParallaxSource {
+  Auto,        // the raw table when the asset has one (exact), the compressed one otherwise
+  Raw,         // the raw table only
+  Compressed,  // the compressed table only
+};
+
 // The answer of a query.
 struct ParallaxSample {
   double r = 0;               // ray depth (<= 0), tile-side units; the footprint mean for areas
@@ -69,14 +121,25 @@ struct ParallaxSample {
   double direction[3] = {0, 0, 1};  // o as used: normalised, clamped into the cap
 };
 
+// The same queries on the raw and on the compressed form. The view points into the Asset's bytes
+// (it must outlive the view); the compressed form's prefix sums are owned (shared between copies).
 class ParallaxView {
  public:
-  // Errors: NotFound (CBK-E019: no parallax table), WrongType/Unsupported (CBK-E015: version,
-  // element type, shape, SAT shape differing from the table's), Malformed (CBK-E021: a parameter
-  // out of range). The SAT is optional (has_sat()).
-  Status open(const Asset& asset) noexcept;
-  bool is_open() const noexcept { return codes_ != nullptr; }
-  bool has_sat() const noexcept { return sat_ != nullptr; }
+  // Errors: NotFound (CBK-E019: no parallax table of the form asked for), WrongType/Unsupported
+  // (CBK-E015: version, element type, shape, SAT shape differing from the table's, bits, flags),
+  // Malformed (CBK-E021: a parameter or step out of range, NaN/Inf included). The raw SAT is
+  // optional (has_sat()); the compressed form always answers footprints (SATs built on demand;
+  // footprint_depth returns Unsupported if one cannot be allocated).
+  Status open(const Asset& asset, ParallaxSource source = ParallaxSource::Auto) noexcept;
+  bool is_open() const noexcept { return codes_ != nullptr || packed_ != nullptr; }
+  bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
+  bool is_compressed() const noexcept { return packed_ != nullptr; }
+  // Compressed form: its record (zero for the raw form).
+  const CompressedParallaxInfoRecord& compressed_info() const noexcept { return packed_info_; }
+  // Bytes of the SATs the compressed form has built so far (0 for raw).
+  uint64_t decoded_bytes() const noexcept;
+  // The depth step of `bin` (tile-side units per code; the raw form's depth_scale for every bin).
+  double depth_step(uint32_t bin) const noexcept;
 
   const ParallaxInfoRecord& info() const noexcept { return info_; }
   uint32_t resolution() const noexcept { return info_.resolution; }
@@ -107,16 +170,32 @@ class ParallaxView {
                          ParallaxSample* out) const noexcept;
 
   // The exact sum of the codes of `bin` over texels [0, x) x [0, y), 0 <= x, y <= N (from the
-  // SAT; exact for any N). Precondition: has_sat(), bin < dirs^2.
+  // SAT; exact for any N). Precondition: has_sat(), bin < dirs^2; compressed form: the bin's SAT
+  // built (footprint_depth or ensure_sat did), else 0.
   uint64_t code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
+  // Builds the compressed form's SAT of `bin` now (no-op for raw); false if it cannot be allocated.
+  // Thread-safe. Precondition: bin < dirs^2.
+  bool ensure_sat(uint32_t bin) const noexcept;
 
  private:
   double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
   double prefix_integral(uint32_t bin, double x, double y) const noexcept;
+  const uint32_t* bin_sat(uint32_t bin) const noexcept;
+  uint32_t code(uint64_t index) const noexcept {
+    return codes_ ? uint32_t(codes_[index]) : uint32_t(codes8_[index]);
+  }
+
+  struct Packed;  // the compressed form's steps and on-demand SATs
+  Status open_raw(const Asset& asset) noexcept;
+  Status open_compressed(const Asset& asset) noexcept;
 
   ParallaxInfoRecord info_{};
   const uint16_t* codes_ = nullptr;
   const uint32_t* sat_ = nullptr;
+  const uint8_t* codes8_ = nullptr;  // compressed form
+  const double* steps_ = nullptr;    // compressed form, D values in the asset
+  CompressedParallaxInfoRecord packed_info_{};
+  std::shared_ptr<Packed> packed_;
 };
 
 }  // namespace clothbake::reader

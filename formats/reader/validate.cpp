@@ -398,6 +398,50 @@ void check_parallax_sat(const Asset& asset, const ParallaxView& view, Reporter& 
       }
 }
 
+// A compressed parallax table beside the raw one must decode to it within its recorded depth
+// error (CBK-E022); codes of an all-zero direction (step 0) must be 0. O(D N^2).
+void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, Reporter& r) {
+  SectionInfo codes_info;
+  ArrayView<uint8_t> codes8;
+  ArrayView<uint16_t> codes16;
+  if (!asset.find(SectionType::ParallaxCompressed, kCompressedParallaxCodesInstance, &codes_info)
+           .ok() ||
+      (packed.compressed_info().bits == 8 ? !asset.view_of(codes_info, &codes8).ok()
+                                          : !asset.view_of(codes_info, &codes16).ok()))
+    return;
+  auto code = [&](uint64_t i) -> unsigned {
+    return codes8.data ? unsigned(codes8.data[i]) : unsigned(codes16.data[i]);
+  };
+  const uint64_t n = packed.resolution(), dirs = uint64_t(packed.dirs()) * packed.dirs();
+  for (uint64_t d = 0; d < dirs; ++d)
+    if (packed.depth_step(uint32_t(d)) == 0.0)
+      for (uint64_t t = 0; t < n * n; ++t)
+        if (code(d * n * n + t) != 0) {
+          r.report(Check::ValueRange, codes_info.index,
+                   "parallax_compressed: direction %" PRIu64 " has step 0 but texel (%" PRIu64
+                   ", %" PRIu64 ") has code %u",
+                   d, t % n, t / n, code(d * n * n + t));
+          return;
+        }
+  ParallaxView raw;
+  if (!raw.open(asset, ParallaxSource::Raw).ok() || raw.resolution() != n ||
+      raw.dirs() != packed.dirs())
+    return;
+  const double tolerance = packed.compressed_info().max_depth_error * (1 + 1e-9) + 1e-15;
+  for (uint64_t d = 0; d < dirs; ++d)
+    for (uint64_t t = 0; t < n * n; ++t) {
+      const double a = raw.bin_depth(uint32_t(d), int64_t(t % n), int64_t(t / n));
+      const double b = packed.bin_depth(uint32_t(d), int64_t(t % n), int64_t(t / n));
+      if (!(std::fabs(a - b) <= tolerance)) {
+        r.report(kCheckCrossSection, codes_info.index,
+                 "parallax_compressed: direction %" PRIu64 " texel (%" PRIu64 ", %" PRIu64
+                 ") decodes to %.9g, the raw table has %.9g (recorded max error %.3g)",
+                 d, t % n, t / n, b, a, packed.compressed_info().max_depth_error);
+        return;
+      }
+    }
+}
+
 // Opens the baked tables as a renderer does and checks them against each other and the maps:
 // resolutions (CBK-E016), cluster counts and supports, raw against compressed (CBK-E022), and
 // every view's own open() checks (their IDs).
@@ -416,12 +460,22 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
   };
   if (has_type(asset, SectionType::ParallaxTable) || has_type(asset, SectionType::ParallaxSat)) {
     ParallaxView parallax;
-    const Status s = parallax.open(asset);
+    const Status s = parallax.open(asset, ParallaxSource::Raw);
     if (!s.ok()) {
       r.report_status(s, kNoSection);
     } else {
       check_resolution("parallax", parallax.resolution());
       if (parallax.has_sat()) check_parallax_sat(asset, parallax, r);
+    }
+  }
+  if (has_type(asset, SectionType::ParallaxCompressed)) {
+    ParallaxView packed;
+    const Status s = packed.open(asset, ParallaxSource::Compressed);
+    if (!s.ok()) {
+      r.report_status(s, kNoSection);
+    } else {
+      check_resolution("parallax_compressed", packed.resolution());
+      check_compressed_parallax(asset, packed, r);
     }
   }
   if (has_type(asset, SectionType::VisibilityAsg) || has_type(asset, SectionType::AsgFitError)) {

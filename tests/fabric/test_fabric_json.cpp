@@ -14,6 +14,7 @@ BakeSettings unusual_settings() {
   b.resolution = 64;
   b.parallax_dirs = 9;
   b.parallax_min_cos = 0.625;
+  b.parallax_max_error = 0.125;
   b.visibility_dirs = 11;
   b.radiance_dirs = 13;
   b.clusters = 5;
@@ -26,11 +27,17 @@ BakeSettings unusual_settings() {
 
 TEST(BakeSettingsJson, HoldsEveryFieldUnderItsTomlKey) {
   const nlohmann::json j = bake_settings_json(unusual_settings());
-  const nlohmann::json expected = {{"resolution", 64},          {"parallax_dirs", 9},
-                                   {"parallax_min_cos", 0.625}, {"visibility_dirs", 11},
-                                   {"radiance_dirs", 13},       {"clusters", 5},
-                                   {"compress", false},         {"compress_clusters", 3},
-                                   {"compress_rank", 7},        {"seed", 0xffffffffffffffffull}};
+  const nlohmann::json expected = {{"resolution", 64},
+                                   {"parallax_dirs", 9},
+                                   {"parallax_min_cos", 0.625},
+                                   {"parallax_max_error", 0.125},
+                                   {"visibility_dirs", 11},
+                                   {"radiance_dirs", 13},
+                                   {"clusters", 5},
+                                   {"compress", false},
+                                   {"compress_clusters", 3},
+                                   {"compress_rank", 7},
+                                   {"seed", 0xffffffffffffffffull}};
   EXPECT_EQ(j, expected);
   EXPECT_TRUE(j["seed"].is_number_unsigned());
 }

@@ -76,6 +76,17 @@ std::map<std::string, Record> code_records() {
        CBK_FIELD(ParallaxInfoRecord, depth_scale),
        CBK_FIELD(ParallaxInfoRecord, max_quantization_error),
        CBK_FIELD(ParallaxInfoRecord, max_offset), CBK_FIELD(ParallaxInfoRecord, reserved)}};
+  r["CompressedParallaxInfoRecord"] = {
+      sizeof(CompressedParallaxInfoRecord),
+      {CBK_FIELD(CompressedParallaxInfoRecord, resolution),
+       CBK_FIELD(CompressedParallaxInfoRecord, dirs), CBK_FIELD(CompressedParallaxInfoRecord, bits),
+       CBK_FIELD(CompressedParallaxInfoRecord, flags),
+       CBK_FIELD(CompressedParallaxInfoRecord, min_cos),
+       CBK_FIELD(CompressedParallaxInfoRecord, reference_height),
+       CBK_FIELD(CompressedParallaxInfoRecord, max_offset),
+       CBK_FIELD(CompressedParallaxInfoRecord, rms_offset_error),
+       CBK_FIELD(CompressedParallaxInfoRecord, max_offset_error),
+       CBK_FIELD(CompressedParallaxInfoRecord, max_depth_error)}};
   r["VisibilityInfoRecord"] = {
       sizeof(VisibilityInfoRecord),
       {CBK_FIELD(VisibilityInfoRecord, resolution), CBK_FIELD(VisibilityInfoRecord, dirs),

@@ -8,6 +8,7 @@
 
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/validate.hpp"
 
 using namespace clothbake::reader;
@@ -57,6 +58,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         sink = sink + uint64_t(y.name[0]);
     std::string_view json;
     if (asset.metadata_json(&json).ok() && !json.empty()) sink = sink + uint64_t(json.back());
+    for (ParallaxSource source : {ParallaxSource::Raw, ParallaxSource::Compressed}) {
+      ParallaxView parallax;  // both forms: per-texel and footprint queries at the tile's edges
+      if (!parallax.open(asset, source).ok()) continue;
+      const double n = parallax.resolution(), view[3] = {0.3, -0.7, 0.5};
+      ParallaxSample sample;
+      (void)parallax.depth(-1, int64_t(n), view, &sample);
+      if (parallax.has_sat())
+        (void)parallax.footprint_depth({-0.5, n - 0.25, n + 1.5, 2 * n}, view, &sample);
+      sink = sink + uint64_t(sample.r < 0);
+    }
     validate_asset(asset, nullptr, nullptr);
   }
   return 0;

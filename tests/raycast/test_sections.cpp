@@ -413,9 +413,30 @@ TEST(RaycastStages, BakeWritesQueryableSectionsIdenticallyForAnyThreadCount) {
   ParallaxSettings ps;
   ps.dirs = 8;
   ParallaxTable direct = bake_parallax(fabric.maps, ps);
+  // The default form is the compressed one (8-bit codes, within the recorded error).
+  ASSERT_TRUE(parallax.is_compressed());
   for (int bin = 0; bin < 64; bin += 5)
     for (int x = 0; x < 16; ++x)
-      ASSERT_EQ(parallax.bin_depth(uint32_t(bin), x, 3), direct.r(bin, x, 3));
+      ASSERT_LE(std::fabs(parallax.bin_depth(uint32_t(bin), x, 3) - direct.r(bin, x, 3)),
+                parallax.compressed_info().max_depth_error);
+  // Without compression the stage writes the raw codes exactly (format 1.0).
+  {
+    pipeline::BakeRequest request;
+    request.fabric = fabric;
+    request.fabric->bake.compress = false;
+    request.output_path = (dir / "raw.cbk").string();
+    request.stages = {"parallax"};
+    pipeline::bake(request, stages::bake_stages());
+    reader::Asset raw_asset;
+    ASSERT_TRUE(raw_asset.open_file(request.output_path.c_str()).ok());
+    EXPECT_EQ(raw_asset.version_minor(), 0);
+    reader::ParallaxView raw;
+    ASSERT_TRUE(raw.open(raw_asset).ok());
+    EXPECT_FALSE(raw.is_compressed());
+    for (int bin = 0; bin < 64; bin += 5)
+      for (int x = 0; x < 16; ++x)
+        ASSERT_EQ(raw.bin_depth(uint32_t(bin), x, 3), direct.r(bin, x, 3));
+  }
   std::string_view json;
   ASSERT_TRUE(asset.metadata_json(&json).ok());
   auto meta = nlohmann::json::parse(json);

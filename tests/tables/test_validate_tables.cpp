@@ -122,6 +122,7 @@ class ValidateTables : public ::testing::Test {
     packed_ = new std::vector<formats::Section>(sections_of(read_bytes(request.output_path)));
     request.output_path = (dir / "raw.cbk").string();
     request.stages = {"tables", "parallax"};
+    request.fabric->bake.compress = false;  // the raw parallax codes and SATs too
     pipeline::bake(request, stages::bake_stages());
     raw_ = new std::vector<formats::Section>(sections_of(read_bytes(request.output_path)));
     fs::remove_all(dir);
@@ -143,7 +144,8 @@ TEST_F(ValidateTables, BakedAssetsAreValid) {
   }
   // The fixtures hold what the corruptions below need.
   EXPECT_NE(find(*packed_, SectionType::RadianceCompressedTables, 2), nullptr);
-  EXPECT_NE(find(*packed_, SectionType::ParallaxSat, 0), nullptr);
+  EXPECT_NE(find(*packed_, SectionType::ParallaxCompressed, 2), nullptr);
+  EXPECT_NE(find(*raw_, SectionType::ParallaxSat, 0), nullptr);
   EXPECT_NE(find(*packed_, SectionType::VisibilityAsg, 0), nullptr);
   EXPECT_NE(find(*raw_, SectionType::RadianceRawTables, 3), nullptr);
   EXPECT_NE(find(*raw_, SectionType::ClusterLabels, 0), nullptr);
@@ -172,7 +174,7 @@ TEST_F(ValidateTables, LabelsThatDisagreeWithTheTablesAreCrossSectionErrors) {
 }
 
 TEST_F(ValidateTables, ParallaxSatThatIsNotTheSatOfTheCodes) {
-  auto s = *packed_;
+  auto s = *raw_;
   formats::Section* sat = find(s, SectionType::ParallaxSat, 0);
   ASSERT_NE(sat, nullptr);
   uint32_t v;
@@ -187,7 +189,7 @@ TEST_F(ValidateTables, ParallaxSatThatIsNotTheSatOfTheCodes) {
 TEST_F(ValidateTables, ResolutionsThatDisagreeAreE016) {
   // The parallax info record claims another resolution along with a matching shape: drop the
   // parallax sections and put a consistent 8^2 parallax table in their place.
-  auto s = *packed_;
+  auto s = *raw_;
   formats::Section* info = find(s, SectionType::ParallaxTable, 0);
   formats::Section* codes = find(s, SectionType::ParallaxTable, 1);
   ASSERT_NE(info, nullptr);

@@ -179,6 +179,9 @@ TEST_F(FabricLoad, WrongTypeAndOutOfRange) {
   f = write_image_fabric(dir, 8, "", "[bake]\ncompress_rank = 256\n");
   EXPECT_THAT(load_error(f.toml),
               HasSubstr("bake.compress_rank = 256 is out of range; valid range is [0, 255]"));
+  f = write_image_fabric(dir, 8, "", "[bake]\nparallax_max_error = 0\n");
+  EXPECT_THAT(load_error(f.toml),
+              HasSubstr("bake.parallax_max_error = 0 is out of range; valid range is (0, 1]"));
   f = write_image_fabric(dir, 8, "", "[bake]\ncompress_clusters = -1\n");
   EXPECT_THAT(load_error(f.toml),
               HasSubstr("bake.compress_clusters = -1 is out of range; valid range is [0, 64]"));

@@ -45,6 +45,7 @@ void expect_same_fabric(const Fabric& a, const Fabric& b) {
   EXPECT_EQ(x.resolution, y.resolution);
   EXPECT_EQ(x.parallax_dirs, y.parallax_dirs);
   EXPECT_EQ(x.parallax_min_cos, y.parallax_min_cos);
+  EXPECT_EQ(x.parallax_max_error, y.parallax_max_error);
   EXPECT_EQ(x.visibility_dirs, y.visibility_dirs);
   EXPECT_EQ(x.radiance_dirs, y.radiance_dirs);
   EXPECT_EQ(x.clusters, y.clusters);

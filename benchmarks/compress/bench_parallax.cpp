@@ -1,0 +1,147 @@
+// Parallax queries on the raw (16-bit codes + stored SATs) and compressed (8-bit codes, SATs on
+// first use) forms of a 256^2 x 32^2 table of pseudo-random codes (query cost does not depend on
+// the content), opening the compressed form with every checksum, and the requantisation itself
+// (docs/performance.md, "Compressed parallax").
+//
+//   build/bin/bench_parallax --benchmark_min_time=0.3
+#include <benchmark/benchmark.h>
+
+#include <cstring>
+#include <memory>
+#include <random>
+
+#include "compress/parallax_codes.hpp"
+#include "formats/reader/parallax_sections.hpp"
+#include "formats/writer/asset_writer.hpp"
+#include "raycast/parallax.hpp"
+#include "raycast/raycast_sections.hpp"
+
+using namespace clothbake;
+
+namespace {
+
+constexpr int kN = 256, kDirs = 32;
+
+struct Fixture {
+  raycast::ParallaxTable table;
+  std::vector<uint64_t> raw_bytes, packed_bytes;
+  std::size_t packed_size = 0;
+  reader::Asset raw_asset, packed_asset;
+  reader::ParallaxView raw, packed;
+  Fixture() {
+    table.resolution = kN;
+    table.dirs = kDirs;
+    table.depth_scale = 0.25 / 65535;
+    table.depth.resize(std::size_t(kDirs) * kDirs * kN * kN);
+    std::mt19937_64 rng(1);
+    for (auto& c : table.depth)
+      c = uint16_t(rng() >> 48);
+    const compress::QuantisedParallax q = compress::quantise_parallax(
+        {table.depth.data(), kN, kDirs, table.min_cos, table.depth_scale, 0.0, 0.0});
+    auto pack = compress::compressed_parallax_sections(q);
+    raycast::ParallaxTable copy = table;
+    auto rs = raycast::parallax_sections(std::move(copy));
+    auto store = [](const std::vector<formats::Section>& s, std::vector<uint64_t>* out) {
+      auto bytes = formats::serialize_asset(s);
+      out->resize((bytes.size() + 7) / 8);
+      std::memcpy(out->data(), bytes.data(), bytes.size());
+      return bytes.size();
+    };
+    const std::size_t raw_size = store(rs, &raw_bytes);
+    packed_size = store(pack, &packed_bytes);
+    (void)raw_asset.open_memory(raw_bytes.data(), raw_size, {reader::Verify::Structure});
+    (void)packed_asset.open_memory(packed_bytes.data(), packed_size, {reader::Verify::Structure});
+    (void)raw.open(raw_asset);
+    (void)packed.open(packed_asset);
+    for (uint32_t b = 0; b < uint32_t(kDirs * kDirs); ++b)
+      (void)packed.ensure_sat(b);  // steady state: the SATs a renderer uses are built
+  }
+};
+
+Fixture& fixture() {
+  static Fixture f;
+  return f;
+}
+
+std::vector<double> positions() {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0, kN);
+  std::vector<double> p(2 * 4096);
+  for (double& x : p)
+    x = u(rng);
+  return p;
+}
+
+void texel_query(benchmark::State& state, bool compressed) {
+  const reader::ParallaxView& view = compressed ? fixture().packed : fixture().raw;
+  const auto p = positions();
+  const double v[3] = {0.3, -0.2, 0.9};
+  reader::ParallaxSample s;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    (void)view.depth(int64_t(p[2 * (i & 4095)]), int64_t(p[2 * (i & 4095) + 1]), v, &s);
+    benchmark::DoNotOptimize(s.r);
+    ++i;
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+
+void footprint_query(benchmark::State& state, bool compressed) {
+  const reader::ParallaxView& view = compressed ? fixture().packed : fixture().raw;
+  const auto p = positions();
+  const double size = double(state.range(0)) + 0.5;
+  const double v[3] = {0.3, -0.2, 0.9};
+  reader::ParallaxSample s;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const double x0 = p[2 * (i & 4095)], y0 = p[2 * (i & 4095) + 1];
+    (void)view.footprint_depth({x0, y0, x0 + size, y0 + size}, v, &s);
+    benchmark::DoNotOptimize(s.r);
+    ++i;
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+
+void BM_TexelRaw(benchmark::State& s) {
+  texel_query(s, false);
+}
+void BM_TexelCompressed(benchmark::State& s) {
+  texel_query(s, true);
+}
+void BM_FootprintRaw(benchmark::State& s) {
+  footprint_query(s, false);
+}
+void BM_FootprintCompressed(benchmark::State& s) {
+  footprint_query(s, true);
+}
+
+void BM_OpenCompressedWithChecksums(benchmark::State& state) {
+  Fixture& f = fixture();
+  for (auto _ : state) {
+    reader::Asset a;
+    reader::ParallaxView v;
+    benchmark::DoNotOptimize(
+        a.open_memory(f.packed_bytes.data(), f.packed_size, {reader::Verify::Checksums}).ok() &&
+        v.open(a).ok());
+  }
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(f.packed_size));
+}
+
+void BM_Quantise(benchmark::State& state) {
+  Fixture& f = fixture();
+  for (auto _ : state) {
+    auto q = compress::quantise_parallax(
+        {f.table.depth.data(), kN, kDirs, f.table.min_cos, f.table.depth_scale, 0.0, 0.0});
+    benchmark::DoNotOptimize(q.codes.data());
+  }
+}
+
+}  // namespace
+
+BENCHMARK(BM_TexelRaw);
+BENCHMARK(BM_TexelCompressed);
+BENCHMARK(BM_FootprintRaw)->Arg(1)->Arg(4)->Arg(64);
+BENCHMARK(BM_FootprintCompressed)->Arg(1)->Arg(4)->Arg(64);
+BENCHMARK(BM_OpenCompressedWithChecksums)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Quantise)->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK_MAIN();
