@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/depfile.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
@@ -34,6 +35,7 @@ struct BakeOptions {
   bool record_timings = false;
   bool list_stages = false;
   std::string report;
+  std::string depfile;
   // Compression (compress/compress_settings.hpp).
   std::string compress_shape;  // --compress K,R
   double max_error = 0.0;      // --max-error E
@@ -136,6 +138,9 @@ Action setup_bake(CLI::App& app) {
   app.add_option("--report", o->report,
                  "write a JSON report: per-stage wall/CPU time and peak memory, asset sections");
   add_json_flag(app, o->json, "print the report on stdout");
+  app.add_option("--depfile", o->depfile,
+                 "write a Make-syntax depfile: the output and every file the bake read (fabric, "
+                 "maps, WIF, the clothbake executable)");
   app.add_flag("--force", o->force, "replace an existing output file that is not an asset");
   app.add_flag("--record-timings", o->record_timings,
                "store stage timings in the asset metadata (makes the bytes differ run to run)");
@@ -167,6 +172,7 @@ Action setup_bake(CLI::App& app) {
     formats::OutputOptions report_output;
     report_output.require_asset_to_replace = false;
     if (!o->report.empty()) formats::check_output_path(o->report, report_output);
+    if (!o->depfile.empty()) formats::check_output_path(o->depfile, report_output);
 
     pipeline::BakeRequest request;
     request.fabric_path = o->fabric;
@@ -188,10 +194,22 @@ Action setup_bake(CLI::App& app) {
           o->report, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); },
           report_output);
     }
+    if (!o->depfile.empty()) {
+      std::vector<std::string> deps;
+      for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
+        deps.push_back(input.path);
+      if (const std::string exe = current_executable(); !exe.empty()) deps.push_back(exe);
+      write_depfile(o->depfile, o->output, deps);
+    }
     if (o->json) print_json(report);
-    info("wrote " + result.asset.path + " (" + std::to_string(result.asset.size_bytes) +
-         " bytes, " + std::to_string(result.asset.sections.size()) + " sections) in " +
-         std::to_string(result.run.wall_seconds) + " s");
+    if (result.asset.unchanged)
+      info(result.asset.path +
+           " is up to date: the bake gave the same bytes, so the file and its "
+           "mtime were left untouched");
+    else
+      info("wrote " + result.asset.path + " (" + std::to_string(result.asset.size_bytes) +
+           " bytes, " + std::to_string(result.asset.sections.size()) + " sections) in " +
+           std::to_string(result.run.wall_seconds) + " s");
     return 0;
   };
 }

@@ -62,6 +62,7 @@ nlohmann::json bake_report_json(const BakeRequest& request, const BakeResult& re
   report["asset"] = {{"path", result.asset.path},
                      {"size_bytes", result.asset.size_bytes},
                      {"content_hash", result.asset.content_hash},
+                     {"unchanged", result.asset.unchanged},
                      {"sections", sections}};
   return report;
 }
