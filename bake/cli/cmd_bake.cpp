@@ -10,11 +10,13 @@
 #include <memory>
 #include <sstream>
 
+#include "bake/cache/stage_cache.hpp"
 #include "bake/cli/command.hpp"
 #include "bake/cli/depfile.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -36,6 +38,9 @@ struct BakeOptions {
   bool list_stages = false;
   std::string report;
   std::string depfile;
+  std::string cache;           // --cache DIR (else $CLOTHBAKE_CACHE)
+  std::string cache_max_size;  // --cache-max-size
+  bool no_cache = false;
   // Compression (compress/compress_settings.hpp).
   std::string compress_shape;  // --compress K,R
   double max_error = 0.0;      // --max-error E
@@ -144,6 +149,12 @@ Action setup_bake(CLI::App& app) {
   app.add_flag("--force", o->force, "replace an existing output file that is not an asset");
   app.add_flag("--record-timings", o->record_timings,
                "store stage timings in the asset metadata (makes the bytes differ run to run)");
+  app.add_option("--cache", o->cache,
+                 "content-keyed cache of finished stage outputs (default: $CLOTHBAKE_CACHE; "
+                 "docs/batch.md)");
+  app.add_option("--cache-max-size", o->cache_max_size,
+                 "bound of the cache, least recently used entries out (default 10G)");
+  app.add_flag("--no-cache", o->no_cache, "ignore --cache and $CLOTHBAKE_CACHE");
   app.add_flag("--list-stages", o->list_stages, "list the stages in run order and exit");
   app.add_option("--compress", o->compress_shape,
                  "C-PCA with a fixed shape K,R: K clusters per visibility cluster, rank R "
@@ -184,9 +195,29 @@ Action setup_bake(CLI::App& app) {
     request.run.record_timings = o->record_timings;
     if (!compression.given().empty())
       request.seeds.put(stages::kCompressSettingsArtifact, compression);
+    std::unique_ptr<cache::DiskCache> stage_cache;
+    const std::string cache_dir = o->no_cache ? "" : cache::cache_dir_from(o->cache);
+    if (!cache_dir.empty() && !o->record_timings) {  // timings would make entries differ
+      cache::CacheOptions cache_options;
+      cache_options.dir = cache_dir;
+      if (!o->cache_max_size.empty())
+        cache_options.max_bytes = cache::parse_size(o->cache_max_size, "--cache-max-size");
+      stage_cache = std::make_unique<cache::DiskCache>(cache_options, stages::artifact_codecs());
+      request.run.cache = stage_cache.get();
+    }
     const pipeline::BakeResult result = pipeline::bake(request, stages::bake_stages());
 
     nlohmann::json report = pipeline::bake_report_json(request, result);
+    if (stage_cache) {
+      const auto& c = stage_cache->counts();
+      report["cache"] = {{"dir", cache_dir},
+                         {"enabled", stage_cache->enabled()},
+                         {"hits", c.hits},
+                         {"stored", c.misses},
+                         {"corrupt", c.corrupt},
+                         {"unstored", c.unstored},
+                         {"keys", stage_cache->keys()}};
+    }
     report["warnings"] = take_warnings();
     if (!o->report.empty()) {
       const std::string text = report.dump(2) + "\n";

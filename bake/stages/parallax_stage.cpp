@@ -3,6 +3,7 @@
 // formats/reader/parallax_sections.hpp). Settings: [bake] parallax_dirs and parallax_min_cos.
 #include <nlohmann/json.hpp>
 
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "fabric/fabric.hpp"
 #include "raycast/parallax.hpp"
@@ -50,6 +51,7 @@ pipeline::Stage parallax_stage() {
   s.inputs = {"fabric"};
   s.outputs = {"section/parallax", "metadata/parallax"};
   s.run = run_parallax;
+  s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;
 }
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "fabric/fabric.hpp"
@@ -76,6 +77,7 @@ pipeline::Stage tables_stage() {
   s.inputs = {"fabric", "clusters"};
   s.outputs = {"section/tables", "metadata/tables"};
   s.run = run_tables;
+  s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;
 }
 

@@ -133,6 +133,7 @@ pipeline::Stage write_stage() {
   s.outputs = {"asset"};
   s.always = true;
   s.run = run_write;
+  s.cacheable = false;  // writes the asset
   return s;
 }
 
