@@ -218,6 +218,10 @@ Action setup_bake(CLI::App& app) {
                          {"unstored", c.unstored},
                          {"keys", stage_cache->keys()}};
     }
+    nlohmann::json inputs = nlohmann::json::array();  // every file read (batch up-to-date checks)
+    for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
+      inputs.push_back({{"role", input.role}, {"path", input.path}, {"xxh64", input.xxh64}});
+    report["inputs"] = inputs;
     report["warnings"] = take_warnings();
     if (!o->report.empty()) {
       const std::string text = report.dump(2) + "\n";
