@@ -38,6 +38,7 @@ struct BakeOptions {
   bool list_stages = false;
   std::string report;
   std::string depfile;
+  std::string depfile_target;  // default: the output
   std::string cache;           // --cache DIR (else $CLOTHBAKE_CACHE)
   std::string cache_max_size;  // --cache-max-size
   bool no_cache = false;
@@ -146,6 +147,8 @@ Action setup_bake(CLI::App& app) {
   app.add_option("--depfile", o->depfile,
                  "write a Make-syntax depfile: the output and every file the bake read (fabric, "
                  "maps, WIF, the clothbake executable)");
+  app.add_option("--depfile-target", o->depfile_target,
+                 "target named in the depfile (default: the output), e.g. a stamp file for Make");
   app.add_flag("--force", o->force, "replace an existing output file that is not an asset");
   app.add_flag("--record-timings", o->record_timings,
                "store stage timings in the asset metadata (makes the bytes differ run to run)");
@@ -234,7 +237,7 @@ Action setup_bake(CLI::App& app) {
       for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
         deps.push_back(input.path);
       if (const std::string exe = current_executable(); !exe.empty()) deps.push_back(exe);
-      write_depfile(o->depfile, o->output, deps);
+      write_depfile(o->depfile, o->depfile_target.empty() ? o->output : o->depfile_target, deps);
     }
     if (o->json) print_json(report);
     if (result.asset.unchanged)
