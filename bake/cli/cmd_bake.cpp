@@ -10,10 +10,13 @@
 #include <memory>
 #include <sstream>
 
+#include "bake/cache/stage_cache.hpp"
 #include "bake/cli/command.hpp"
+#include "bake/cli/depfile.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -34,6 +37,11 @@ struct BakeOptions {
   bool record_timings = false;
   bool list_stages = false;
   std::string report;
+  std::string depfile;
+  std::string depfile_target;  // default: the output
+  std::string cache;           // --cache DIR (else $CLOTHBAKE_CACHE)
+  std::string cache_max_size;  // --cache-max-size
+  bool no_cache = false;
   // Compression (compress/compress_settings.hpp).
   std::string compress_shape;  // --compress K,R
   double max_error = 0.0;      // --max-error E
@@ -136,9 +144,20 @@ Action setup_bake(CLI::App& app) {
   app.add_option("--report", o->report,
                  "write a JSON report: per-stage wall/CPU time and peak memory, asset sections");
   add_json_flag(app, o->json, "print the report on stdout");
+  app.add_option("--depfile", o->depfile,
+                 "write a Make-syntax depfile: the output and every file the bake read (fabric, "
+                 "maps, WIF, the clothbake executable)");
+  app.add_option("--depfile-target", o->depfile_target,
+                 "target named in the depfile (default: the output), e.g. a stamp file for Make");
   app.add_flag("--force", o->force, "replace an existing output file that is not an asset");
   app.add_flag("--record-timings", o->record_timings,
                "store stage timings in the asset metadata (makes the bytes differ run to run)");
+  app.add_option("--cache", o->cache,
+                 "content-keyed cache of finished stage outputs (default: $CLOTHBAKE_CACHE; "
+                 "docs/batch.md)");
+  app.add_option("--cache-max-size", o->cache_max_size,
+                 "bound of the cache, least recently used entries out (default 10G)");
+  app.add_flag("--no-cache", o->no_cache, "ignore --cache and $CLOTHBAKE_CACHE");
   app.add_flag("--list-stages", o->list_stages, "list the stages in run order and exit");
   app.add_option("--compress", o->compress_shape,
                  "C-PCA with a fixed shape K,R: K clusters per visibility cluster, rank R "
@@ -167,6 +186,7 @@ Action setup_bake(CLI::App& app) {
     formats::OutputOptions report_output;
     report_output.require_asset_to_replace = false;
     if (!o->report.empty()) formats::check_output_path(o->report, report_output);
+    if (!o->depfile.empty()) formats::check_output_path(o->depfile, report_output);
 
     pipeline::BakeRequest request;
     request.fabric_path = o->fabric;
@@ -178,9 +198,33 @@ Action setup_bake(CLI::App& app) {
     request.run.record_timings = o->record_timings;
     if (!compression.given().empty())
       request.seeds.put(stages::kCompressSettingsArtifact, compression);
+    std::unique_ptr<cache::DiskCache> stage_cache;
+    const std::string cache_dir = o->no_cache ? "" : cache::cache_dir_from(o->cache);
+    if (!cache_dir.empty() && !o->record_timings) {  // timings would make entries differ
+      cache::CacheOptions cache_options;
+      cache_options.dir = cache_dir;
+      if (!o->cache_max_size.empty())
+        cache_options.max_bytes = cache::parse_size(o->cache_max_size, "--cache-max-size");
+      stage_cache = std::make_unique<cache::DiskCache>(cache_options, stages::artifact_codecs());
+      request.run.cache = stage_cache.get();
+    }
     const pipeline::BakeResult result = pipeline::bake(request, stages::bake_stages());
 
     nlohmann::json report = pipeline::bake_report_json(request, result);
+    if (stage_cache) {
+      const auto& c = stage_cache->counts();
+      report["cache"] = {{"dir", cache_dir},
+                         {"enabled", stage_cache->enabled()},
+                         {"hits", c.hits},
+                         {"stored", c.misses},
+                         {"corrupt", c.corrupt},
+                         {"unstored", c.unstored},
+                         {"keys", stage_cache->keys()}};
+    }
+    nlohmann::json inputs = nlohmann::json::array();  // every file read (batch up-to-date checks)
+    for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
+      inputs.push_back({{"role", input.role}, {"path", input.path}, {"xxh64", input.xxh64}});
+    report["inputs"] = inputs;
     report["warnings"] = take_warnings();
     if (!o->report.empty()) {
       const std::string text = report.dump(2) + "\n";
@@ -188,10 +232,22 @@ Action setup_bake(CLI::App& app) {
           o->report, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); },
           report_output);
     }
+    if (!o->depfile.empty()) {
+      std::vector<std::string> deps;
+      for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
+        deps.push_back(input.path);
+      if (const std::string exe = current_executable(); !exe.empty()) deps.push_back(exe);
+      write_depfile(o->depfile, o->depfile_target.empty() ? o->output : o->depfile_target, deps);
+    }
     if (o->json) print_json(report);
-    info("wrote " + result.asset.path + " (" + std::to_string(result.asset.size_bytes) +
-         " bytes, " + std::to_string(result.asset.sections.size()) + " sections) in " +
-         std::to_string(result.run.wall_seconds) + " s");
+    if (result.asset.unchanged)
+      info(result.asset.path +
+           " is up to date: the bake gave the same bytes, so the file and its "
+           "mtime were left untouched");
+    else
+      info("wrote " + result.asset.path + " (" + std::to_string(result.asset.size_bytes) +
+           " bytes, " + std::to_string(result.asset.sections.size()) + " sections) in " +
+           std::to_string(result.run.wall_seconds) + " s");
     return 0;
   };
 }

@@ -2,8 +2,10 @@
 // A value is immutable once stored and shared by reference between stages.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <typeinfo>
 #include <vector>
@@ -21,18 +23,37 @@ class Artifacts {
     values_.emplace(name, std::make_shared<const Holder<T>>(std::move(value)));
   }
 
+  // Stores a value of type `type` that is produced on first access: `load` must put it under
+  // `name` into the set it is given (the cache decodes a large output only when a stage reads
+  // it). What `load` throws propagates from get(), and the next get() calls it again.
+  void put_deferred(const std::string& name, const std::type_info& type,
+                    std::function<void(Artifacts&)> load) {
+    if (values_.count(name)) throw_internal_error("artifact '" + name + "' is produced twice");
+    values_.emplace(name, std::make_shared<const Deferred>(name, type, std::move(load)));
+  }
+
   // The value stored under `name`. Throws Error(Internal) if it is missing or of another type.
   template <class T>
   const T& get(const std::string& name) const {
     auto it = values_.find(name);
     if (it == values_.end()) throw_internal_error("artifact '" + name + "' is missing");
-    const auto* holder = dynamic_cast<const Holder<T>*>(it->second.get());
+    const Base* base = it->second.get();
+    if (const auto* deferred = dynamic_cast<const Deferred*>(base)) base = deferred->resolve();
+    const auto* holder = dynamic_cast<const Holder<T>*>(base);
     if (holder == nullptr)
       throw_internal_error("artifact '" + name + "' is not a " + typeid(T).name());
     return holder->value;
   }
 
   bool contains(const std::string& name) const { return values_.count(name) != 0; }
+
+  // The type of the value stored under `name` (for type-keyed serialisers: bake/cache). Throws
+  // Error(Internal) if it is missing.
+  const std::type_info& type_of(const std::string& name) const {
+    auto it = values_.find(name);
+    if (it == values_.end()) throw_internal_error("artifact '" + name + "' is missing");
+    return it->second->type();
+  }
 
   // Names in sorted order (optionally only those starting with `prefix`).
   std::vector<std::string> names(const std::string& prefix = "") const {
@@ -63,11 +84,35 @@ class Artifacts {
  private:
   struct Base {
     virtual ~Base() = default;
+    virtual const std::type_info& type() const = 0;
   };
   template <class T>
   struct Holder final : Base {
     explicit Holder(T v) : value(std::move(v)) {}
+    const std::type_info& type() const override { return typeid(T); }
     T value;
+  };
+  struct Deferred final : Base {
+    Deferred(std::string n, const std::type_info& t, std::function<void(Artifacts&)> l)
+        : name(std::move(n)), stored_type(t), load(std::move(l)) {}
+    const std::type_info& type() const override { return stored_type; }
+    const Base* resolve() const {
+      std::lock_guard<std::mutex> guard(mutex);
+      if (!value) {
+        Artifacts loaded;
+        load(loaded);
+        auto it = loaded.values_.find(name);
+        if (it == loaded.values_.end() || it->second->type() != stored_type)
+          throw_internal_error("deferred artifact '" + name + "' did not load");
+        value = it->second;
+      }
+      return value.get();
+    }
+    std::string name;
+    const std::type_info& stored_type;
+    std::function<void(Artifacts&)> load;
+    mutable std::mutex mutex;
+    mutable std::shared_ptr<const Base> value;
   };
   std::map<std::string, std::shared_ptr<const Base>> values_;
 };

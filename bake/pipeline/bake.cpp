@@ -40,7 +40,8 @@ nlohmann::json bake_report_json(const BakeRequest& request, const BakeResult& re
                       {"wall_seconds", s.wall_seconds},
                       {"cpu_seconds", s.cpu_seconds},
                       {"peak_rss_bytes", s.peak_rss_bytes},
-                      {"peak_rss_scope", s.peak_scope}});
+                      {"peak_rss_scope", s.peak_scope},
+                      {"cache", s.cache}});
   nlohmann::json sections = nlohmann::json::array();
   for (const auto& s : result.asset.sections)
     sections.push_back({{"name", s.name},
@@ -62,6 +63,7 @@ nlohmann::json bake_report_json(const BakeRequest& request, const BakeResult& re
   report["asset"] = {{"path", result.asset.path},
                      {"size_bytes", result.asset.size_bytes},
                      {"content_hash", result.asset.content_hash},
+                     {"unchanged", result.asset.unchanged},
                      {"sections", sections}};
   return report;
 }

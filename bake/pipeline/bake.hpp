@@ -37,6 +37,8 @@ struct AssetSummary {
   uint64_t size_bytes = 0;
   std::string content_hash;  // header checksum, 16 hex digits
   std::vector<SectionSummary> sections;
+  // The file already held these exact bytes: it was left untouched, mtime included (restat).
+  bool unchanged = false;
 };
 
 struct BakeRequest {

@@ -11,8 +11,10 @@
 
 namespace clothbake::pipeline {
 
-RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
-                       const RunOptions& options, const std::vector<Stage>& stages) {
+namespace {
+
+RunResult run_once(const std::vector<std::string>& picked, Artifacts seeded,
+                   const RunOptions& options, const std::vector<Stage>& stages) {
   const auto seeded_names = seeded.names();
   const std::vector<const Stage*> plan =
       plan_stages(stages, picked, std::set<std::string>(seeded_names.begin(), seeded_names.end()));
@@ -44,7 +46,14 @@ RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
     report.peak_scope = reset_peak_rss() ? "stage" : "process";
     const double wall0 = wall_seconds();
     const double cpu0 = process_cpu_seconds();
-    stage.run(context);
+    if (options.cache == nullptr) {
+      stage.run(context);
+    } else if (options.cache->load(stage, result.artifacts, produced)) {
+      report.cache = "hit";
+    } else {
+      stage.run(context);
+      report.cache = options.cache->store(stage, result.artifacts, produced) ? "miss" : "uncached";
+    }
     report.wall_seconds = wall_seconds() - wall0;
     report.cpu_seconds = process_cpu_seconds() - cpu0;
     report.peak_rss_bytes = peak_rss_bytes();
@@ -62,6 +71,21 @@ RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
   for (const auto& s : result.stages)
     result.peak_rss_bytes = std::max(result.peak_rss_bytes, s.peak_rss_bytes);
   return result;
+}
+
+}  // namespace
+
+RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
+                       const RunOptions& options, const std::vector<Stage>& stages) {
+  // A corrupt cache entry found while a stage reads it has been removed: run again (each retry
+  // removes one entry, so this ends; three are plenty in practice).
+  for (int attempt = 0;; ++attempt) {
+    try {
+      return run_once(picked, seeded, options, stages);
+    } catch (const CacheEntryCorrupt&) {
+      if (options.cache == nullptr || attempt >= 8) throw;
+    }
+  }
 }
 
 }  // namespace clothbake::pipeline

@@ -31,6 +31,15 @@ struct Stage {
   // Runs whether or not it is picked with --stages (the asset writer).
   bool always = false;
   std::function<void(StageContext&)> run;
+  // The content-keyed cache (RunOptions::cache, docs/batch.md). A cacheable stage's outputs are a
+  // pure function of its inputs: they may be kept under a key derived from the inputs and reused.
+  // False for stages that read or write files (load_fabric, write).
+  bool cacheable = true;
+  // Optional, for a stage that reads only part of an input: puts a stand-in holding just that part
+  // into `view` under the input's name (e.g. the fabric without its colours, for the stages that
+  // albedos do not affect). The cache keys the stage on the stand-in's content instead of the
+  // whole input; the stage itself still runs on the real input.
+  std::function<void(const Artifacts& available, Artifacts& view)> key_view;
 };
 
 // Measurements of one finished stage.
@@ -40,12 +49,34 @@ struct StageReport {
   double cpu_seconds = 0;       // process CPU time (all threads) spent during the stage
   uint64_t peak_rss_bytes = 0;  // peak resident memory during the stage (see peak_scope)
   std::string peak_scope;       // "stage" (peak reset before the stage) or "process"
+  std::string cache;            // "hit", "miss" (ran, stored), "uncached" (ran); "" without cache
+};
+
+// Thrown (through a stage reading a deferred input) when a cache entry fails its checksum: the
+// entry is gone and run_pipeline runs the stages again, recomputing it.
+struct CacheEntryCorrupt : Error {
+  explicit CacheEntryCorrupt(const std::string& message) : Error(ExitCode::Input, message) {}
+};
+
+// Where finished stage outputs are kept by key (implemented in bake/cache). The driver calls
+// load() before a stage and, when it returns false, runs the stage and calls store().
+class StageCache {
+ public:
+  virtual ~StageCache() = default;
+  // Fills `produced` with every output of `stage` and returns true when a valid entry exists for
+  // the stage's key over `available`; false otherwise (it may then hold a lock on the key until
+  // store(), so that concurrent bakes compute a stage once).
+  virtual bool load(const Stage& stage, const Artifacts& available, Artifacts& produced) = 0;
+  // Keeps the outputs of a stage that ran. Returns false when they were not kept (the stage has
+  // no key or an output has no serialiser, or the cache cannot be written: warned once).
+  virtual bool store(const Stage& stage, const Artifacts& available, const Artifacts& produced) = 0;
 };
 
 struct RunOptions {
   int threads = 0;              // 0: TBB's default (all cores)
   bool show_progress = false;   // progress bar on stderr
   bool record_timings = false;  // stages may store the timings in their outputs (write stage)
+  StageCache* cache = nullptr;  // optional: reuse finished stage outputs by key
 };
 
 // What a running stage sees. Reading an undeclared input or producing an undeclared output is an

@@ -4,6 +4,7 @@
 // tables stage. Settings: [bake] clusters, seed, visibility_dirs (the mean-visibility grid).
 #include <nlohmann/json.hpp>
 
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "cluster/cluster_sections.hpp"
 #include "cluster/visibility_clusters.hpp"
@@ -40,6 +41,7 @@ pipeline::Stage cluster_stage() {
   s.inputs = {"fabric", "visibility/asg_params"};
   s.outputs = {"clusters", "section/clusters", "metadata/clusters"};
   s.run = run_cluster;
+  s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;
 }
 

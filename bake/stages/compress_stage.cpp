@@ -11,6 +11,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "bake/stages/table_streaming.hpp"
 #include "cluster/visibility_clusters.hpp"
@@ -113,6 +114,7 @@ pipeline::Stage compress_stage() {
   s.outputs = {"section/compress", "metadata/compress", kCompressSupersedesArtifact};
   s.collects = {kCompressSettingsArtifact};
   s.run = run_compress;
+  s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;
 }
 

@@ -29,6 +29,7 @@ pipeline::Stage load_fabric_stage() {
   s.inputs = {"fabric_path"};
   s.outputs = {"fabric"};
   s.run = run_load_fabric;
+  s.cacheable = false;  // reads files: its output is keyed by content instead
   return s;
 }
 

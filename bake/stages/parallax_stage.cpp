@@ -10,6 +10,7 @@
 // (or compress = false) writes the raw codes and SATs alone, exactly as format 1.0 did.
 #include <nlohmann/json.hpp>
 
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
 #include "compress/compress_settings.hpp"
@@ -101,6 +102,7 @@ pipeline::Stage parallax_stage() {
   s.outputs = {"section/parallax", "metadata/parallax"};
   s.collects = {kCompressSettingsArtifact};
   s.run = run_parallax;
+  s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;
 }
 

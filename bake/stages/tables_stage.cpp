@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <nlohmann/json.hpp>
 
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "bake/stages/table_streaming.hpp"
 #include "cluster/visibility_clusters.hpp"
@@ -109,6 +110,7 @@ pipeline::Stage tables_stage() {
   // Reads the compression request to decide whether the raw SATs are needed at all.
   s.collects = {kCompressSettingsArtifact};
   s.run = run_tables;
+  s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;
 }
 

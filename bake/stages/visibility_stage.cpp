@@ -5,6 +5,7 @@
 // clustering. Settings: [bake] visibility_dirs.
 #include <nlohmann/json.hpp>
 
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "fabric/fabric.hpp"
 #include "raycast/raycast_sections.hpp"
@@ -51,6 +52,7 @@ pipeline::Stage visibility_stage() {
   s.inputs = {"fabric"};
   s.outputs = {"section/visibility", "metadata/visibility", "visibility/asg_params"};
   s.run = run_visibility;
+  s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;
 }
 

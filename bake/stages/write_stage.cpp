@@ -1,7 +1,8 @@
 // The `write` stage (always): collects every "section/*", "metadata/*" and "supersedes/*"
 // artifact of the stages that ran, adds the metadata section (provenance, stage order, each
 // stage's parameters) and writes the asset atomically through formats/writer; publishes the
-// asset's summary ("asset", pipeline::AssetSummary) for the bake report.
+// asset's summary ("asset", pipeline::AssetSummary) for the bake report. A file that already holds
+// the exact bytes is not rewritten (AssetSummary::unchanged; docs/batch.md, "Restat").
 #include <algorithm>
 #include <map>
 
@@ -13,6 +14,7 @@
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
+#include "formats/writer/same_bytes.hpp"
 
 namespace clothbake::stages {
 namespace {
@@ -90,11 +92,14 @@ void run_write(StageContext& ctx) {
 
   formats::OutputOptions options;
   options.force = request.force;
-  formats::write_asset_file(request.path, formats::SectionRefs(sections), options);
+  // Restat: an existing file with exactly these bytes is left alone (mtime kept).
+  const bool unchanged = formats::file_holds_asset(request.path, formats::SectionRefs(sections));
+  if (!unchanged) formats::write_asset_file(request.path, formats::SectionRefs(sections), options);
 
   // Summarise from the table order the writer used.
   AssetSummary summary;
   summary.path = request.path;
+  summary.unchanged = unchanged;
   summary.size_bytes = formats::asset_size(formats::SectionRefs(sections));
   reader::Asset asset;
   const reader::Status status = asset.open_file(request.path.c_str(), {reader::Verify::Structure});
@@ -132,6 +137,7 @@ pipeline::Stage write_stage() {
   s.outputs = {"asset"};
   s.always = true;
   s.run = run_write;
+  s.cacheable = false;  // writes the asset
   return s;
 }
 

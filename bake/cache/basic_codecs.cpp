@@ -1,0 +1,176 @@
+// Codecs of the artifact types below bake/cache (codec.hpp). The static_asserts on struct sizes
+// fail the build when a field is added to an encoded struct, so that the codec (and therefore the
+// cache key, which hashes the encoding) cannot silently miss it.
+#include <nlohmann/json.hpp>
+
+#include "bake/cache/codec.hpp"
+#include "fabric/fabric.hpp"
+#include "formats/writer/asset_writer.hpp"
+
+namespace clothbake::cache {
+namespace {
+
+static_assert(sizeof(FabricMaps) == 8 + 6 * sizeof(std::vector<float>),
+              "FabricMaps changed: update encode_fabric in bake/cache/basic_codecs.cpp");
+static_assert(sizeof(YarnMaterial) == sizeof(std::string) + 2 * 8 + 4 * sizeof(Rgb),
+              "YarnMaterial changed: update encode_fabric in bake/cache/basic_codecs.cpp");
+static_assert(sizeof(SheenParams) == sizeof(Rgb) + 8,
+              "SheenParams changed: update encode_fabric in bake/cache/basic_codecs.cpp");
+static_assert(sizeof(BakeSettings) == 56,
+              "BakeSettings changed: update encode_fabric in bake/cache/basic_codecs.cpp");
+static_assert(sizeof(InputFile) == 3 * sizeof(std::string),
+              "InputFile changed: update encode_fabric in bake/cache/basic_codecs.cpp");
+static_assert(sizeof(Fabric) == sizeof(std::string) + sizeof(FabricMaps) +
+                                    sizeof(std::vector<YarnMaterial>) + sizeof(SheenParams) +
+                                    sizeof(BakeSettings) + sizeof(std::vector<InputFile>) + 8,
+              "Fabric changed: update encode_fabric in bake/cache/basic_codecs.cpp");
+static_assert(sizeof(formats::Section) == 8 + 8 + 2 * sizeof(std::vector<uint32_t>),
+              "formats::Section changed: update the section codec in bake/cache/basic_codecs.cpp");
+
+void encode_fabric(const Fabric& f, ByteWriter& w) {
+  w.str(f.name);
+  w.pod(int32_t(f.maps.resolution));
+  w.vec(f.maps.height);
+  w.vec(f.maps.tangent);
+  w.vec(f.maps.normal);
+  w.vec(f.maps.gap);
+  w.vec(f.maps.yarn_id);
+  w.vec(f.maps.albedo);
+  w.pod(uint64_t(f.yarns.size()));
+  for (const auto& y : f.yarns) {
+    w.str(y.name);
+    w.pod(y.roughness);
+    w.pod(y.optical_thickness);
+    w.pod(y.specular_albedo);
+    w.pod(y.diffuse_reflectance);
+    w.pod(y.diffuse_transmittance);
+    w.pod(y.color);
+  }
+  w.pod(f.sheen.color);
+  w.pod(f.sheen.roughness);
+  const BakeSettings& b = f.bake;
+  w.pod(int32_t(b.resolution));
+  w.pod(int32_t(b.parallax_dirs));
+  w.pod(b.parallax_min_cos);
+  w.pod(b.parallax_max_error);
+  w.pod(int32_t(b.visibility_dirs));
+  w.pod(int32_t(b.radiance_dirs));
+  w.pod(int32_t(b.clusters));
+  w.pod(uint8_t(b.compress));
+  w.pod(int32_t(b.compress_clusters));
+  w.pod(int32_t(b.compress_rank));
+  w.pod(b.seed);
+  w.pod(uint64_t(f.inputs.size()));
+  for (const auto& i : f.inputs) {
+    w.str(i.role);
+    w.str(i.path);
+    w.str(i.xxh64);
+  }
+  w.pod(f.tile_size_mm);
+}
+
+Fabric decode_fabric(ByteReader& r) {
+  Fabric f;
+  f.name = r.str();
+  f.maps.resolution = r.pod<int32_t>();
+  f.maps.height = r.vec<float>();
+  f.maps.tangent = r.vec<Vec3f>();
+  f.maps.normal = r.vec<Vec3f>();
+  f.maps.gap = r.vec<float>();
+  f.maps.yarn_id = r.vec<uint16_t>();
+  f.maps.albedo = r.vec<Vec3f>();
+  const uint64_t yarns = r.pod<uint64_t>();
+  for (uint64_t k = 0; k < yarns; ++k) {
+    YarnMaterial y;
+    y.name = r.str();
+    y.roughness = r.pod<double>();
+    y.optical_thickness = r.pod<double>();
+    y.specular_albedo = r.pod<Rgb>();
+    y.diffuse_reflectance = r.pod<Rgb>();
+    y.diffuse_transmittance = r.pod<Rgb>();
+    y.color = r.pod<Rgb>();
+    f.yarns.push_back(std::move(y));
+  }
+  f.sheen.color = r.pod<Rgb>();
+  f.sheen.roughness = r.pod<double>();
+  BakeSettings& b = f.bake;
+  b.resolution = r.pod<int32_t>();
+  b.parallax_dirs = r.pod<int32_t>();
+  b.parallax_min_cos = r.pod<double>();
+  b.parallax_max_error = r.pod<double>();
+  b.visibility_dirs = r.pod<int32_t>();
+  b.radiance_dirs = r.pod<int32_t>();
+  b.clusters = r.pod<int32_t>();
+  b.compress = r.pod<uint8_t>() != 0;
+  b.compress_clusters = r.pod<int32_t>();
+  b.compress_rank = r.pod<int32_t>();
+  b.seed = r.pod<uint64_t>();
+  const uint64_t inputs = r.pod<uint64_t>();
+  for (uint64_t k = 0; k < inputs; ++k) {
+    InputFile i;
+    i.role = r.str();
+    i.path = r.str();
+    i.xxh64 = r.str();
+    f.inputs.push_back(std::move(i));
+  }
+  f.tile_size_mm = r.pod<double>();
+  return f;
+}
+
+void encode_sections(const std::vector<formats::Section>& sections, ByteWriter& w) {
+  w.pod(uint64_t(sections.size()));
+  for (const auto& s : sections) {
+    w.pod(uint32_t(s.type));
+    w.pod(s.instance);
+    w.pod(s.version);
+    w.pod(uint16_t(s.element));
+    w.vec(s.dims);
+    w.vec(s.payload);
+  }
+}
+
+std::vector<formats::Section> decode_sections(ByteReader& r) {
+  std::vector<formats::Section> out;
+  const uint64_t n = r.pod<uint64_t>();
+  for (uint64_t k = 0; k < n; ++k) {
+    formats::Section s;
+    s.type = formats::SectionType(r.pod<uint32_t>());
+    s.instance = r.pod<uint32_t>();
+    s.version = r.pod<uint16_t>();
+    s.element = formats::ElementType(r.pod<uint16_t>());
+    s.dims = r.vec<uint32_t>();
+    s.payload = r.vec<std::byte>();
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+}  // namespace
+
+void add_basic_codecs(Codecs& codecs) {
+  codecs.add<std::string>(
+      "string", [](const std::string& s, ByteWriter& w) { w.str(s); },
+      [](ByteReader& r) { return r.str(); });
+  codecs.add<std::vector<std::string>>(
+      "strings",
+      [](const std::vector<std::string>& v, ByteWriter& w) {
+        w.pod(uint64_t(v.size()));
+        for (const auto& s : v)
+          w.str(s);
+      },
+      [](ByteReader& r) {
+        std::vector<std::string> v(std::size_t(r.pod<uint64_t>()));
+        for (auto& s : v)
+          s = r.str();
+        return v;
+      });
+  // CBOR keeps the JSON types (integer or double, exactly) and the sorted key order.
+  codecs.add<nlohmann::json>(
+      "json/cbor",
+      [](const nlohmann::json& j, ByteWriter& w) { w.vec(nlohmann::json::to_cbor(j)); },
+      [](ByteReader& r) { return nlohmann::json::from_cbor(r.vec<uint8_t>()); });
+  codecs.add<std::vector<formats::Section>>("sections/1", encode_sections, decode_sections);
+  codecs.add<Fabric>("fabric/1", encode_fabric, decode_fabric);
+}
+
+}  // namespace clothbake::cache

@@ -1,0 +1,499 @@
+// clothbake batch (DIR | LIST.txt) -o OUTDIR [--jobs N] [--max-memory S] [--cache DIR]
+// [--cache-max-size S] [--force-rebake] [--json] [--emit slurm]: bakes a library of fabrics, one
+// `clothbake bake` child process per fabric (docs/batch.md). Up-to-date fabrics are skipped (a
+// stamp per fabric: tool version, options, every input file's size, mtime and content hash, the
+// output's size and mtime); a failure is reported and the rest go on; at most N bakes run at once
+// and never more than fit in --max-memory by their measured peaks. Exit 0 when every fabric is
+// baked or up to date, 2 when any failed (after all ran), 1 for a bad command line.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "bake/cache/stage_cache.hpp"
+#include "bake/cli/command.hpp"
+#include "bake/cli/depfile.hpp"
+#include "bake/cli/options.hpp"
+#include "bake/inputs/fabric_files.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "common/version.hpp"
+#include "formats/writer/atomic_file.hpp"
+
+extern char** environ;
+
+namespace clothbake::cli {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr uint64_t kUnknownPeakBytes = uint64_t(2) << 30;  // a bake never measured: assume 2 GiB
+
+struct BatchOptions {
+  std::string source;
+  std::string output_dir;
+  int jobs = 1;
+  std::string max_memory;
+  std::string cache;
+  std::string cache_max_size;
+  bool json = false;
+  bool force = false;
+  std::string emit;
+};
+
+struct Job {
+  std::string fabric;  // path as listed (relative paths resolved against the list's folder)
+  std::string name;    // stem: OUTDIR/<name>.cbk
+  std::string output;
+  std::string status = "pending";  // baked, up-to-date, failed
+  std::string note;
+  double seconds = 0;
+  uint64_t size = 0;
+  uint64_t peak = 0;  // measured (stamp or this run), 0 unknown
+  pid_t pid = -1;
+  std::chrono::steady_clock::time_point start;
+};
+
+int64_t mtime_ns(const struct stat& st) {
+  return int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+}
+
+std::string state_dir(const BatchOptions& o) {
+  return (fs::path(o.output_dir) / ".clothbake-batch").string();
+}
+
+// Options that change the bytes of an asset (part of the up-to-date key).
+std::string options_key(const BatchOptions&) {
+  return "bake defaults";
+}
+
+uint64_t default_max_memory() {
+  std::ifstream in("/proc/meminfo");
+  std::string key;
+  uint64_t kb = 0;
+  while (in >> key >> kb) {
+    if (key == "MemTotal:") return kb * 1024 / 10 * 8;  // 80 %
+    in.ignore(256, '\n');
+  }
+  return uint64_t(8) << 30;
+}
+
+std::vector<Job> list_jobs(const BatchOptions& o) {
+  std::vector<std::string> fabrics;
+  std::error_code ec;
+  if (fs::is_directory(o.source, ec)) {
+    for (const auto& e : fs::directory_iterator(o.source, ec))
+      if (e.path().extension() == ".toml") fabrics.push_back(e.path().string());
+    if (ec) throw_input_error("cannot list " + o.source + ": " + ec.message());
+    std::sort(fabrics.begin(), fabrics.end());
+  } else {
+    std::ifstream in(o.source);
+    if (!in) throw_input_error("cannot read the fabric list " + o.source);
+    const fs::path base = fs::path(o.source).parent_path();
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto first = line.find_first_not_of(" \t\r");
+      if (first == std::string::npos || line[first] == '#') continue;
+      line = line.substr(first, line.find_last_not_of(" \t\r") - first + 1);
+      fabrics.push_back(fs::path(line).is_absolute() ? line : (base / line).string());
+    }
+  }
+  if (fabrics.empty()) throw_input_error(o.source + " names no fabric (.toml)");
+  std::vector<Job> jobs;
+  std::map<std::string, std::vector<std::size_t>> by_output;
+  for (const auto& f : fabrics) {
+    Job j;
+    j.fabric = f;
+    j.name = fs::path(f).stem().string();
+    j.output = (fs::path(o.output_dir) / (j.name + ".cbk")).string();
+    by_output[j.output].push_back(jobs.size());
+    jobs.push_back(j);
+  }
+  for (auto& [output, indices] : by_output)
+    if (indices.size() > 1)
+      for (std::size_t i : indices) {
+        std::string others;
+        for (std::size_t k : indices)
+          if (k != i) others += (others.empty() ? "" : ", ") + jobs[k].fabric;
+        jobs[i].status = "failed";
+        jobs[i].note = "two fabrics map to " + output + ": also " + others + " (rename one)";
+      }
+  for (auto& j : jobs)
+    if (j.status == "pending" && !fs::is_regular_file(j.fabric, ec)) {
+      j.status = "failed";
+      j.note = j.fabric + " does not exist";
+    }
+  return jobs;
+}
+
+std::string stamp_path(const BatchOptions& o, const Job& j) {
+  return (fs::path(state_dir(o)) / (j.name + ".stamp.json")).string();
+}
+
+// Up to date: a stamp of the same tool and options, the output unchanged since (size, mtime),
+// every input unchanged (size and mtime, or else the same content hash). Fills j.peak.
+bool up_to_date(const BatchOptions& o, Job& j, std::string* why) {
+  std::ifstream in(stamp_path(o, j));
+  if (!in) {
+    *why = "never baked";
+    return false;
+  }
+  nlohmann::json stamp;
+  try {
+    stamp = nlohmann::json::parse(in);
+  } catch (...) {
+    *why = "unreadable stamp";
+    return false;
+  }
+  j.peak = stamp.value("peak_rss_bytes", uint64_t(0));
+  if (stamp.value("tool", "") != CLOTHBAKE_VERSION_STRING ||
+      stamp.value("exe", "") != current_executable()) {
+    *why = "another clothbake";
+    return false;
+  }
+  if (stamp.value("options", "") != options_key(o) || stamp.value("fabric", "") != j.fabric) {
+    *why = "other options";
+    return false;
+  }
+  struct stat st {};
+  if (::stat(j.output.c_str(), &st) != 0 || uint64_t(st.st_size) != stamp["output"]["size"] ||
+      mtime_ns(st) != stamp["output"]["mtime_ns"].get<int64_t>()) {
+    *why = "output missing or changed";
+    return false;
+  }
+  j.size = uint64_t(st.st_size);
+  for (const auto& input : stamp["inputs"]) {
+    const std::string path = input["path"];
+    if (::stat(path.c_str(), &st) != 0) {
+      *why = path + " is gone";
+      return false;
+    }
+    if (uint64_t(st.st_size) == input["size"] && mtime_ns(st) == input["mtime_ns"].get<int64_t>())
+      continue;
+    // Touched: the content decides.
+    std::string hash;
+    try {
+      hash = inputs::hash_file(path, path);
+    } catch (const Error&) {
+    }
+    if (hash != input["xxh64"]) {
+      *why = path + " changed";
+      return false;
+    }
+  }
+  return true;
+}
+
+void write_stamp(const BatchOptions& o, const Job& j, const nlohmann::json& report) {
+  nlohmann::json stamp;
+  stamp["tool"] = CLOTHBAKE_VERSION_STRING;
+  stamp["exe"] = current_executable();
+  stamp["options"] = options_key(o);
+  stamp["fabric"] = j.fabric;
+  stamp["peak_rss_bytes"] = report["total"]["peak_rss_bytes"];
+  stamp["seconds"] = report["total"]["wall_seconds"];
+  struct stat st {};
+  ::stat(j.output.c_str(), &st);
+  stamp["output"] = {{"size", uint64_t(st.st_size)}, {"mtime_ns", mtime_ns(st)}};
+  nlohmann::json files = nlohmann::json::array();
+  for (const auto& input : report["inputs"]) {
+    const std::string path = input["path"];
+    struct stat ist {};
+    ::stat(path.c_str(), &ist);
+    files.push_back({{"path", path},
+                     {"size", uint64_t(ist.st_size)},
+                     {"mtime_ns", mtime_ns(ist)},
+                     {"xxh64", input["xxh64"]}});
+  }
+  stamp["inputs"] = files;
+  const std::string text = stamp.dump(1) + "\n";
+  formats::OutputOptions out;
+  out.require_asset_to_replace = false;
+  formats::write_file_atomically(
+      stamp_path(o, j), [&](formats::Sink& s) { s.write(text.data(), text.size()); }, out);
+}
+
+std::vector<std::string> bake_arguments(const BatchOptions& o, const Job& j, int threads,
+                                        const std::string& report) {
+  std::vector<std::string> args = {
+      "bake",     j.fabric, "-o", j.output, "--quiet", "--threads", std::to_string(threads),
+      "--report", report};
+  const std::string cache = cache::cache_dir_from(o.cache);
+  if (!cache.empty()) args.insert(args.end(), {"--cache", cache});
+  if (!o.cache_max_size.empty()) args.insert(args.end(), {"--cache-max-size", o.cache_max_size});
+  return args;
+}
+
+std::string last_line(const std::string& path) {
+  std::ifstream in(path);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  const std::string prefix = "clothbake: ";
+  if (last.rfind(prefix, 0) == 0) last = last.substr(prefix.size());
+  return last.empty() ? "failed without a message" : last;
+}
+
+pid_t spawn_bake(const std::vector<std::string>& args, const std::string& log) {
+  const std::string exe = current_executable();
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(exe.c_str()));
+  for (const auto& a : args)
+    argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return rc == 0 ? pid : -1;
+}
+
+std::string human_size(uint64_t bytes) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1);
+  if (bytes >= (uint64_t(1) << 30))
+    s << double(bytes) / double(uint64_t(1) << 30) << " GiB";
+  else if (bytes >= (uint64_t(1) << 20))
+    s << double(bytes) / double(1 << 20) << " MiB";
+  else if (bytes >= 1024)
+    s << double(bytes) / 1024.0 << " KiB";
+  else
+    s << bytes << " B";
+  return s.str();
+}
+
+std::string sh_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s)
+    out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+// --emit slurm: an sbatch job array, one task per out-of-date fabric (docs/batch.md, "Slurm").
+int emit_slurm(const BatchOptions& o, const std::vector<Job>& jobs, uint64_t peak_estimate) {
+  std::vector<const Job*> todo;
+  for (const auto& j : jobs)
+    if (j.status == "pending") todo.push_back(&j);
+  const fs::path dir = fs::absolute(o.output_dir);
+  const std::string list = (dir / "clothbake-batch.list").string();
+  const std::string script = (dir / "clothbake-batch.sbatch").string();
+  std::string list_text;
+  for (const Job* j : todo)
+    list_text += fs::absolute(j->fabric).string() + "\n";
+  const int cpus = std::max(1, int(std::thread::hardware_concurrency()));
+  const uint64_t mem_mb = (peak_estimate + peak_estimate / 4) / (1 << 20) + 64;  // +25 % margin
+  const std::string cache = cache::cache_dir_from(o.cache);
+  std::ostringstream s;
+  s << "#!/bin/bash\n"
+    << "# Written by `clothbake batch --emit slurm` (docs/batch.md). One array task per fabric of\n"
+    << "# " << list << "; each runs the same stateless, deterministic `clothbake bake` as a local\n"
+    << "# batch, so the assets are byte-identical to local bakes.\n"
+    << "#SBATCH --job-name=clothbake-batch\n"
+    << "#SBATCH --array=0-" << (todo.empty() ? 0 : todo.size() - 1) << "\n"
+    << "#SBATCH --ntasks=1\n"
+    << "#SBATCH --cpus-per-task=" << cpus << "\n"
+    << "#SBATCH --mem=" << mem_mb << "M\n"
+    << "#SBATCH --output=" << (dir / ".clothbake-batch" / "slurm-%A_%a.log").string() << "\n"
+    << "set -euo pipefail\n"
+    << "CLOTHBAKE=" << sh_quote(current_executable()) << "\n"
+    << "LIST=" << sh_quote(list) << "\n"
+    << "OUTDIR=" << sh_quote(dir.string()) << "\n"
+    << "FABRIC=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" \"$LIST\")\n"
+    << "NAME=$(basename \"$FABRIC\" .toml)\n"
+    << "exec \"$CLOTHBAKE\" bake \"$FABRIC\" -o \"$OUTDIR/$NAME.cbk\" --quiet \\\n"
+    << "  --threads \"${SLURM_CPUS_PER_TASK:-1}\" --report "
+       "\"$OUTDIR/.clothbake-batch/$NAME.report.json\"";
+  if (!cache.empty()) s << " \\\n  --cache " << sh_quote(fs::absolute(cache).string());
+  s << "\n";
+  formats::OutputOptions out;
+  out.require_asset_to_replace = false;
+  const std::string text = s.str();
+  formats::write_file_atomically(
+      list, [&](formats::Sink& k) { k.write(list_text.data(), list_text.size()); }, out);
+  formats::write_file_atomically(
+      script, [&](formats::Sink& k) { k.write(text.data(), text.size()); }, out);
+  ::chmod(script.c_str(), 0755);
+  int failed = 0;
+  for (const auto& j : jobs)
+    if (j.status == "failed") {
+      std::cerr << "clothbake: " << j.fabric << ": " << j.note << "\n";
+      ++failed;
+    }
+  if (o.json) {
+    print_json({{"script", script},
+                {"list", list},
+                {"tasks", todo.size()},
+                {"mem_mb", mem_mb},
+                {"cpus_per_task", cpus},
+                {"failed", failed}});
+  } else {
+    std::cout << "wrote " << script << " (" << todo.size() << " tasks); submit with: sbatch "
+              << script << "\n";
+  }
+  return failed ? int(ExitCode::Input) : 0;
+}
+
+Action setup_batch(CLI::App& app) {
+  auto o = std::make_shared<BatchOptions>();
+  app.add_option("SOURCE", o->source, "folder of fabric .toml files, or a list file (one per line)")
+      ->required();
+  app.add_option("-o,--output", o->output_dir, "output folder: OUTDIR/<fabric stem>.cbk")
+      ->required();
+  app.add_option("--jobs", o->jobs, "bakes at once (default 1)")->check(CLI::PositiveNumber);
+  app.add_option("--max-memory", o->max_memory,
+                 "never start bakes whose measured peaks sum above this (default 80 % of RAM)");
+  app.add_option("--cache", o->cache, "stage cache shared by the bakes (default $CLOTHBAKE_CACHE)");
+  app.add_option("--cache-max-size", o->cache_max_size, "bound of the cache (default 10G)");
+  app.add_flag("--force-rebake", o->force, "bake every fabric, up to date or not");
+  app.add_option("--emit", o->emit, "write a farm script instead of baking: slurm")
+      ->check(CLI::IsMember({"slurm"}));
+  add_json_flag(app, o->json, "print the summary as JSON on stdout");
+  return [o] {
+    const uint64_t max_memory = o->max_memory.empty()
+                                    ? default_max_memory()
+                                    : cache::parse_size(o->max_memory, "--max-memory");
+    if (!o->cache_max_size.empty()) (void)cache::parse_size(o->cache_max_size, "--cache-max-size");
+    std::error_code ec;
+    fs::create_directories(state_dir(*o), ec);
+    if (ec)
+      throw_input_error("cannot create the output folder " + o->output_dir + ": " + ec.message());
+    std::vector<Job> jobs = list_jobs(*o);
+    uint64_t known_peak = 0;
+    for (auto& j : jobs) {
+      if (j.status != "pending") continue;
+      std::string why;
+      if (up_to_date(*o, j, &why) && !o->force) {
+        j.status = "up-to-date";
+        j.note = "inputs, options and output unchanged";
+      } else {
+        j.note = why;
+      }
+      known_peak = std::max(known_peak, j.peak);
+    }
+    const uint64_t unknown_peak = known_peak ? known_peak : kUnknownPeakBytes;
+    if (o->emit == "slurm") return emit_slurm(*o, jobs, unknown_peak);
+
+    const int cpus = std::max(1, int(std::thread::hardware_concurrency()));
+    const int threads = std::max(1, cpus / o->jobs);
+    auto estimate = [&](const Job& j) { return j.peak ? j.peak + j.peak / 10 : unknown_peak; };
+    std::map<pid_t, std::size_t> running;
+    uint64_t reserved = 0;
+    const auto batch_start = std::chrono::steady_clock::now();
+    for (;;) {
+      // Start what fits: in list order, first fit by memory; one bake always may run.
+      for (std::size_t i = 0; i < jobs.size() && int(running.size()) < o->jobs; ++i) {
+        Job& j = jobs[i];
+        if (j.status != "pending") continue;
+        if (!running.empty() && reserved + estimate(j) > max_memory) continue;
+        const std::string base = (fs::path(state_dir(*o)) / j.name).string();
+        j.pid = spawn_bake(bake_arguments(*o, j, threads, base + ".report.json"), base + ".log");
+        j.start = std::chrono::steady_clock::now();
+        if (j.pid < 0) {
+          j.status = "failed";
+          j.note = "cannot start clothbake";
+          continue;
+        }
+        j.status = "running";
+        running[j.pid] = i;
+        reserved += estimate(j);
+      }
+      if (running.empty()) break;
+      int status = 0;
+      const pid_t pid = ::waitpid(-1, &status, 0);
+      if (pid < 0) {
+        if (errno == EINTR) continue;
+        break;
+      }
+      auto it = running.find(pid);
+      if (it == running.end()) continue;
+      Job& j = jobs[it->second];
+      running.erase(it);
+      reserved -= estimate(j);
+      j.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - j.start).count();
+      const std::string base = (fs::path(state_dir(*o)) / j.name).string();
+      if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+        try {
+          std::ifstream in(base + ".report.json");
+          const nlohmann::json report = nlohmann::json::parse(in);
+          j.peak = report["total"]["peak_rss_bytes"];
+          j.size = report["asset"]["size_bytes"];
+          j.status = "baked";
+          j.note = report["asset"].value("unchanged", false) ? "same bytes (file kept)" : j.note;
+          write_stamp(*o, j, report);
+        } catch (const std::exception& e) {
+          j.status = "failed";
+          j.note = std::string("baked, but the report or stamp failed: ") + e.what();
+        }
+      } else {
+        j.status = "failed";
+        j.note = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
+                                     : last_line(base + ".log");
+      }
+    }
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_start).count();
+    int failed = 0, baked = 0, fresh = 0;
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& j : jobs) {
+      failed += j.status == "failed";
+      baked += j.status == "baked";
+      fresh += j.status == "up-to-date";
+      rows.push_back({{"fabric", j.fabric},
+                      {"output", j.output},
+                      {"status", j.status},
+                      {"seconds", j.seconds},
+                      {"size_bytes", j.size},
+                      {"peak_rss_bytes", j.peak},
+                      {"note", j.note}});
+    }
+    if (o->json) {
+      print_json({{"fabrics", rows},
+                  {"baked", baked},
+                  {"up_to_date", fresh},
+                  {"failed", failed},
+                  {"jobs", o->jobs},
+                  {"threads_per_bake", threads},
+                  {"max_memory_bytes", max_memory},
+                  {"wall_seconds", wall}});
+    } else {
+      std::size_t width = 6;
+      for (const auto& j : jobs)
+        width = std::max(width, j.name.size());
+      std::cout << std::left << std::setw(int(width) + 2) << "fabric" << std::setw(12) << "status"
+                << std::setw(10) << "seconds" << std::setw(12) << "size"
+                << "note\n";
+      for (const auto& j : jobs) {
+        std::ostringstream secs;
+        secs << std::fixed << std::setprecision(2) << j.seconds;
+        std::cout << std::left << std::setw(int(width) + 2) << j.name << std::setw(12) << j.status
+                  << std::setw(10) << secs.str() << std::setw(12)
+                  << (j.size ? human_size(j.size) : "-") << j.note << "\n";
+      }
+      std::cout << baked << " baked, " << fresh << " up to date, " << failed << " failed in "
+                << std::fixed << std::setprecision(2) << wall << " s\n";
+    }
+    return failed ? int(ExitCode::Input) : 0;
+  };
+}
+
+const bool registered = register_command(
+    {"batch", "Bake a folder or list of fabrics: up-to-date skips, parallel, farm scripts",
+     setup_batch});
+
+}  // namespace
+}  // namespace clothbake::cli

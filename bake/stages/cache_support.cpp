@@ -1,0 +1,178 @@
+// Codecs of the algorithm artifact types and the colour-free fabric key view (cache_support.hpp).
+// The static_asserts fail the build when an encoded struct gains a field.
+#include "bake/stages/cache_support.hpp"
+
+#include "bake/stages/table_streaming.hpp"
+
+#include "cluster/visibility_clusters.hpp"
+#include "compress/compress_settings.hpp"
+#include "fabric/fabric.hpp"
+#include "model/asg.hpp"
+
+namespace clothbake::stages {
+namespace {
+
+using cache::ByteReader;
+using cache::ByteWriter;
+
+static_assert(sizeof(cluster::ClusterStats) == 40, "ClusterStats changed: update its codec");
+static_assert(sizeof(cluster::KMeansResult) == 16 + 4 * 24 + 8 + 12 + 4,
+              "KMeansResult changed: update its codec");
+static_assert(sizeof(cluster::VisibilityClusters) ==
+                  16 + 2 * 24 + 24 + 24 + sizeof(cluster::KMeansResult),
+              "VisibilityClusters changed: update its codec");
+static_assert(sizeof(compress::CompressRequest) == 8 + 8 + 8 + 16,
+              "CompressRequest changed: update its codec");
+static_assert(std::is_trivially_copyable_v<model::AsgParams<float>>);
+static_assert(sizeof(tables::RadianceOptions) == 4 + 4 + 8 + 8,
+              "RadianceOptions changed: update the tables/streamed codec");
+static_assert(sizeof(StreamedTables) == 8 + sizeof(tables::RadianceOptions) + 6 * 24,
+              "StreamedTables changed: update its codec");
+
+// The streaming fills are a function of their inputs and options: those are stored, the fills
+// rebuilt on decode (cheap: no values are filled until the compress stage asks).
+void encode_streamed(const StreamedTablesArtifact& t, ByteWriter& w) {
+  w.pod(uint8_t(t != nullptr));
+  if (!t) return;
+  w.pod(int32_t(t->resolution));
+  w.pod(int32_t(t->cluster_count));
+  w.pod(int32_t(t->options.bins_per_side));
+  w.pod(int32_t(t->options.samples_per_side));
+  w.pod(t->options.max_relative_error);
+  w.pod(uint8_t(t->options.warn_unresolved));
+  w.vec(t->tangent);
+  w.vec(t->gap);
+  w.vec(t->yarn_id);
+  w.vec(t->roughness);
+  w.vec(t->labels);
+}
+
+StreamedTablesArtifact decode_streamed(ByteReader& r) {
+  if (r.pod<uint8_t>() == 0) return nullptr;
+  const int resolution = r.pod<int32_t>(), cluster_count = r.pod<int32_t>();
+  tables::RadianceOptions options;
+  options.bins_per_side = r.pod<int32_t>();
+  options.samples_per_side = r.pod<int32_t>();
+  options.max_relative_error = r.pod<double>();
+  options.warn_unresolved = r.pod<uint8_t>() != 0;
+  auto tangent = r.vec<Vec3f>();
+  auto gap = r.vec<float>();
+  auto yarn_id = r.vec<uint16_t>();
+  auto roughness = r.vec<double>();
+  auto labels = r.vec<uint8_t>();
+  return make_streamed_tables(resolution, std::move(tangent), std::move(gap), std::move(yarn_id),
+                              std::move(roughness), std::move(labels), cluster_count, options);
+}
+
+template <class T>
+void put_optional(ByteWriter& w, const std::optional<T>& v) {
+  w.pod(uint8_t(v.has_value()));
+  w.pod(v.value_or(T{}));
+}
+template <class T>
+std::optional<T> get_optional(ByteReader& r) {
+  const bool has = r.pod<uint8_t>() != 0;
+  const T v = r.pod<T>();
+  return has ? std::optional<T>(v) : std::nullopt;
+}
+
+void encode_clusters(const cluster::VisibilityClusters& c, ByteWriter& w) {
+  w.pod(int32_t(c.resolution));
+  w.pod(int32_t(c.clusters));
+  w.pod(int32_t(c.visibility_dirs));
+  w.pod(int32_t(c.samples_per_bin_side));
+  w.vec(c.labels);
+  w.vec(c.mean_visibility);
+  w.vec(c.stats);
+  w.pod(c.variance);
+  w.pod(c.residual_variance);
+  w.pod(c.explained_fraction);
+  const cluster::KMeansResult& k = c.kmeans;
+  w.pod(int32_t(k.clusters));
+  w.pod(uint64_t(k.dim));
+  w.vec(k.labels);
+  w.vec(k.centres);
+  w.vec(k.sizes);
+  w.vec(k.inertia);
+  w.pod(k.total_inertia);
+  w.pod(int32_t(k.iterations));
+  w.pod(uint8_t(k.converged));
+  w.pod(int32_t(k.empty_repairs));
+}
+
+cluster::VisibilityClusters decode_clusters(ByteReader& r) {
+  cluster::VisibilityClusters c;
+  c.resolution = r.pod<int32_t>();
+  c.clusters = r.pod<int32_t>();
+  c.visibility_dirs = r.pod<int32_t>();
+  c.samples_per_bin_side = r.pod<int32_t>();
+  c.labels = r.vec<uint8_t>();
+  c.mean_visibility = r.vec<float>();
+  c.stats = r.vec<cluster::ClusterStats>();
+  c.variance = r.pod<double>();
+  c.residual_variance = r.pod<double>();
+  c.explained_fraction = r.pod<double>();
+  cluster::KMeansResult& k = c.kmeans;
+  k.clusters = r.pod<int32_t>();
+  k.dim = std::size_t(r.pod<uint64_t>());
+  k.labels = r.vec<int32_t>();
+  k.centres = r.vec<double>();
+  k.sizes = r.vec<uint64_t>();
+  k.inertia = r.vec<double>();
+  k.total_inertia = r.pod<double>();
+  k.iterations = r.pod<int32_t>();
+  k.converged = r.pod<uint8_t>() != 0;
+  k.empty_repairs = r.pod<int32_t>();
+  return c;
+}
+
+}  // namespace
+
+cache::Codecs artifact_codecs() {
+  cache::Codecs codecs;
+  cache::add_basic_codecs(codecs);
+  codecs.add<std::vector<model::AsgParams<float>>>(
+      "asg_params/1",
+      [](const std::vector<model::AsgParams<float>>& v, ByteWriter& w) { w.vec(v); },
+      [](ByteReader& r) { return r.vec<model::AsgParams<float>>(); });
+  codecs.add<cluster::VisibilityClusters>("visibility_clusters/1", encode_clusters,
+                                          decode_clusters);
+  codecs.add<StreamedTablesArtifact>("streamed_tables/1", encode_streamed, decode_streamed);
+  codecs.add<compress::CompressRequest>(
+      "compress_request/1",
+      [](const compress::CompressRequest& q, ByteWriter& w) {
+        w.pod(uint8_t(q.disable));
+        w.pod(uint8_t(q.keep_raw));
+        put_optional(w, q.clusters);
+        put_optional(w, q.rank);
+        put_optional(w, q.max_error);
+      },
+      [](ByteReader& r) {
+        compress::CompressRequest q;
+        q.disable = r.pod<uint8_t>() != 0;
+        q.keep_raw = r.pod<uint8_t>() != 0;
+        q.clusters = get_optional<int>(r);
+        q.rank = get_optional<int>(r);
+        q.max_error = get_optional<double>(r);
+        return q;
+      });
+  return codecs;
+}
+
+void fabric_without_colours_view(const pipeline::Artifacts& available, pipeline::Artifacts& view) {
+  Fabric f = available.get<Fabric>("fabric");
+  f.name.clear();
+  f.inputs.clear();
+  f.maps.albedo.clear();
+  for (auto& y : f.yarns) {
+    y.name.clear();
+    y.specular_albedo = Rgb{};
+    y.diffuse_reflectance = Rgb{};
+    y.diffuse_transmittance = Rgb{};
+    y.color = Rgb{};
+  }
+  f.sheen = SheenParams{};
+  view.put("fabric", std::move(f));
+}
+
+}  // namespace clothbake::stages

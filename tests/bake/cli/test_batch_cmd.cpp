@@ -1,0 +1,184 @@
+// `clothbake batch` end to end on tiny fabrics: bakes equal single bakes; up-to-date fabrics are
+// skipped (a touched but unchanged input too), a changed one alone is rebaked; a missing file in
+// the list, two fabrics mapped to one output, a broken fabric and a full disk fail with a message
+// naming the fabric while the rest are baked, nothing partial is left, the exit code is 2; the
+// emitted Slurm array script parses and its tasks, run as Slurm would, give the same bytes.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "tests/support/run_cli.hpp"
+
+namespace fs = std::filesystem;
+using clothbake::test_support::clothbake_executable;
+using clothbake::test_support::run_clothbake;
+
+namespace {
+
+std::string fabric(const std::string& weave, int resolution = 16) {
+  return "[weave]\nname = \"" + weave + "\"\n[bake]\nresolution = " + std::to_string(resolution) +
+         "\nparallax_dirs = 4\nvisibility_dirs = 4\nradiance_dirs = 6\nclusters = 2\n";
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class Batch : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("clothbake_batch_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "lib");
+    std::ofstream(dir_ / "lib" / "plain.toml") << fabric("plain");
+    std::ofstream(dir_ / "lib" / "twill.toml") << fabric("twill2/1");
+    std::ofstream(dir_ / "lib" / "satin.toml") << fabric("satin5");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  nlohmann::json batch(const std::vector<std::string>& extra, int expect = 0) {
+    std::vector<std::string> args = {"batch", (dir_ / "lib").string(), "-o",
+                                     (dir_ / "out").string(), "--json"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_clothbake(args);
+    EXPECT_EQ(r.code, expect) << r.err << r.out;
+    return nlohmann::json::parse(r.out.empty() ? "{}" : r.out);
+  }
+  static std::map<std::string, std::string> statuses(const nlohmann::json& doc) {
+    std::map<std::string, std::string> out;
+    for (const auto& f : doc["fabrics"])
+      out[fs::path(f["fabric"].get<std::string>()).stem().string()] = f["status"];
+    return out;
+  }
+  std::string single_bake(const std::string& name) {
+    const fs::path out = dir_ / ("single-" + name + ".cbk");
+    const auto r = run_clothbake(
+        {"bake", (dir_ / "lib" / (name + ".toml")).string(), "-o", out.string(), "--quiet"});
+    EXPECT_EQ(r.code, 0) << r.err;
+    return slurp(out);
+  }
+  bool no_temporary_files(const fs::path& dir) const {
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().filename().string().find(".tmp-") != std::string::npos) return false;
+    return true;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Batch, BakesSkipsUpToDateAndRebakesOnlyWhatChanged) {
+  auto doc = batch({"--jobs", "2", "--cache", (dir_ / "cache").string()});
+  EXPECT_EQ(doc["baked"], 3);
+  for (const std::string name : {"plain", "twill", "satin"})
+    EXPECT_EQ(slurp(dir_ / "out" / (name + ".cbk")), single_bake(name)) << name;
+  doc = batch({"--jobs", "2"});
+  EXPECT_EQ(doc["up_to_date"], 3);
+  // Touched, same content: still up to date (the hash confirms).
+  fs::last_write_time(dir_ / "lib" / "twill.toml", fs::file_time_type::clock::now());
+  EXPECT_EQ(batch({})["up_to_date"], 3);
+  // Changed content: that fabric alone is baked again.
+  std::ofstream(dir_ / "lib" / "twill.toml") << fabric("twill2/1") << "seed = 7\n";
+  const auto s = statuses(batch({}));
+  EXPECT_EQ(s.at("twill"), "baked");
+  EXPECT_EQ(s.at("plain"), "up-to-date");
+  EXPECT_EQ(s.at("satin"), "up-to-date");
+  // A deleted output is baked again.
+  fs::remove(dir_ / "out" / "plain.cbk");
+  EXPECT_EQ(statuses(batch({})).at("plain"), "baked");
+}
+
+TEST_F(Batch, BadEntriesFailAloneWithAMessage) {
+  fs::create_directories(dir_ / "other");
+  std::ofstream(dir_ / "other" / "plain.toml") << fabric("plain");
+  std::ofstream(dir_ / "lib" / "broken.toml") << "[weave]\nname = \"nope\"\n";
+  std::ofstream(dir_ / "list.txt") << "# a list\nlib/plain.toml\nother/plain.toml\n"
+                                   << "lib/missing.toml\n\nlib/twill.toml\nlib/broken.toml\n";
+  const auto r = run_clothbake(
+      {"batch", (dir_ / "list.txt").string(), "-o", (dir_ / "out").string(), "--json"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  std::map<std::string, nlohmann::json> rows;
+  for (const auto& f : doc["fabrics"])
+    rows[f["fabric"]] = f;
+  const std::string lib = (dir_ / "lib").string(), other = (dir_ / "other").string();
+  EXPECT_EQ(rows[lib + "/plain.toml"]["status"], "failed");
+  EXPECT_NE(rows[lib + "/plain.toml"]["note"].get<std::string>().find("two fabrics map to"),
+            std::string::npos);
+  EXPECT_EQ(rows[other + "/plain.toml"]["status"], "failed");
+  EXPECT_NE(rows[lib + "/missing.toml"]["note"].get<std::string>().find("does not exist"),
+            std::string::npos);
+  EXPECT_NE(rows[lib + "/broken.toml"]["note"].get<std::string>().find("unknown weave 'nope'"),
+            std::string::npos);
+  EXPECT_EQ(rows[lib + "/twill.toml"]["status"], "baked");
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "twill.cbk"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "plain.cbk"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "broken.cbk"));
+  EXPECT_TRUE(no_temporary_files(dir_ / "out"));
+}
+
+// A file size limit (RLIMIT_FSIZE, as a full disk: writes fail) that the small assets fit under and
+// the big one does not: the big one fails with the writer's message, the rest are baked, nothing
+// partial at any output.
+TEST_F(Batch, FullDiskFailsOneFabricAndLeavesNothingPartial) {
+  std::ofstream(dir_ / "lib" / "big.toml") << fabric("twill2/1", 64);
+  const std::string small = single_bake("plain");
+  const uint64_t limit_blocks = (small.size() * 4) / 512;  // dash: ulimit -f counts 512 B blocks
+  const std::string command = "ulimit -f " + std::to_string(limit_blocks) +
+                              "; trap '' XFSZ; exec '" + clothbake_executable() + "' batch '" +
+                              (dir_ / "lib").string() + "' -o '" + (dir_ / "out").string() +
+                              "' --json";
+  const auto limited = clothbake::test_support::detail::spawn({"/bin/sh", "-c", command});
+  EXPECT_EQ(limited.code, 2) << limited.err;
+  const auto doc = nlohmann::json::parse(limited.out);
+  const auto s = statuses(doc);
+  EXPECT_EQ(s.at("big"), "failed");
+  EXPECT_EQ(s.at("plain"), "baked");
+  EXPECT_EQ(s.at("twill"), "baked");
+  for (const auto& f : doc["fabrics"]) {
+    if (f["status"] == "failed")
+      EXPECT_NE(f["note"].get<std::string>().find("big.cbk"), std::string::npos) << f["note"];
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "big.cbk"));
+  EXPECT_TRUE(no_temporary_files(dir_ / "out"));
+}
+
+TEST_F(Batch, MemoryLimitStillBakesEverything) {
+  // A limit below any bake's peak: one bake at a time, all baked.
+  const auto doc = batch({"--jobs", "2", "--max-memory", "1M"});
+  EXPECT_EQ(doc["baked"], 3);
+}
+
+// The emitted script: bash parses it, its directives are those documented, and running each array
+// task as Slurm would (SLURM_ARRAY_TASK_ID set) gives assets byte-identical to local bakes.
+TEST_F(Batch, EmittedSlurmArrayRunsTheSameBakes) {
+  const auto r = run_clothbake({"batch", (dir_ / "lib").string(), "-o", (dir_ / "out").string(),
+                                "--emit", "slurm", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["tasks"], 3);
+  const std::string script = doc["script"];
+  const std::string text = slurp(script);
+  EXPECT_NE(text.find("#SBATCH --array=0-2\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("#SBATCH --mem="), std::string::npos);
+  EXPECT_NE(text.find("#SBATCH --cpus-per-task="), std::string::npos);
+  EXPECT_NE(text.find("#SBATCH --output="), std::string::npos);
+  ASSERT_EQ(std::system(("bash -n '" + script + "'").c_str()), 0);
+  for (int task = 0; task < 3; ++task) {
+    const std::string run = "SLURM_ARRAY_TASK_ID=" + std::to_string(task) +
+                            " SLURM_CPUS_PER_TASK=1 bash '" + script + "'";
+    ASSERT_EQ(std::system(run.c_str()), 0) << task;
+  }
+  for (const std::string name : {"plain", "twill", "satin"})
+    EXPECT_EQ(slurp(dir_ / "out" / (name + ".cbk")), single_bake(name)) << name;
+}
+
+}  // namespace

@@ -1,0 +1,255 @@
+// The content-keyed stage cache end to end (`clothbake bake --cache`, `clothbake cache`): a second
+// bake is all hits with the same bytes; an albedo-only change reuses every ray-casting, cluster,
+// table and compression stage and gives the bytes of an uncached bake; a corrupted entry is
+// detected, removed and recomputed; an unusable cache is warned about and bypassed; concurrent
+// bakes of one key agree; a bake killed while storing leaves no torn entry; the size bound holds.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "tests/support/run_cli.hpp"
+
+namespace fs = std::filesystem;
+using clothbake::test_support::CliRun;
+using clothbake::test_support::clothbake_executable;
+using clothbake::test_support::run_clothbake;
+
+namespace {
+
+const char* kFabric = R"(name = "tiny"
+[weave]
+name = "twill2/1"
+[[yarn]]
+name = "warp"
+color = [0.05, 0.09, 0.26]
+[[yarn]]
+name = "weft"
+[bake]
+resolution = 16
+parallax_dirs = 4
+visibility_dirs = 4
+radiance_dirs = 6
+clusters = 2
+)";
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class Cache : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("clothbake_cache_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "f.toml") << kFabric;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // bake f.toml -o OUT [--cache DIR] --json; returns the report (code checked).
+  nlohmann::json bake(const std::string& out, bool cached = true, CliRun* run = nullptr) {
+    std::vector<std::string> args = {
+        "bake", (dir_ / "f.toml").string(), "-o", (dir_ / out).string(), "--json", "--quiet"};
+    if (cached) args.insert(args.end(), {"--cache", (dir_ / "cache").string()});
+    CliRun r = run_clothbake(args);
+    if (run) *run = r;
+    EXPECT_EQ(r.code, 0) << r.err;
+    return r.code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json{};
+  }
+  static std::map<std::string, std::string> cache_states(const nlohmann::json& report) {
+    std::map<std::string, std::string> out;
+    for (const auto& s : report["stages"])
+      out[s["name"]] = s["cache"];
+    return out;
+  }
+  std::vector<fs::path> entries(const std::string& stage = "") const {
+    std::vector<fs::path> out;
+    for (const auto& e : fs::directory_iterator(dir_ / "cache" / "entries"))
+      if (e.path().filename().string().rfind(stage, 0) == 0 && e.path().extension() == ".entry")
+        out.push_back(e.path());
+    return out;
+  }
+  fs::path dir_;
+};
+
+const std::vector<std::string> kReused = {"parallax", "visibility", "cluster", "tables",
+                                          "compress"};
+
+TEST_F(Cache, SecondBakeIsAllHitsWithTheSameBytes) {
+  const auto first = bake("a.cbk");
+  for (const auto& [stage, state] : cache_states(first))
+    EXPECT_EQ(state, stage == "load_fabric" || stage == "write" ? "uncached" : "miss") << stage;
+  const auto second = bake("b.cbk");
+  for (const auto& [stage, state] : cache_states(second))
+    EXPECT_EQ(state, stage == "load_fabric" || stage == "write" ? "uncached" : "hit") << stage;
+  bake("plain.cbk", false);
+  EXPECT_EQ(slurp(dir_ / "a.cbk"), slurp(dir_ / "plain.cbk"));
+  EXPECT_EQ(slurp(dir_ / "b.cbk"), slurp(dir_ / "plain.cbk"));
+  EXPECT_EQ(second["cache"]["hits"], 7);
+}
+
+TEST_F(Cache, AlbedoOnlyChangeReusesTheGeometryStages) {
+  bake("a.cbk");
+  std::string text = kFabric;
+  text.replace(text.find("0.05, 0.09, 0.26"), 16, "0.50, 0.10, 0.02");
+  std::ofstream(dir_ / "f.toml") << text;
+  const auto report = bake("b.cbk");
+  const auto states = cache_states(report);
+  for (const auto& s : kReused)
+    EXPECT_EQ(states.at(s), "hit") << s;
+  EXPECT_EQ(states.at("fabric_records"), "miss");  // the yarn colours are in the records
+  bake("plain.cbk", false);
+  EXPECT_EQ(slurp(dir_ / "b.cbk"), slurp(dir_ / "plain.cbk"));
+  EXPECT_NE(slurp(dir_ / "a.cbk"), slurp(dir_ / "b.cbk"));
+
+  // A geometry change (roughness) is a miss for the tables.
+  text.replace(text.find("name = \"weft\""), 13, "name = \"weft\"\nroughness = 0.55");
+  std::ofstream(dir_ / "f.toml") << text;
+  EXPECT_EQ(cache_states(bake("c.cbk")).at("tables"), "miss");
+}
+
+// A flipped byte in a payload, in the index, or a truncated entry: detected, removed, recomputed;
+// the asset equals an uncached bake.
+TEST_F(Cache, CorruptedEntriesAreRecomputedNeverUsed) {
+  bake("plain.cbk", false);
+  bake("a.cbk");
+  const std::string good = slurp(dir_ / "plain.cbk");
+  for (int kind = 0; kind < 3; ++kind) {
+    for (const std::string stage : {"parallax", "feature_maps"}) {
+      ASSERT_EQ(entries(stage).size(), 1u);
+      const fs::path entry = entries(stage)[0];
+      std::string bytes = slurp(entry);
+      if (kind == 0) bytes[40] ^= 0x10;                 // payload
+      if (kind == 1) bytes[bytes.size() - 30] ^= 0x10;  // index
+      if (kind == 2) bytes.resize(bytes.size() / 2);    // truncated
+      std::ofstream(entry, std::ios::binary | std::ios::trunc) << bytes;
+    }
+    CliRun run;
+    const auto report = bake("b.cbk", true, &run);
+    EXPECT_NE(report["warnings"].dump().find("is corrupt"), std::string::npos) << kind << run.out;
+    EXPECT_GE(report["cache"]["corrupt"].get<int>(), 1) << kind;
+    EXPECT_EQ(slurp(dir_ / "b.cbk"), good) << kind;
+    fs::remove(dir_ / "b.cbk");
+    // Recomputed and stored again: the next bake is all hits, no warning.
+    const auto again = bake("c.cbk", true, &run);
+    EXPECT_EQ(again["cache"]["hits"], 7) << kind;
+    EXPECT_EQ(again["warnings"].size(), 0u) << again["warnings"];
+    fs::remove(dir_ / "c.cbk");
+  }
+}
+
+TEST_F(Cache, UnusableCacheIsWarnedAboutAndBypassed) {
+  std::ofstream(dir_ / "cache") << "a file, not a folder";
+  CliRun run;
+  const auto report = bake("a.cbk", true, &run);
+  EXPECT_NE(report["warnings"].dump().find("baking without the cache"), std::string::npos)
+      << run.out;
+  EXPECT_EQ(report["cache"]["enabled"], false);
+  bake("plain.cbk", false);
+  EXPECT_EQ(slurp(dir_ / "a.cbk"), slurp(dir_ / "plain.cbk"));
+}
+
+TEST_F(Cache, ConcurrentBakesOfOneKeyAgree) {
+  bake("plain.cbk", false);
+  std::vector<std::thread> threads;
+  std::vector<CliRun> runs(3);
+  const std::vector<std::string> outs = {"c0.cbk", "c1.cbk", "c2.cbk"};
+  for (int i = 0; i < 3; ++i)
+    threads.emplace_back([&, i] {
+      runs[i] = run_clothbake({"bake", (dir_ / "f.toml").string(), "-o", (dir_ / outs[i]).string(),
+                               "--quiet", "--json", "--cache", (dir_ / "cache").string()});
+    });
+  for (auto& t : threads)
+    t.join();
+  int stored = 0;
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_EQ(runs[i].code, 0) << runs[i].err;
+    EXPECT_EQ(slurp(dir_ / outs[i]), slurp(dir_ / "plain.cbk"));
+    stored += nlohmann::json::parse(runs[i].out)["cache"]["stored"].get<int>();
+  }
+  EXPECT_EQ(stored, 7) << "each stage computed once across the three bakes";
+  EXPECT_EQ(entries().size(), 7u);
+}
+
+// SIGKILL while an entry is being written (the sink pauses mid-write): only a temporary file is
+// left, never a torn entry; the next bake is correct.
+TEST_F(Cache, KilledStoreLeavesNoTornEntry) {
+  const std::string exe = clothbake_executable();
+  const std::string f = (dir_ / "f.toml").string(), out = (dir_ / "a.cbk").string(),
+                    cache = (dir_ / "cache").string();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::setenv("CLOTHBAKE_TEST_PAUSE_AFTER_BYTES", "2000", 1);
+    ::execl(exe.c_str(), exe.c_str(), "bake", f.c_str(), "-o", out.c_str(), "--quiet", "--cache",
+            cache.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bool partial = false;
+  for (int i = 0; i < 1000 && !partial; ++i) {
+    std::error_code ec;
+    if (fs::is_directory(dir_ / "cache" / "entries", ec))
+      for (const auto& e : fs::directory_iterator(dir_ / "cache" / "entries", ec))
+        if (e.path().filename().string()[0] == '.' && fs::file_size(e.path(), ec) >= 2000)
+          partial = true;
+    if (!partial) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(partial) << "the store never paused mid-write";
+  EXPECT_FALSE(fs::exists(out));
+  const auto info = run_clothbake({"cache", "info", cache, "--json"});
+  ASSERT_EQ(info.code, 0) << info.err;
+  EXPECT_EQ(nlohmann::json::parse(info.out)["temporary_files"], 1);
+  CliRun run;
+  const auto report = bake("a.cbk", true, &run);
+  EXPECT_EQ(report["warnings"].size(), 0u) << report["warnings"];
+  bake("plain.cbk", false);
+  EXPECT_EQ(slurp(dir_ / "a.cbk"), slurp(dir_ / "plain.cbk"));
+}
+
+TEST_F(Cache, SizeBoundAndPrune) {
+  bake("a.cbk");
+  const auto info = nlohmann::json::parse(
+      run_clothbake({"cache", "info", (dir_ / "cache").string(), "--json"}).out);
+  const uint64_t total = info["bytes"];
+  ASSERT_GT(total, 0u);
+  // A bound of half the total: the least recently used entries go, the rest fit.
+  fs::remove_all(dir_ / "cache");
+  bake("b.cbk", true);
+  auto r = run_clothbake({"cache", "prune", (dir_ / "cache").string(), "--max-size",
+                          std::to_string(total / 2), "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto doc = nlohmann::json::parse(r.out);
+  EXPECT_LE(doc["kept_bytes"].get<uint64_t>(), total / 2);
+  EXPECT_GT(doc["removed_entries"].get<int>(), 0);
+  // --cache-max-size bounds the cache during the bake.
+  fs::remove_all(dir_ / "cache");
+  CliRun run = run_clothbake({"bake", (dir_ / "f.toml").string(), "-o", (dir_ / "c.cbk").string(),
+                              "--quiet", "--cache", (dir_ / "cache").string(), "--cache-max-size",
+                              std::to_string(total / 2)});
+  ASSERT_EQ(run.code, 0) << run.err;
+  doc = nlohmann::json::parse(
+      run_clothbake({"cache", "info", (dir_ / "cache").string(), "--json"}).out);
+  EXPECT_LE(doc["bytes"].get<uint64_t>(), total / 2);
+  r = run_clothbake({"cache", "prune", (dir_ / "cache").string(), "--all", "--json"});
+  EXPECT_EQ(nlohmann::json::parse(r.out)["kept_entries"], 0);
+  EXPECT_EQ(run_clothbake({"cache", "prune", (dir_ / "cache").string(), "--max-size", "lots"}).code,
+            1);
+}
+
+}  // namespace

@@ -1,0 +1,143 @@
+// Depfile escaping (golden strings, and GNU Make reading the escaped names back) and
+// `clothbake bake --depfile` / restat end to end.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "bake/cli/depfile.hpp"
+#include "common/error.hpp"
+#include "tests/support/run_cli.hpp"
+
+namespace fs = std::filesystem;
+using namespace clothbake;
+using clothbake::test_support::run_clothbake;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("clothbake_depfile_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void write(const fs::path& p, const std::string& text) {
+  std::ofstream(p, std::ios::binary) << text;
+}
+
+int64_t mtime_ns(const fs::path& p) {
+  struct stat st {};
+  ::stat(p.c_str(), &st);
+  return int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+}
+
+const char* kTinyFabric = R"(name = "tiny"
+[weave]
+name = "twill2/1"
+[bake]
+resolution = 16
+parallax_dirs = 4
+visibility_dirs = 4
+radiance_dirs = 6
+clusters = 2
+)";
+
+}  // namespace
+
+TEST(Depfile, EscapesAsNinjaAndMakeExpect) {
+  EXPECT_EQ(cli::escape_depfile_path("plain/a.png"), "plain/a.png");
+  EXPECT_EQ(cli::escape_depfile_path("a b.png"), "a\\ b.png");
+  EXPECT_EQ(cli::escape_depfile_path("c#d"), "c\\#d");
+  EXPECT_EQ(cli::escape_depfile_path("e$f"), "e$$f");
+  EXPECT_EQ(cli::escape_depfile_path("tab\there"), "tab\\\there");
+  // A backslash before a space is doubled so that it stays a literal backslash.
+  EXPECT_EQ(cli::escape_depfile_path("x\\ y"), "x\\\\\\ y");
+  EXPECT_EQ(cli::escape_depfile_path("win\\path"), "win\\path");
+  EXPECT_THROW(cli::escape_depfile_path("bad\nname"), Error);
+}
+
+TEST(Depfile, TextListsEachDependencyOnceWithPhonyRules) {
+  EXPECT_EQ(cli::depfile_text("out.cbk", {"f.toml", "a b.png", "f.toml"}),
+            "out.cbk: \\\n  f.toml \\\n  a\\ b.png\n\nf.toml:\n\na\\ b.png:\n");
+}
+
+// GNU Make reads the escaped names back as the files they name: touching the file with a space,
+// a '#' or a '$' in its name makes the target out of date; deleting one is not an error.
+TEST(Depfile, GnuMakeReadsEscapedNames) {
+  if (std::system("command -v make >/dev/null 2>&1") != 0) GTEST_SKIP() << "no make";
+  const fs::path dir = fresh_dir("make");
+  const std::vector<std::string> deps = {"a b.txt", "c#d.txt", "e$f.txt"};
+  const auto past = fs::file_time_type::clock::now() - std::chrono::seconds(1000);
+  for (const auto& d : deps) {
+    write(dir / d, "x");
+    fs::last_write_time(dir / d, past);
+  }
+  write(dir / "out.d", cli::depfile_text("out", deps));
+  write(dir / "Makefile", "out:\n\ttouch out\n-include out.d\n");
+  const std::string make = "cd '" + dir.string() + "' && make -s";
+  ASSERT_EQ(std::system((make + " >/dev/null").c_str()), 0);
+  EXPECT_EQ(std::system((make + " -q out").c_str()), 0) << "up to date after the build";
+  for (const auto& d : deps) {
+    const auto now = fs::file_time_type::clock::now();
+    fs::last_write_time(dir / "out", now - std::chrono::seconds(100));
+    fs::last_write_time(dir / d, now - std::chrono::seconds(50));
+    EXPECT_NE(std::system((make + " -q out").c_str()), 0) << d << " is newer: must rebuild";
+    ASSERT_EQ(std::system((make + " >/dev/null").c_str()), 0);
+    EXPECT_EQ(std::system((make + " -q out").c_str()), 0);
+  }
+  fs::remove(dir / deps[0]);
+  EXPECT_EQ(std::system((make + " >/dev/null").c_str()), 0) << "a deleted dependency is no error";
+  fs::remove_all(dir);
+}
+
+TEST(BakeDepfile, NamesEveryFileReadAndRestatKeepsTheFile) {
+  const fs::path dir = fresh_dir("bake");
+  write(dir / "tiny fabric.toml", kTinyFabric);
+  const fs::path out = dir / "out #1.cbk", dep = dir / "out.d";
+  auto r = run_clothbake({"bake", (dir / "tiny fabric.toml").string(), "-o", out.string(),
+                          "--depfile", dep.string(), "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string text = slurp(dep);
+  EXPECT_EQ(text.rfind(cli::escape_depfile_path(out.string()) + ":", 0), 0u) << text;
+  EXPECT_NE(text.find(cli::escape_depfile_path((dir / "tiny fabric.toml").string())),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find(cli::escape_depfile_path(
+                fs::canonical(test_support::clothbake_executable()).string())),
+            std::string::npos)
+      << text;
+
+  // Same inputs: same bytes, so the file and its mtime stay; the report says so.
+  const std::string bytes = slurp(out);
+  fs::last_write_time(out, fs::last_write_time(out) - std::chrono::hours(1));
+  const int64_t before = mtime_ns(out);
+  r = run_clothbake({"bake", (dir / "tiny fabric.toml").string(), "-o", out.string(), "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"unchanged\": true"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("up to date"), std::string::npos) << r.err;
+  EXPECT_EQ(mtime_ns(out), before);
+  EXPECT_EQ(slurp(out), bytes);
+
+  // A change that alters the bytes rewrites the file.
+  std::string changed = kTinyFabric;
+  changed.replace(changed.find("tiny"), 4, "tinier");
+  write(dir / "tiny fabric.toml", changed);
+  r = run_clothbake({"bake", (dir / "tiny fabric.toml").string(), "-o", out.string(), "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"unchanged\": false"), std::string::npos);
+  EXPECT_NE(mtime_ns(out), before);
+  EXPECT_NE(slurp(out), bytes);
+  fs::remove_all(dir);
+}
