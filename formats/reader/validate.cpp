@@ -10,6 +10,7 @@
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/metadata_limits.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/reader/visibility_sections.hpp"
@@ -179,8 +180,12 @@ void check_metadata(const Asset& asset, Reporter& r) {
     ++first;
   while (last > first && blank(text[last - 1]))
     --last;
-  if (last - first < 2 || text[first] != '{' || text[last - 1] != '}')
+  if (last - first < 2 || text[first] != '{' || text[last - 1] != '}') {
     r.report(Check::Metadata, s.index, "metadata: not a JSON object");
+    return;
+  }
+  status = check_metadata_limits(text);
+  if (!status.ok()) r.report_status(status, s.index);
 }
 
 bool in_range(double v, double lo, double hi) {
@@ -229,9 +234,16 @@ void check_fabric_records(const Asset& asset, Reporter& r, uint32_t* yarn_count,
                uint64_t(yarns.size), unsigned(info->yarn_count));
     for (uint64_t i = 0; i < yarns.size; ++i) {
       const YarnMaterialRecord& y = yarns[i];
-      if (std::memchr(y.name, 0, sizeof y.name) == nullptr)
+      if (std::memchr(y.name, 0, sizeof y.name) == nullptr) {
         r.report(Check::SectionLayout, s.index,
                  "yarn_materials[%" PRIu64 "]: name is not NUL-terminated", i);
+      } else {
+        const std::string_view name(y.name, std::strlen(y.name));
+        const std::size_t bad = utf8_error_offset(name);
+        if (bad != name.size())
+          r.report(Check::MetadataSchema, s.index,
+                   "yarn_materials[%" PRIu64 "]: name is not UTF-8 (byte %zu)", i, bad);
+      }
       uint64_t at;
       if (!all_zero(y.reserved, sizeof y.reserved, &at))
         r.report(Check::Padding, s.index,
