@@ -183,7 +183,8 @@ Action setup_bake(CLI::App& app) {
     nlohmann::json report = pipeline::bake_report_json(request, result);
     report["warnings"] = take_warnings();
     if (!o->report.empty()) {
-      const std::string text = report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+      const std::string text =
+          report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
       formats::write_file_atomically(
           o->report, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); },
           report_output);

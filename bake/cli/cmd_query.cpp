@@ -27,6 +27,7 @@
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/writer/open_asset.hpp"
+#include "formats/writer/valid_asset.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -69,7 +70,7 @@ int query_parallax(const QueryOptions& o) {
     if (rect[2] < rect[0] || rect[3] < rect[1])
       throw CLI::ValidationError("--rect", "x1 must be >= x0 and y1 >= y0");
   }
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   reader::ParallaxView view;
   formats::throw_if_failed(view.open(asset), o.asset);
   reader::ParallaxSample sample;
@@ -126,7 +127,7 @@ int query_visibility(const QueryOptions& o) {
     throw CLI::ValidationError("--rect", "visibility queries are per texel: use --texel");
   const std::array<double, 3> dir = parse_direction(o.dir, "--dir");
   const std::vector<double> texel = parse_number_list(o.texel, "--texel", kTexel);
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   reader::VisibilityAsgView view;
   formats::throw_if_failed(view.open(asset), o.asset);
   const int64_t x = int64_t(texel[0]), y = int64_t(texel[1]);
@@ -184,7 +185,7 @@ int query_radiance(const QueryOptions& o) {
   args.source = o.tables == "raw"          ? TableSource::Raw
                 : o.tables == "compressed" ? TableSource::Compressed
                                            : TableSource::Auto;
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   nlohmann::json answer = radiance_query(asset, args);
   if (o.json) {
     answer["asset"] = o.asset;
