@@ -27,7 +27,6 @@
 #include "common/error.hpp"
 #include "formats/reader/radiance_layout.hpp"
 #include "formats/writer/open_asset.hpp"
-#include "formats/writer/valid_asset.hpp"
 #include "verify/compressed_verify.hpp"
 #include "verify/radiance_verify.hpp"
 
@@ -90,7 +89,7 @@ Action setup_verify(CLI::App& app) {
   app.add_flag("--no-throughput", o->no_throughput,
                "compressed tables: skip the compressed-vs-raw query throughput measurement");
   return [o] {
-    const reader::Asset asset = formats::open_valid_asset(o->asset);
+    const reader::Asset asset = formats::open_asset(o->asset, reader::Verify::Checksums);
     const bool raw = verify::has_raw_tables(asset);
     const bool compressed = verify::has_compressed_tables(asset);
     if (!raw && !compressed)
