@@ -11,6 +11,7 @@
 //
 // Exit codes: 1 bad arguments (naming the option), 2 missing file or missing section, 3 invalid
 // asset (layout or checksum), 0 otherwise.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -180,6 +181,13 @@ int query_radiance(const QueryOptions& o) {
   args.lobe = o.lobe;
   args.cluster = o.cluster;
   args.h = parse_vec3(o.h, "--h");
+  // A half vector of tiny or huge components (1e-310, 1e308) is the same direction scaled: divide
+  // by the largest component so that its squared length neither underflows nor overflows.
+  if (const double largest =
+          std::max({std::fabs(args.h[0]), std::fabs(args.h[1]), std::fabs(args.h[2])});
+      largest > 0 && (largest > 1e150 || largest < 1e-150))
+    for (double& c : args.h)
+      c /= largest;
   const std::vector<double> rect = parse_number_list(o.rect, "--rect", kRect);
   args.rect = {rect[0], rect[1], rect[2], rect[3]};
   args.source = o.tables == "raw"          ? TableSource::Raw

@@ -1,6 +1,7 @@
 // WIF 1.1 import (docs/weaves.md, "WIF import"): INI-style sections, row sections with 1-based
 // thread numbers, defaults from [WARP]/[WEFT], and the drawdown from threading and lifts.
 #include "bake/inputs/wif.hpp"
+#include "bake/inputs/fabric_files.hpp"
 
 #include <algorithm>
 #include <bitset>
@@ -749,6 +750,8 @@ WifDraft parse_wif(const std::string& text, const std::string& path_for_messages
 }
 
 WifDraft read_wif(const std::string& path) {
+  inputs::require_regular_file(
+      path);  // a directory is not "larger than 64 MiB"; a FIFO would block
   std::ifstream in(path, std::ios::binary);
   if (!in) throw_input_error(path + ": cannot open the WIF file");
   in.seekg(0, std::ios::end);

@@ -15,6 +15,7 @@
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/reader/xxh64.hpp"
+#include "model/parameter_ranges.hpp"
 
 namespace clothbake::reader {
 namespace {
@@ -206,8 +207,8 @@ void check_fabric_records(const Asset& asset, Reporter& r, uint32_t* yarn_count,
       if (!all_zero(info->reserved, sizeof info->reserved, &at))
         r.report(Check::Padding, s.index, "fabric_info: reserved byte %" PRIu64 " is not zero",
                  uint64_t(offsetof(FabricInfoRecord, reserved)) + at);
-      if (!in_range(info->sheen_roughness, 1e-9, 1.0))
-        r.report(Check::ValueRange, s.index, "fabric_info: sheen_roughness %g is outside (0, 1]",
+      if (!model::roughness_in_range(info->sheen_roughness))
+        r.report(Check::ValueRange, s.index, "fabric_info: sheen_roughness %g is outside [1e-4, 1]",
                  info->sheen_roughness);
       if (!(info->tile_size_mm >= 0) || !std::isfinite(info->tile_size_mm))
         r.report(Check::ValueRange, s.index, "fabric_info: tile_size_mm %g is not >= 0",
@@ -249,9 +250,9 @@ void check_fabric_records(const Asset& asset, Reporter& r, uint32_t* yarn_count,
         r.report(Check::Padding, s.index,
                  "yarn_materials[%" PRIu64 "]: reserved byte %" PRIu64 " is not zero", i,
                  uint64_t(offsetof(YarnMaterialRecord, reserved)) + at);
-      if (!in_range(y.roughness, 1e-9, 1.0))
+      if (!model::roughness_in_range(y.roughness))
         r.report(Check::ValueRange, s.index,
-                 "yarn_materials[%" PRIu64 "]: roughness %g is outside (0, 1]", i, y.roughness);
+                 "yarn_materials[%" PRIu64 "]: roughness %g is outside [1e-4, 1]", i, y.roughness);
       if (!(y.optical_thickness > 0) || !std::isfinite(y.optical_thickness))
         r.report(Check::ValueRange, s.index,
                  "yarn_materials[%" PRIu64 "]: optical_thickness %g is not > 0", i,

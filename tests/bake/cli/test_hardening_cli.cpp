@@ -452,3 +452,97 @@ TEST_F(Hardening, CompressedFootprintQueriesAreExactForSubTexelFootprints) {
   }
   EXPECT_GT(zero_clusters, 0);  // the exact-zero case was exercised
 }
+
+// Defect 11: roughness = 1e-300 baked and validate then rejected the asset (CBK-E021); the model
+// clamped silently. One range, [1e-4, 1], for the loader, the model and the validator.
+TEST_F(Hardening, RoughnessHasOneRangeForLoaderAndValidator) {
+  const std::string out = path("rough.cbk");
+  for (const auto& [from, to] :
+       std::vector<std::pair<std::string, std::string>>{{"roughness = 0.45", "roughness = 1e-300"},
+                                                        {"roughness = 0.40", "roughness = 1e-300"},
+                                                        {"roughness = 0.45", "roughness = 5e-5"}}) {
+    const std::string fabric = path("rough.toml");
+    std::ofstream(fabric) << fabric_text({{from, to}});
+    const CliRun r =
+        run_clothbake({"bake", fabric, "-o", out, "--stages", "feature_maps", "--quiet"});
+    EXPECT_EQ(r.code, 2) << to << ": " << r.err;
+    EXPECT_TRUE(mentions(r, "roughness")) << r.err;
+    EXPECT_TRUE(mentions(r, "[0.0001, 1]")) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // The smallest accepted value bakes and validates.
+  const std::string fabric = path("rough_min.toml");
+  std::ofstream(fabric) << fabric_text(
+      {{"roughness = 0.45", "roughness = 1e-4"}, {"roughness = 0.40", "roughness = 1e-4"}});
+  ASSERT_EQ(run_clothbake({"bake", fabric, "-o", out, "--stages", "feature_maps", "--quiet"}).code,
+            0);
+  EXPECT_EQ(run_clothbake({"validate", out}).code, 0);
+}
+
+// Defects 12, 2 and 3: extreme thread geometry gave non-finite maps (bake failed late without the
+// key) or reliefs no ray can trace (Embree aborted, the parallax stage hung). Refused at load,
+// exit 2, naming the keys and the pixel; nothing written.
+TEST_F(Hardening, ExtremeReliefsAreRefusedAtLoad) {
+  const std::string out = path("relief.cbk");
+  for (const std::string spacing : {"1e-300", "1e-30"}) {
+    const std::string fabric = path("relief.toml");
+    std::ofstream(fabric) << fabric_text({{"spacing_mm = 0.25", "spacing_mm = " + spacing}});
+    CliRun r = run_clothbake({"inspect", fabric});
+    EXPECT_EQ(r.code, 2) << spacing << ": " << r.err;
+    EXPECT_TRUE(mentions(r, "spacing_mm")) << r.err;
+    r = run_clothbake({"bake", fabric, "-o", out, "--quiet"});
+    EXPECT_EQ(r.code, 2) << spacing << ": " << r.err;
+    EXPECT_TRUE(mentions(r, "pixel (")) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // An image height map scaled by the documented maximum height_scale.
+  const std::string maps = path("maps");
+  ASSERT_EQ(run_clothbake({"pattern", "--weave", "plain", "--resolution", "16", "-o", maps}).code,
+            0);
+  std::ifstream in(maps + "/fabric.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("[maps]\n"), 7, "[maps]\nheight_scale = 1e12\n");
+  std::ofstream(maps + "/fabric.toml") << text;
+  const CliRun r = run_clothbake({"inspect", maps + "/fabric.toml"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(mentions(r, "height_scale")) << r.err;
+  EXPECT_TRUE(mentions(r, "tile widths")) << r.err;
+}
+
+// Defect 10: a FIFO as the fabric, a WIF or an asset blocked forever; /dev/zero as the fabric grew
+// without bound; a directory as the WIF was "larger than 64 MiB" (defect 15). Regular files only.
+TEST_F(Hardening, SpecialFilesAreRefusedAtOnce) {
+  const std::string fifo = path("fifo");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // `timeout` turns a hang (the old behaviour) into a failure instead of a stuck suite.
+  for (const std::string command :
+       {"inspect " + fifo, "info " + fifo, "validate " + fifo, "inspect /dev/zero",
+        "pattern --wif " + fifo + " -o " + path("p1"), "info /dev/zero"}) {
+    const CliRun r = run_clothbake_line(command +
+                                        " & pid=$!; (sleep 20; kill -9 $pid) "
+                                        "2>/dev/null & killer=$!; wait $pid; rc=$?; "
+                                        "kill $killer 2>/dev/null; exit $rc");
+    EXPECT_EQ(r.code, 2) << command << ": " << r.err;
+    EXPECT_TRUE(mentions(r, "not a regular file")) << command << ": " << r.err;
+  }
+  const CliRun r = run_clothbake({"pattern", "--wif", path(""), "-o", path("p2")});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(mentions(r, "is a directory")) << r.err;
+}
+
+// Defect 15: --dir 1e308,1e308,1e308 blamed --texel; --h 1e-310 was "not a finite number"; output
+// names of 244+ bytes failed because of the temporary file's suffix.
+TEST_F(Hardening, ExtremeNumbersAndLongNames) {
+  CliRun r = run_clothbake_line("query " + good() +
+                                " parallax --dir 1e308,1e308,1e308 --texel 1,1 --json");
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = run_clothbake_line("query " + good() +
+                         " radiance --lobe specular_reflection --h 1e-310,0,1e-310 --rect 0,0,2,2");
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::string fabric = path("long.toml");
+  std::ofstream(fabric) << fabric_text();
+  const std::string out = path(std::string(250, 'n') + ".cbk");
+  r = run_clothbake({"bake", fabric, "-o", out, "--stages", "feature_maps", "--quiet"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out));
+}
