@@ -484,7 +484,7 @@ TEST_F(Hardening, RoughnessHasOneRangeForLoaderAndValidator) {
 // exit 2, naming the keys and the pixel; nothing written.
 TEST_F(Hardening, ExtremeReliefsAreRefusedAtLoad) {
   const std::string out = path("relief.cbk");
-  for (const std::string spacing : {"1e-300", "1e-30"}) {
+  for (const std::string& spacing : {std::string("1e-300"), std::string("1e-30")}) {
     const std::string fabric = path("relief.toml");
     std::ofstream(fabric) << fabric_text({{"spacing_mm = 0.25", "spacing_mm = " + spacing}});
     CliRun r = run_clothbake({"inspect", fabric});
@@ -515,9 +515,9 @@ TEST_F(Hardening, SpecialFilesAreRefusedAtOnce) {
   const std::string fifo = path("fifo");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   // `timeout` turns a hang (the old behaviour) into a failure instead of a stuck suite.
-  for (const std::string command :
-       {"inspect " + fifo, "info " + fifo, "validate " + fifo, "inspect /dev/zero",
-        "pattern --wif " + fifo + " -o " + path("p1"), "info /dev/zero"}) {
+  for (const std::string& command :
+       {"inspect " + fifo, "info " + fifo, "validate " + fifo, std::string("inspect /dev/zero"),
+        "pattern --wif " + fifo + " -o " + path("p1"), std::string("info /dev/zero")}) {
     const CliRun r = run_clothbake_line(command +
                                         " & pid=$!; (sleep 20; kill -9 $pid) "
                                         "2>/dev/null & killer=$!; wait $pid; rc=$?; "
