@@ -92,6 +92,12 @@ std::vector<MetadataFinding> check_metadata(const reader::Asset& asset, json* ou
          std::string("metadata: ") + status.message()});
     return findings;
   }
+  return check_metadata_text(text, out);
+}
+
+std::vector<MetadataFinding> check_metadata_text(std::string_view text, json* out) {
+  std::vector<MetadataFinding> findings;
+  *out = json();
   const reader::Status limits = reader::check_metadata_limits(text);
   if (!limits.ok()) {
     findings.push_back({Check::Metadata, limits.message()});

@@ -24,6 +24,10 @@ struct MetadataFinding {
 // ...). Unknown keys are ignored (docs/format.md: readers ignore what they do not know).
 std::vector<MetadataFinding> check_metadata(const reader::Asset& asset, nlohmann::json* out);
 
+// The same checks on metadata text (everything but the CBK-E019 presence check): the limits, the
+// JSON syntax, "format" and the schema. Used by check_metadata and the metadata fuzzer.
+std::vector<MetadataFinding> check_metadata_text(std::string_view text, nlohmann::json* out);
+
 // The metadata object, or throws clothbake::Error(InvalidAsset) with "CBK-E0nn: metadata: ..."
 // for the first finding of check_metadata().
 nlohmann::json read_metadata(const reader::Asset& asset);

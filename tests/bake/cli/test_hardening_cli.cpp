@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -50,6 +51,16 @@ class Hardening : public ::testing::Test {
     pipeline::bake(request, stages::bake_stages());
   }
   static void TearDownTestSuite() {
+    // $CLOTHBAKE_SAVE_CRAFTED=DIR keeps the small crafted assets (how tests/fuzz/corpus/crafted_*
+    // were made: the fuzz corpus holds every hostile asset of these tests).
+    if (const char* save = std::getenv("CLOTHBAKE_SAVE_CRAFTED"); save && *save)
+      for (const auto& entry : fs::directory_iterator(*dir_))
+        if (entry.is_regular_file() && entry.path().extension() == ".cbk" &&
+            entry.path().filename().string().size() < 64 &&
+            entry.file_size() < (std::uintmax_t(600) << 10))
+          fs::copy_file(entry.path(),
+                        fs::path(save) / ("crafted_" + entry.path().filename().string()),
+                        fs::copy_options::overwrite_existing);
     fs::remove_all(*dir_);
     delete dir_;
   }
