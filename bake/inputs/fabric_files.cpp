@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "common/error.hpp"
@@ -48,7 +49,8 @@ std::string xxh64_hex(std::string_view bytes) {
 }
 
 std::string hash_file(const std::string& path, const std::string& context) {
-  return xxh64_hex(read_file_bytes(path, context));
+  // Any size: hashed inputs include assets (render), which are not text inputs.
+  return xxh64_hex(read_file_bytes(path, context, std::numeric_limits<std::size_t>::max()));
 }
 
 std::string resolve_relative(const std::string& base_dir, const std::string& path) {

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -750,8 +751,10 @@ WifDraft parse_wif(const std::string& text, const std::string& path_for_messages
 }
 
 WifDraft read_wif(const std::string& path) {
-  inputs::require_regular_file(
-      path);  // a directory is not "larger than 64 MiB"; a FIFO would block
+  // A directory is not "larger than 64 MiB" and a FIFO would block: regular files only (a missing
+  // file keeps its "cannot open" message below).
+  std::error_code exists_error;
+  if (std::filesystem::exists(path, exists_error)) inputs::require_regular_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw_input_error(path + ": cannot open the WIF file");
   in.seekg(0, std::ios::end);
