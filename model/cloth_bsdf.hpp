@@ -44,6 +44,7 @@
 #include <string>
 
 #include "model/diffuse.hpp"
+#include "model/parameter_ranges.hpp"
 #include "model/rgb.hpp"
 #include "model/sggx.hpp"
 #include "model/sheen.hpp"
@@ -56,14 +57,14 @@ namespace clothbake::model {
 template <class T>
 struct TexelParams {
   Vec3<T> tangent{T(1), T(0), T(0)};     // fibre tangent, local frame (normalised by the BSDF)
-  T roughness = T(0.3);                  // SGGX fibre roughness sigma in (0, 1]
+  T roughness = T(0.3);                  // SGGX fibre roughness sigma in [1e-4, 1]
   T optical_thickness = T(2);            // SpongeCake slab optical thickness T in [0, inf]
   Rgb<T> specular_albedo{T(0.8)};        // single-scattering albedo alpha, [0, 1]
   Rgb<T> diffuse_reflectance{T(0.1)};    // R_d, [0, 1]
   Rgb<T> diffuse_transmittance{T(0.1)};  // T_d, [0, 1]
   T gap = T(1);                          // I(x) in [0, 1]: 1 = yarn, 0 = gap (delta transmission)
   Rgb<T> sheen_color{T(0)};              // sheen colour in [0, 1]; zero disables sheen
-  T sheen_roughness = T(0.5);            // sheen roughness in [0, 1]
+  T sheen_roughness = T(0.5);            // sheen roughness in [1e-4, 1]
 };
 
 // Which parameter is wrong, and why; field is empty when the parameters are valid.
@@ -83,7 +84,7 @@ inline ParamsProblem validate_texel_params(const TexelParams<T>& p) {
   };
   const T tl = length(p.tangent);
   if (!std::isfinite(tl) || !(tl > T(0))) return {"tangent", "must be a finite non-zero vector"};
-  if (!(p.roughness > T(0) && p.roughness <= T(1))) return {"roughness", "must be in (0, 1]"};
+  if (!roughness_in_range(double(p.roughness))) return {"roughness", "must be in [1e-4, 1]"};
   if (!(p.optical_thickness >= T(0))) return {"optical_thickness", "must be >= 0 (inf allowed)"};
   if (!rgb_unit(p.specular_albedo)) return {"specular_albedo", "components must be in [0, 1]"};
   if (!rgb_unit(p.diffuse_reflectance))
@@ -92,7 +93,8 @@ inline ParamsProblem validate_texel_params(const TexelParams<T>& p) {
     return {"diffuse_transmittance", "components must be in [0, 1]"};
   if (!unit_range(p.gap)) return {"gap", "must be in [0, 1]"};
   if (!rgb_unit(p.sheen_color)) return {"sheen_color", "components must be in [0, 1]"};
-  if (!unit_range(p.sheen_roughness)) return {"sheen_roughness", "must be in [0, 1]"};
+  if (!roughness_in_range(double(p.sheen_roughness)))
+    return {"sheen_roughness", "must be in [1e-4, 1]"};
   return {};
 }
 

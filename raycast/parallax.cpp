@@ -66,7 +66,10 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
                       std::to_string(int64_t(bytes / (1 << 20))) + " MiB, above the limit of " +
                       std::to_string(int64_t(kMaxParallaxBytes / (1 << 20))) +
                       " MiB: lower the resolution or the directions");
-  const auto [z_min, z_max] = height_range(maps);
+  // Plain variables, not a structured binding: clang before 16 cannot capture bindings in the
+  // lambdas below (the sanitizer build uses clang).
+  const HeightRange heights = height_range(maps);
+  const double z_min = heights.min, z_max = heights.max;
 
   ParallaxTable table;
   table.resolution = n;

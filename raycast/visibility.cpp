@@ -62,7 +62,10 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
                       " MiB of visibility samples, above the limit of " +
                       std::to_string(int64_t(kMaxVisibilitySampleBytes / (1 << 20))) +
                       " MiB: lower the resolution or the directions");
-  const auto [z_min, z_max] = height_range(maps);
+  // Plain variables, not a structured binding: clang before 16 cannot capture bindings in the
+  // lambdas below (the sanitizer build uses clang).
+  const HeightRange heights = height_range(maps);
+  const double z_min = heights.min, z_max = heights.max;
 
   VisibilitySamples samples;
   samples.resolution = n;

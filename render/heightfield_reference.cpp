@@ -12,6 +12,7 @@
 #include "eval/evaluator.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/writer/open_asset.hpp"
+#include "formats/writer/valid_asset.hpp"
 #include "raycast/heightfield_scene.hpp"
 #include "render/camera.hpp"
 #include "render/shapes.hpp"
@@ -28,7 +29,7 @@ HeightfieldReference render_heightfield_reference(const Scene& scene, std::size_
     throw_input_error(scene.path + ": " + o.name +
                       ": the near-field reference needs a plane "
                       "with a fabric");
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   reader::FeatureMapsView maps;
   eval::Evaluator ev;
   if (!reader::read_feature_maps(asset, &maps).ok() || !ev.open(asset).ok())

@@ -11,6 +11,7 @@
 
 #include "common/error.hpp"
 #include "formats/writer/open_asset.hpp"
+#include "formats/writer/valid_asset.hpp"
 #include "model/splitmix64.hpp"
 #include "render/camera.hpp"
 #include "render/environment.hpp"
@@ -62,8 +63,7 @@ Renderer::Renderer(const Scene& scene, const RenderOptions& options)
   for (const Object& o : scene.objects) {
     Material m;
     if (!o.asset.empty()) {
-      m.asset =
-          std::make_unique<reader::Asset>(formats::open_asset(o.asset, reader::Verify::Checksums));
+      m.asset = std::make_unique<reader::Asset>(formats::open_valid_asset(o.asset));
       eval::EvalOptions eo;
       eo.tables = options.tables;
       eo.parallax = options.parallax;

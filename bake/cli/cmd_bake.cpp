@@ -227,7 +227,8 @@ Action setup_bake(CLI::App& app) {
     report["inputs"] = inputs;
     report["warnings"] = take_warnings();
     if (!o->report.empty()) {
-      const std::string text = report.dump(2) + "\n";
+      const std::string text =
+          report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
       formats::write_file_atomically(
           o->report, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); },
           report_output);

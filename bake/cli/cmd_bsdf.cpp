@@ -186,7 +186,7 @@ Action setup_bsdf(CLI::App& app) {
   auto o = std::make_shared<BsdfOptions>();
   app.add_option("--tangent", o->tangent, "fibre tangent x,y,z in the local frame (z = normal)")
       ->required();
-  app.add_option("--roughness", o->roughness, "SGGX fibre roughness sigma in (0, 1]")->required();
+  app.add_option("--roughness", o->roughness, "SGGX fibre roughness sigma in [1e-4, 1]")->required();
   app.add_option("--thickness", o->thickness, "SpongeCake optical thickness T >= 0 (or inf)")
       ->required();
   app.add_option("--albedo", o->albedo, "specular albedo alpha: v or r,g,b in [0, 1]")->required();
@@ -196,7 +196,7 @@ Action setup_bsdf(CLI::App& app) {
                  "diffuse transmittance T_d: v or r,g,b (default 0)");
   app.add_option("--sheen-color", o->sheen_color, "sheen colour: v or r,g,b (default 0: no sheen)");
   app.add_option("--sheen-roughness", o->sheen_roughness,
-                 "sheen roughness in [0, 1] (default 0.5)");
+                 "sheen roughness in [1e-4, 1] (default 0.5)");
   app.add_option("--gap", o->gap, "yarn indicator I in [0, 1]: 1 yarn, 0 gap (default 1)");
   app.add_option("--visibility", o->visibility, "visibility V(x', wi) in [0, 1] (default 1)");
   app.add_option("--wi", o->wi, "direction towards the light x,y,z (normalised)")->required();

@@ -22,6 +22,7 @@
 #include "common/error.hpp"
 #include "eval/evaluator.hpp"
 #include "formats/writer/open_asset.hpp"
+#include "formats/writer/valid_asset.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -80,7 +81,7 @@ int run_eval(const EvalCliOptions& o) {
                    : o.tables == "compressed" ? eval::TableChoice::Compressed
                                               : eval::TableChoice::Auto;
 
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   eval::Evaluator evaluator;
   formats::throw_if_failed(evaluator.open(asset, options), o.asset);
   const eval::Footprint footprint{r[0], r[1], r[2], r[3]};

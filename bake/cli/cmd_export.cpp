@@ -24,6 +24,7 @@
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/atomic_file.hpp"
 #include "formats/writer/open_asset.hpp"
+#include "formats/writer/valid_asset.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -218,7 +219,7 @@ Action setup_export(CLI::App& app) {
                  "(default specular_reflection; delta_transmission: the gap table)");
   app.add_flag("--force", o->force, "replace an existing clothbake asset at the output path");
   return [o] {
-    const Asset asset = formats::open_asset(o->asset, Verify::Structure);
+    const Asset asset = formats::open_valid_asset(o->asset);
     const SectionType type = parse_section(o->section);
     const bool radiance =
         type == SectionType::RadianceRawTables || type == SectionType::RadianceCompressedTables;

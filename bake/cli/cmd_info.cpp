@@ -10,7 +10,9 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/writer/metadata_json.hpp"
 #include "formats/writer/open_asset.hpp"
 
 namespace clothbake::cli {
@@ -74,11 +76,9 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
                       {"color", y.color}});
     doc["yarns"] = list;
   }
-  std::string_view text;
-  if (asset.metadata_json(&text).ok()) {
-    nlohmann::json metadata = nlohmann::json::parse(text, nullptr, false);
-    doc["metadata"] = metadata.is_discarded() ? nlohmann::json("(not valid JSON)") : metadata;
-  }
+  // Metadata over the limits, not JSON or with a known key of the wrong type: exit 3 (CBK-E020,
+  // CBK-E023), as validate reports it.
+  doc["metadata"] = formats::read_metadata(asset);
   // Bytes per section name, and what the asset would weigh with the raw forms of the compressed
   // sections instead (from the sizes the parallax and compress stages recorded in the metadata).
   nlohmann::json by_name = nlohmann::json::object();
@@ -87,19 +87,25 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
     by_name[name] = by_name.value(name, uint64_t(0)) + s["bytes"].get<uint64_t>();
   }
   int64_t raw_total = int64_t(asset.file_size());
-  const nlohmann::json* params = nullptr;
-  if (doc.contains("metadata") && doc["metadata"].is_object() &&
-      doc["metadata"].contains("parameters"))
-    params = &doc["metadata"]["parameters"];
-  if (params && by_name.contains("parallax_compressed") && !by_name.contains("parallax") &&
-      params->contains("parallax") && (*params)["parallax"].contains("compressed"))
-    raw_total += int64_t((*params)["parallax"]["compressed"].value("raw_bytes", uint64_t(0))) -
-                 int64_t(by_name["parallax_compressed"].get<uint64_t>());
-  if (params && by_name.contains("radiance_compressed") && !by_name.contains("radiance_tables") &&
-      params->contains("compress") && (*params)["compress"].contains("kinds")) {
-    raw_total -= int64_t(by_name["radiance_compressed"].get<uint64_t>());
-    for (const auto& k : (*params)["compress"]["kinds"])
-      raw_total += int64_t(k.value("raw_float_bytes", uint64_t(0)));
+  // The recorded sizes are information: a value of an unexpected type leaves the total as the
+  // file's size instead of failing the command.
+  try {
+    const nlohmann::json* params = nullptr;
+    if (doc.contains("metadata") && doc["metadata"].is_object() &&
+        doc["metadata"].contains("parameters"))
+      params = &doc["metadata"]["parameters"];
+    if (params && by_name.contains("parallax_compressed") && !by_name.contains("parallax") &&
+        params->contains("parallax") && (*params)["parallax"].contains("compressed"))
+      raw_total += int64_t((*params)["parallax"]["compressed"].value("raw_bytes", uint64_t(0))) -
+                   int64_t(by_name["parallax_compressed"].get<uint64_t>());
+    if (params && by_name.contains("radiance_compressed") && !by_name.contains("radiance_tables") &&
+        params->contains("compress") && (*params)["compress"].contains("kinds")) {
+      raw_total -= int64_t(by_name["radiance_compressed"].get<uint64_t>());
+      for (const auto& k : (*params)["compress"]["kinds"])
+        raw_total += int64_t(k.value("raw_float_bytes", uint64_t(0)));
+    }
+  } catch (const nlohmann::json::exception&) {
+    raw_total = int64_t(asset.file_size());
   }
   doc["sizes"] = {{"by_name", by_name},
                   {"total_bytes", asset.file_size()},
@@ -109,29 +115,35 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
 
 void print_text(const nlohmann::json& doc) {
   std::ostream& out = std::cout;
-  out << "asset:    " << doc["path"].get<std::string>() << '\n';
+  // Names and paths come from the asset: escape what a terminal would interpret.
+  auto text = [](const nlohmann::json& value) { return terminal_safe(value.get<std::string>()); };
+  out << "asset:    " << text(doc["path"]) << '\n';
   out << "format:   " << doc["format"]["major"] << '.' << doc["format"]["minor"] << '\n';
   out << "size:     " << doc["size_bytes"] << " bytes\n";
   out << "content:  xxh64 " << doc["content_hash"].get<std::string>() << '\n';
   if (doc.contains("metadata") && doc["metadata"].is_object()) {
     const auto& m = doc["metadata"];
     if (m.contains("tool"))
-      out << "tool:     " << m["tool"].value("name", "?") << ' ' << m["tool"].value("version", "?")
-          << '\n';
+      out << "tool:     " << terminal_safe(m["tool"].value("name", "?")) << ' '
+          << terminal_safe(m["tool"].value("version", "?")) << '\n';
     if (m.contains("stages")) {
       out << "stages:  ";
       for (const auto& s : m["stages"])
-        out << ' ' << s.get<std::string>();
+        out << ' ' << text(s);
       out << '\n';
     }
     if (m.contains("fabric") && m["fabric"].contains("inputs")) {
       out << "inputs:\n";
       for (const auto& in : m["fabric"]["inputs"])
-        out << "  " << std::left << std::setw(10) << in.value("role", "") << ' '
-            << in.value("xxh64", "") << "  " << in.value("path", "") << '\n';
+        out << "  " << std::left << std::setw(10) << terminal_safe(in.value("role", "")) << ' '
+            << terminal_safe(in.value("xxh64", "")) << "  " << terminal_safe(in.value("path", ""))
+            << '\n';
     }
     if (m.contains("fabric") && m["fabric"].contains("bake"))
-      out << "bake:     " << m["fabric"]["bake"].dump() << '\n';
+      out << "bake:     "
+          << terminal_safe(
+                 m["fabric"]["bake"].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace))
+          << '\n';
   }
   if (doc.contains("fabric_info")) {
     const auto& f = doc["fabric_info"];
@@ -140,9 +152,8 @@ void print_text(const nlohmann::json& doc) {
   }
   if (doc.contains("yarns"))
     for (const auto& y : doc["yarns"])
-      out << "  yarn " << std::left << std::setw(12) << y["name"].get<std::string>()
-          << " roughness " << y["roughness"] << ", optical thickness " << y["optical_thickness"]
-          << '\n';
+      out << "  yarn " << std::left << std::setw(12) << text(y["name"]) << " roughness "
+          << y["roughness"] << ", optical thickness " << y["optical_thickness"] << '\n';
   out << "sections: " << doc["sections"].size() << '\n';
   out << "  " << std::left << std::setw(4) << "#" << std::setw(26) << "name" << std::setw(6)
       << "inst" << std::setw(5) << "ver" << std::setw(6) << "type" << std::setw(18) << "shape"

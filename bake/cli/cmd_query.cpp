@@ -11,6 +11,7 @@
 //
 // Exit codes: 1 bad arguments (naming the option), 2 missing file or missing section, 3 invalid
 // asset (layout or checksum), 0 otherwise.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -27,6 +28,7 @@
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/writer/open_asset.hpp"
+#include "formats/writer/valid_asset.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -69,7 +71,7 @@ int query_parallax(const QueryOptions& o) {
     if (rect[2] < rect[0] || rect[3] < rect[1])
       throw CLI::ValidationError("--rect", "x1 must be >= x0 and y1 >= y0");
   }
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   reader::ParallaxView view;
   formats::throw_if_failed(view.open(asset), o.asset);
   reader::ParallaxSample sample;
@@ -126,7 +128,7 @@ int query_visibility(const QueryOptions& o) {
     throw CLI::ValidationError("--rect", "visibility queries are per texel: use --texel");
   const std::array<double, 3> dir = parse_direction(o.dir, "--dir");
   const std::vector<double> texel = parse_number_list(o.texel, "--texel", kTexel);
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   reader::VisibilityAsgView view;
   formats::throw_if_failed(view.open(asset), o.asset);
   const int64_t x = int64_t(texel[0]), y = int64_t(texel[1]);
@@ -179,12 +181,19 @@ int query_radiance(const QueryOptions& o) {
   args.lobe = o.lobe;
   args.cluster = o.cluster;
   args.h = parse_vec3(o.h, "--h");
+  // A half vector of tiny or huge components (1e-310, 1e308) is the same direction scaled: divide
+  // by the largest component so that its squared length neither underflows nor overflows.
+  if (const double largest =
+          std::max({std::fabs(args.h[0]), std::fabs(args.h[1]), std::fabs(args.h[2])});
+      largest > 0 && (largest > 1e150 || largest < 1e-150))
+    for (double& c : args.h)
+      c /= largest;
   const std::vector<double> rect = parse_number_list(o.rect, "--rect", kRect);
   args.rect = {rect[0], rect[1], rect[2], rect[3]};
   args.source = o.tables == "raw"          ? TableSource::Raw
                 : o.tables == "compressed" ? TableSource::Compressed
                                            : TableSource::Auto;
-  const reader::Asset asset = formats::open_asset(o.asset, reader::Verify::Checksums);
+  const reader::Asset asset = formats::open_valid_asset(o.asset);
   nlohmann::json answer = radiance_query(asset, args);
   if (o.json) {
     answer["asset"] = o.asset;

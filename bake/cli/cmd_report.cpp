@@ -252,7 +252,8 @@ Action setup_report(CLI::App& app) {
       if (!f) throw_input_error((tmp / name).string() + ": cannot write");
     };
     write("compression.csv", csv);
-    write("compression.json", doc.dump(2) + "\n");
+    write("compression.json",
+          doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     std::vector<std::string> plots;
     if (!o->no_plots) {
       // $CLOTHBAKE_PLOT_SCRIPT, else the source tree this file was compiled from.

@@ -9,6 +9,7 @@
 #include "bake/cli/options.hpp"
 #include "common/diagnostics.hpp"
 #include "formats/reader/validate.hpp"
+#include "formats/writer/metadata_json.hpp"
 #include "formats/writer/open_asset.hpp"
 
 namespace clothbake::cli {
@@ -28,19 +29,14 @@ void collect(void* user, Check check, uint32_t section, const char* message) {
       {check_id(check), is_warning(check), section == kNoSection ? -1 : int64_t(section), message});
 }
 
-// Checks that need a JSON parser (the reader library has none): the metadata parses, and names
-// the format.
+// Checks that need a JSON parser (the reader library has none): limits, syntax, "format" and the
+// types of the known keys (formats::check_metadata, shared with every other command).
 void check_metadata_json(const Asset& asset, std::vector<Finding>& findings) {
   std::string_view text;
   if (!asset.metadata_json(&text).ok()) return;  // reported as CBK-E019 already
-  const nlohmann::json metadata = nlohmann::json::parse(text, nullptr, false);
-  if (metadata.is_discarded() || !metadata.is_object()) {
-    findings.push_back({check_id(Check::Metadata), false, -1, "metadata: not valid JSON"});
-    return;
-  }
-  if (metadata.value("format", "") != "clothbake-asset")
-    findings.push_back(
-        {check_id(Check::Metadata), false, -1, "metadata: \"format\" is not \"clothbake-asset\""});
+  nlohmann::json metadata;
+  for (const auto& f : formats::check_metadata(asset, &metadata))
+    findings.push_back({check_id(f.check), false, -1, f.message});
 }
 
 Action setup_validate(CLI::App& app) {

@@ -1,6 +1,8 @@
 // clothbake: the command-line entry point. Subcommands register themselves (see command.hpp).
 // Exit codes (docs/cli.md): 0 ok, 1 usage, 2 input or I/O error, 3 invalid asset, 4 internal error.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <map>
 
@@ -30,8 +32,23 @@ std::vector<Command> registered_commands() {
 }
 
 void print_json(const nlohmann::json& value) {
-  std::cout << value.dump(2) << '\n';
+  // Paths and names are bytes: a byte that is not UTF-8 is written as U+FFFD instead of failing
+  // (docs/cli.md, "Machine output").
+  std::cout << value.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
   std::cout.flush();
+}
+
+int checked_stdout(int code) {
+  // A command's output that did not reach stdout (a full disk, /dev/full, a closed pipe) is an
+  // I/O error, not a success (docs/cli.md, exit code 2).
+  std::cout.flush();
+  errno = 0;
+  const bool failed = std::cout.fail() || std::fflush(stdout) != 0 || std::ferror(stdout);
+  if (!failed) return code;
+  const int err = errno;
+  report_error(std::string("cannot write to standard output") +
+               (err ? std::string(": ") + std::strerror(err) : std::string()));
+  return code != 0 ? code : int(ExitCode::Input);
 }
 
 }  // namespace clothbake::cli
@@ -56,7 +73,7 @@ int main(int argc, char** argv) {
   }
   try {
     for (auto& [sub, action] : actions)
-      if (sub->parsed()) return action();
+      if (sub->parsed()) return cli::checked_stdout(action());
     return int(ExitCode::Usage);
   } catch (const CLI::ParseError& e) {
     // Validation that needs more than CLI11 can express (thrown by an action before any output).

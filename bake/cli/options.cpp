@@ -1,6 +1,9 @@
 #include "bake/cli/options.hpp"
 
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 
 namespace clothbake::cli {
@@ -27,10 +30,20 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
   while (in >> item) {
     std::size_t used = 0;
     double value = 0;
-    try {
-      value = rule.integers ? double(std::stoll(item, &used)) : std::stod(item, &used);
-    } catch (const std::exception&) {  // not a number, or out of range
-      fail();
+    if (rule.integers) {
+      try {
+        value = double(std::stoll(item, &used));
+      } catch (const std::exception&) {  // not a number, or out of range
+        fail();
+      }
+    } else {
+      // strtod, not stod: a subnormal such as 1e-310 is a number (stod throws on the underflow);
+      // an overflow (1e999) is not.
+      char* end = nullptr;
+      errno = 0;
+      value = std::strtod(item.c_str(), &end);
+      used = std::size_t(end - item.c_str());
+      if (errno == ERANGE && std::fabs(value) >= 1.0) fail();
     }
     if (used != item.size() || !std::isfinite(value) || (rule.positive && !(value > 0)) ||
         value < rule.min || value > rule.max)
@@ -48,10 +61,17 @@ std::array<double, 3> parse_vec3(const std::string& text, const std::string& opt
 }
 
 std::array<double, 3> parse_direction(const std::string& text, const std::string& option) {
-  const std::array<double, 3> d = parse_vec3(text, option);
-  if (!(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 0))
+  std::array<double, 3> d = parse_vec3(text, option);
+  const double largest = std::max({std::fabs(d[0]), std::fabs(d[1]), std::fabs(d[2])});
+  if (!(largest > 0))
     throw CLI::ValidationError(option,
                                "'" + text + "' is not a direction: it must be finite and non-zero");
+  // Outside [1e-150, 1e150] the squared length would overflow (1e308,1e308,1e308) or underflow
+  // (1e-310,0,1e-310) downstream: such a vector is divided by its largest component (the same
+  // direction). Others are returned as given.
+  if (largest > 1e150 || largest < 1e-150)
+    for (double& c : d)
+      c /= largest;
   return d;
 }
 

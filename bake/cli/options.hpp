@@ -39,7 +39,9 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 std::array<double, 3> parse_vec3(const std::string& text, const std::string& option);
 
 // "x,y,z": a direction: three finite numbers, not all zero (not normalised; the caller decides
-// whether the length matters). Throws CLI::ValidationError naming the option otherwise.
+// whether the length matters), except that a vector whose largest component is above 1e150 or
+// below 1e-150 is divided by it (its squared length would overflow or underflow). Throws
+// CLI::ValidationError naming the option otherwise.
 std::array<double, 3> parse_direction(const std::string& text, const std::string& option);
 
 }  // namespace clothbake::cli

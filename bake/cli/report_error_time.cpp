@@ -369,7 +369,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
                         {"near_field", near_field},
                         {"grid", grid}};
   std::ofstream(out / "error-time.csv") << csv;
-  std::ofstream(out / "error-time.json") << doc.dump(2) << "\n";
+  std::ofstream(out / "error-time.json")
+      << doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   if (!o.no_plots) {
     // $CLOTHBAKE_PLOT_SCRIPT_DIR, else the source tree this file was compiled from.
     const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT_DIR");

@@ -37,7 +37,9 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
     }
     Fabric fabric = load_fabric(loaded.fabrics[k]);
     std::string key = std::string(CLOTHBAKE_VERSION_STRING) + "\n" +
-                      bake_settings_json(fabric.bake).dump() + "\n";
+                      bake_settings_json(fabric.bake)
+                          .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) +
+                      "\n";
     for (const InputFile& f : fabric.inputs)
       key += f.role + " " + f.xxh64 + "\n";
     const std::string stem = fs::path(loaded.fabrics[k]).stem().string();

@@ -1,4 +1,6 @@
 #include "bake/inputs/fabric_load.hpp"
+#include "bake/inputs/map_limits.hpp"
+#include "model/parameter_ranges.hpp"
 
 #include <fmt/format.h>
 
@@ -39,15 +41,15 @@ using inputs::Range;
 using inputs::TomlSection;
 
 // Valid ranges, shared with docs/fabric-format.md (keep them in sync).
-const Range kRoughness{0.0, 1.0, true, false};            // (0, 1]
-const Range kOpticalThickness{0.0, 1000.0, true, false};  // (0, 1000]
-const Range kUnitInterval{0.0, 1.0};                      // [0, 1]
-const Range kPositiveLength{0.0, 1e6, true, false};       // (0, 1e6]
-const Range kPositiveScale{0.0, 1e12, true, false};       // (0, 1e12]
-const Range kSpacing{0.0, 1000.0, true, false};           // (0, 1000] mm
-const Range kWidthFraction{0.0, 1.0, true, false};        // (0, 1]
-const Range kTwist{-90.0, 90.0, true, true};              // (-90, 90) degrees
-const Range kMinCos{0.0, 0.95};                           // [0, 0.95]
+const Range kRoughness{model::kMinRoughness, model::kMaxRoughness};  // model/parameter_ranges.hpp
+const Range kOpticalThickness{0.0, 1000.0, true, false};             // (0, 1000]
+const Range kUnitInterval{0.0, 1.0};                                 // [0, 1]
+const Range kPositiveLength{0.0, 1e6, true, false};                  // (0, 1e6]
+const Range kPositiveScale{0.0, 1e12, true, false};                  // (0, 1e12]
+const Range kSpacing{0.0, 1000.0, true, false};                      // (0, 1000] mm
+const Range kWidthFraction{0.0, 1.0, true, false};                   // (0, 1]
+const Range kTwist{-90.0, 90.0, true, true};                         // (-90, 90) degrees
+const Range kMinCos{0.0, 0.95};                                      // [0, 0.95]
 
 const std::vector<std::string> kLengthUnits = {"tile", "um", "mm", "cm", "m", "in"};
 
@@ -188,6 +190,13 @@ void build_weave_maps(LoadedFabric& out, weave::WeaveSpec spec, const std::strin
     spec.pick_colors.assign(std::size_t(spec.matrix.picks), f.yarns[1].color);
   weave::validate_weave_spec(spec, where);
   f.maps = weave::generate_weave_maps(spec, f.bake.resolution, where);
+  // Extreme thread geometry (spacing_mm = 1e-300, a tile of 1e-30 mm) overflows the maps or gives
+  // reliefs no ray can trace: refuse it here, naming the keys, not later in a stage.
+  const std::string keys =
+      "the thread geometry ([weave.warp] / [weave.weft] spacing_mm, width, "
+      "height_mm)";
+  inputs::check_maps_finite(f.maps, where, keys);
+  inputs::check_heights(f.maps.height, f.maps.resolution, where, keys);
   f.tile_size_mm = weave::weave_tile_size(spec).width_mm;
   for (std::size_t i = 2; i < f.yarns.size(); ++i)
     warn(
@@ -313,8 +322,11 @@ void load_image_maps(LoadedFabric& out, const TomlSection& maps,
   const std::size_t texels = std::size_t(n) * n;
   const inputs::MapImage* albedo_image = nullptr;
   for (const auto& image : images) {
-    if (image.role == "height")
+    if (image.role == "height") {
       m.height = inputs::decode_height(image, height_scale * to_tile_units);
+      inputs::check_heights(m.height, n, image.context,
+                            "[maps] height_scale, height_units and the image's values");
+    }
     if (image.role == "tangent") m.tangent = inputs::decode_tangents(image);
     if (image.role == "normal") m.normal = inputs::decode_normals(image);
     if (image.role == "gap") m.gap = inputs::decode_gap(image);

@@ -1,4 +1,5 @@
 #include "bake/inputs/map_image.hpp"
+#include "bake/inputs/fabric_files.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -128,6 +129,7 @@ MapImage read_map_image(const std::string& path, const std::string& role,
   map.path = path;
   map.context = fmt::format("{}: {}", key_context, path);
   const std::string& context = map.context;
+  require_regular_file(path, key_context);  // no FIFO, /dev/zero or /dev/urandom as a map
   StoredType stored = probe_stored_type(path);
   if (stored.readable && (stored.width > kMaxMapSide || stored.height > kMaxMapSide))
     throw Error(ExitCode::Input,

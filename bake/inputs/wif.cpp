@@ -1,12 +1,14 @@
 // WIF 1.1 import (docs/weaves.md, "WIF import"): INI-style sections, row sections with 1-based
 // thread numbers, defaults from [WARP]/[WEFT], and the drawdown from threading and lifts.
 #include "bake/inputs/wif.hpp"
+#include "bake/inputs/fabric_files.hpp"
 
 #include <algorithm>
 #include <bitset>
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -749,6 +751,10 @@ WifDraft parse_wif(const std::string& text, const std::string& path_for_messages
 }
 
 WifDraft read_wif(const std::string& path) {
+  // A directory is not "larger than 64 MiB" and a FIFO would block: regular files only (a missing
+  // file keeps its "cannot open" message below).
+  std::error_code exists_error;
+  if (std::filesystem::exists(path, exists_error)) inputs::require_regular_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw_input_error(path + ": cannot open the WIF file");
   in.seekg(0, std::ios::end);

@@ -125,7 +125,8 @@ Status Asset::open_file(const char* path, const OpenOptions& options) noexcept {
   close();
   if (path == nullptr) return Status::error(ErrorCode::InvalidArgument, Check::None, "null path");
 #ifdef CLOTHBAKE_READER_POSIX
-  int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: opening a FIFO must not wait for a writer (it is then refused as not regular).
+  int fd = ::open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     Status s = Status::error(ErrorCode::Io, Check::None, "cannot open: %s", std::strerror(errno));
     s.prefix(path);

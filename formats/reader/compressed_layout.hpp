@@ -57,6 +57,9 @@ inline constexpr uint8_t kNoCell = 255;
 inline constexpr uint32_t kMaxCompressedCells = 255;    // cell ids 0..254 (u8 map, 255 = none)
 inline constexpr uint32_t kMaxCompressedRank = 255;     // basis vectors per cell
 inline constexpr uint32_t kMaxCompressedImages = 4096;  // bounds the reader's SAT memory
+// Largest decoded form (integer SATs, (N + 1)^2 x images x 4 or 8 bytes) a reader builds for one
+// table; open() refuses a larger one with CBK-E024 before allocating anything.
+inline constexpr uint64_t kMaxCompressedDecodedBytes = uint64_t(2) << 30;
 inline constexpr uint32_t kCellFields = 4;
 
 // Info v1: one record, shape {1, 64}.

@@ -101,6 +101,15 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   CompressedTableInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
   if (info.kind != uint32_t(kind)) return layout_error(kind, "info", "kind field does not match");
+  for (unsigned char b : info.reserved)
+    if (b != 0)
+      return Status::error(ErrorCode::Malformed, Check::Padding,
+                           "compressed_tables %s (info): reserved bytes are not zero",
+                           kind_name(kind));
+  if (kind == RadianceTableKind::Gap && info.min_roughness != 0.0)
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "compressed_tables gap (info): min_roughness %g must be 0",
+                         info.min_roughness);
   if (info.resolution == 0 || info.resolution > kMaxRadianceResolution)
     return layout_error(kind, "info", "resolution out of range");
   if (info.bins_per_side == 0 || info.bins_per_side > kMaxRadianceBinsPerSide)
@@ -134,12 +143,14 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     CompressedCell& c = cells[g];
     std::memcpy(&c, cells_view.data + uint64_t(g) * kCellFields, sizeof c);
     if (c.cluster >= info.cluster_count || (g > 0 && c.cluster < cells[g - 1].cluster) ||
-        c.rank > kMaxCompressedRank || c.first_image != image_total || c.texels > uint64_t(n) * n)
-      return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "compressed_tables %s: cell %u (cluster %u, rank %u, first image %u) "
-                           "is out of range or out of order",
-                           kind_name(kind), unsigned(g), unsigned(c.cluster), unsigned(c.rank),
-                           unsigned(c.first_image));
+        c.rank > kMaxCompressedRank || c.first_image != image_total || c.texels > uint64_t(n) * n ||
+        c.rank > c.texels || c.rank > bins)
+      return Status::error(
+          ErrorCode::Malformed, Check::ValueRange,
+          "compressed_tables %s: cell %u (cluster %u, rank %u, first image %u) "
+          "is out of range or out of order (or its rank exceeds its texels or bins)",
+          kind_name(kind), unsigned(g), unsigned(c.cluster), unsigned(c.rank),
+          unsigned(c.first_image));
     image_total += 1 + uint64_t(c.rank);
     coefficient_total += uint64_t(c.texels) * c.rank;
   }
@@ -217,6 +228,12 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   // Decode.
   const bool wide = uint64_t(n) > 256;  // N^2 * 32767 must stay below 2^31 for int32 sums
   const uint64_t sat_count = uint64_t(n + 1) * (n + 1) * (images ? images : 1);
+  if (sat_count * (wide ? 8 : 4) > kMaxCompressedDecodedBytes)
+    return Status::error(ErrorCode::Malformed, Check::ResourceLimit,
+                         "compressed_tables %s: %u x %u texels with %u images decode to %" PRIu64
+                         " bytes, more than the reader's limit of %" PRIu64,
+                         kind_name(kind), unsigned(n), unsigned(n), unsigned(images),
+                         sat_count * (wide ? 8 : 4), kMaxCompressedDecodedBytes);
   std::unique_ptr<int32_t[]> sat32;
   std::unique_ptr<int64_t[]> sat64;
   if (wide)
@@ -388,28 +405,27 @@ bool CompressedRadianceTables::query_impl(const Footprint& rect, const double h[
   const E* sat = static_cast<const E*>(wide_ ? static_cast<const void*>(sat64_.get())
                                              : static_cast<const void*>(sat32_.get()));
   const uint64_t stride = uint64_t(n_ + 1) * images_;
-  // The 4 inner points (coefficients +-1): their S(i, j) corners sum, in wrapping integer
-  // arithmetic, to the rectangle sum over integer corners, which fits in E: exact. The fractional
-  // parts a (S(i+1, j) - S(i, j)) + b (S(i, j+1) - S(i, j)) + ab (texel) use differences that are
-  // partial row/column sums (at most N * 32767 in magnitude: exact in float for N <= 256, the
-  // int32 case) and go to a float (int64 case: double) accumulator. Points of whole crossed tiles
+  // The 4 inner points (coefficients +-1, points 0..3 above) are combined in wrapping integer
+  // arithmetic before anything is rounded: their S(i, j) corners sum to the rectangle sum over
+  // integer corners; the first differences pair up into the partial column sums at x1 and x0 and
+  // the partial row sums at y1 and y0 (each at most N * 32767 in magnitude, so exact in E), and the
+  // second differences are the four corner texels. Only then is each integer multiplied by its
+  // fractional coverage in double: sub-texel footprints keep double precision, and a cluster with
+  // no texel (even partly) in the footprint gets exactly 0. Points of whole crossed tiles
   // (coefficients qx, qy, qx qy) are rare and use double throughout.
   using Wrap = std::conditional_t<sizeof(E) == 4, uint32_t, uint64_t>;
-  using Frac = std::conditional_t<sizeof(E) == 4, float, double>;
-  Wrap whole[kMaxCompressedImages];
-  Frac frac[kMaxCompressedImages];
-  for (uint32_t k = 0; k < count; ++k) {
-    whole[k] = 0;
-    frac[k] = 0;
-  }
+  using Signed = std::conditional_t<sizeof(E) == 4, int32_t, int64_t>;
   // Corner rows of every point first, then prefetch them all: a footprint's points are far apart
   // in the (N + 1)^2 x images SAT, so without this each point's 4 corner spans miss the cache one
   // after the other; issuing every line's load up front overlaps the misses (perf: the query was
   // bound by the loads of the corner differences).
   const E* corner[9];
+  double fa[9], fb[9];
   for (int p = 0; p < m; ++p) {
     const uint32_t i = points[p].x >= size ? n_ - 1 : uint32_t(points[p].x);
     const uint32_t j = points[p].y >= size ? n_ - 1 : uint32_t(points[p].y);
+    fa[p] = points[p].x - double(i);
+    fb[p] = points[p].y - double(j);
     corner[p] = sat + uint64_t(j) * stride + uint64_t(i) * images_ + i0;
 #if defined(__GNUC__)
     const std::size_t span = std::size_t(count) * sizeof(E);
@@ -422,40 +438,43 @@ bool CompressedRadianceTables::query_impl(const Footprint& rect, const double h[
         __builtin_prefetch(row + off);
 #endif
   }
-  for (int p = 0; p < m; ++p) {
-    const uint32_t i = points[p].x >= size ? n_ - 1 : uint32_t(points[p].x);
-    const uint32_t j = points[p].y >= size ? n_ - 1 : uint32_t(points[p].y);
-    const double a = points[p].x - double(i), b = points[p].y - double(j), c = points[p].c;
+  {
+    // Points 0 (x1, y1, +), 1 (x0, y1, -), 2 (x1, y0, -), 3 (x0, y0, +): point 0 and 2 share the
+    // column i1 and its fraction a1, 1 and 3 the column i0; 0 and 1 the row j1, 2 and 3 the row j0.
+    const double a1 = fa[0], a0 = fa[1], b1 = fb[0], b0 = fb[2];
+    const E* c0 = corner[0];
+    const E* c1 = corner[1];
+    const E* c2 = corner[2];
+    const E* c3 = corner[3];
+    auto d10 = [this](const E* s, uint32_t k) { return Wrap(s[k + images_]) - Wrap(s[k]); };
+    auto d01 = [stride](const E* s, uint32_t k) { return Wrap(s[k + stride]) - Wrap(s[k]); };
+    auto d11 = [this, stride](const E* s, uint32_t k) {
+      return Wrap(s[k + stride + images_]) - Wrap(s[k + stride]) - Wrap(s[k + images_]) +
+             Wrap(s[k]);
+    };
+    for (uint32_t k = 0; k < count; ++k) {
+      const Wrap whole = Wrap(c0[k]) - Wrap(c1[k]) - Wrap(c2[k]) + Wrap(c3[k]);
+      const Wrap column1 = d10(c0, k) - d10(c2, k), column0 = d10(c3, k) - d10(c1, k);
+      const Wrap row1 = d01(c0, k) - d01(c1, k), row0 = d01(c3, k) - d01(c2, k);
+      acc[k] += double(Signed(whole)) + a1 * double(Signed(column1)) +
+                a0 * double(Signed(column0)) + b1 * double(Signed(row1)) +
+                b0 * double(Signed(row0)) + a1 * b1 * double(Signed(d11(c0, k))) -
+                a0 * b1 * double(Signed(d11(c1, k))) - a1 * b0 * double(Signed(d11(c2, k))) +
+                a0 * b0 * double(Signed(d11(c3, k)));
+    }
+  }
+  for (int p = 4; p < m; ++p) {
+    const double a = fa[p], b = fb[p], c = points[p].c;
     const E* __restrict s00 = corner[p];
     const E* __restrict s10 = s00 + images_;
     const E* __restrict s01 = s00 + stride;
     const E* __restrict s11 = s01 + images_;
-    if (p < 4) {
-      const bool add = c > 0;
-      if (add)
-        for (uint32_t k = 0; k < count; ++k)
-          whole[k] += Wrap(s00[k]);
-      else
-        for (uint32_t k = 0; k < count; ++k)
-          whole[k] -= Wrap(s00[k]);
-      if (a == 0.0 && b == 0.0) continue;
-      const Frac fa = Frac(add ? a : -a), fb = Frac(add ? b : -b), fab = Frac(add ? a * b : -a * b);
-      for (uint32_t k = 0; k < count; ++k) {
-        const E d10 = E(s10[k] - s00[k]), d01 = E(s01[k] - s00[k]);
-        const E d11 = E(s11[k] - s01[k]) - d10;
-        frac[k] += fa * Frac(d10) + fb * Frac(d01) + fab * Frac(d11);
-      }
-      continue;
-    }
     const double w00 = (1 - a) * (1 - b) * c, w10 = a * (1 - b) * c, w01 = (1 - a) * b * c,
                  w11 = a * b * c;
     for (uint32_t k = 0; k < count; ++k)
       acc[k] +=
           w00 * double(s00[k]) + w10 * double(s10[k]) + w01 * double(s01[k]) + w11 * double(s11[k]);
   }
-  using Signed = std::conditional_t<sizeof(E) == 4, int32_t, int64_t>;
-  for (uint32_t k = 0; k < count; ++k)
-    acc[k] += double(Signed(whole[k])) + double(frac[k]);
 
   // Directions: blend the (at most 4) bins' scaled basis rows first (elementwise, vectorisable),
   // then one dot product per cluster.

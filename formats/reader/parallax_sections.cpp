@@ -208,6 +208,10 @@ Status ParallaxView::open_raw(const Asset& asset) noexcept {
                          "parallax instance 0 must be u8 {1, 64} (one ParallaxInfoRecord)");
   ParallaxInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
+  for (unsigned char b : info.reserved)
+    if (b != 0)
+      return Status::error(ErrorCode::Malformed, Check::Padding,
+                           "parallax: reserved bytes of the info record are not zero");
   if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
       info.dirs > kMaxParallaxDirs)
     return Status::error(ErrorCode::Malformed, Check::ValueRange,

@@ -202,6 +202,15 @@ Status RawRadianceTables::open(const Asset& asset, RadianceTableKind kind) noexc
     return layout_error("info", kind, "must be u8 {1, 64}");
   const auto* info = reinterpret_cast<const RadianceTableInfoRecord*>(info_bytes.data);
   if (info->kind != uint32_t(kind)) return layout_error("info", kind, "kind field does not match");
+  for (unsigned char b : info->reserved)
+    if (b != 0)
+      return Status::error(ErrorCode::Malformed, Check::Padding,
+                           "radiance_tables %s (info): reserved bytes are not zero",
+                           radiance_kind_name(kind));
+  if (kind == RadianceTableKind::Gap && info->min_roughness != 0.0)
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "radiance_tables gap (info): min_roughness %g must be 0",
+                         info->min_roughness);
   if (info->resolution == 0 || info->resolution > kMaxRadianceResolution)
     return layout_error("info", kind, "resolution out of range");
   if (info->bins_per_side == 0 || info->bins_per_side > kMaxRadianceBinsPerSide)

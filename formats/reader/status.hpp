@@ -50,6 +50,8 @@ enum class Check : uint16_t {
   Metadata = 20,          // CBK-E020 metadata is not a UTF-8 JSON object
   ValueRange = 21,        // CBK-E021 a parameter outside its documented range
   CrossSection = 22,      // CBK-E022 well-formed sections that disagree with each other
+  MetadataSchema = 23,    // CBK-E023 a known metadata key of the wrong type; text not UTF-8
+  ResourceLimit = 24,     // CBK-E024 a section that would decode to more than the reader's cap
   // Warnings (numbered from 1001; printed as CBK-W001...).
   UnknownSection = 1001,       // CBK-W001 section type unknown to this reader (skipped)
   NewerMinor = 1002,           // CBK-W002 asset written by a newer minor version

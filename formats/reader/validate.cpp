@@ -10,10 +10,12 @@
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/metadata_limits.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/reader/xxh64.hpp"
+#include "model/parameter_ranges.hpp"
 
 namespace clothbake::reader {
 namespace {
@@ -179,8 +181,12 @@ void check_metadata(const Asset& asset, Reporter& r) {
     ++first;
   while (last > first && blank(text[last - 1]))
     --last;
-  if (last - first < 2 || text[first] != '{' || text[last - 1] != '}')
+  if (last - first < 2 || text[first] != '{' || text[last - 1] != '}') {
     r.report(Check::Metadata, s.index, "metadata: not a JSON object");
+    return;
+  }
+  status = check_metadata_limits(text);
+  if (!status.ok()) r.report_status(status, s.index);
 }
 
 bool in_range(double v, double lo, double hi) {
@@ -201,8 +207,8 @@ void check_fabric_records(const Asset& asset, Reporter& r, uint32_t* yarn_count,
       if (!all_zero(info->reserved, sizeof info->reserved, &at))
         r.report(Check::Padding, s.index, "fabric_info: reserved byte %" PRIu64 " is not zero",
                  uint64_t(offsetof(FabricInfoRecord, reserved)) + at);
-      if (!in_range(info->sheen_roughness, 1e-9, 1.0))
-        r.report(Check::ValueRange, s.index, "fabric_info: sheen_roughness %g is outside (0, 1]",
+      if (!model::roughness_in_range(info->sheen_roughness))
+        r.report(Check::ValueRange, s.index, "fabric_info: sheen_roughness %g is outside [1e-4, 1]",
                  info->sheen_roughness);
       if (!(info->tile_size_mm >= 0) || !std::isfinite(info->tile_size_mm))
         r.report(Check::ValueRange, s.index, "fabric_info: tile_size_mm %g is not >= 0",
@@ -229,17 +235,24 @@ void check_fabric_records(const Asset& asset, Reporter& r, uint32_t* yarn_count,
                uint64_t(yarns.size), unsigned(info->yarn_count));
     for (uint64_t i = 0; i < yarns.size; ++i) {
       const YarnMaterialRecord& y = yarns[i];
-      if (std::memchr(y.name, 0, sizeof y.name) == nullptr)
+      if (std::memchr(y.name, 0, sizeof y.name) == nullptr) {
         r.report(Check::SectionLayout, s.index,
                  "yarn_materials[%" PRIu64 "]: name is not NUL-terminated", i);
+      } else {
+        const std::string_view name(y.name, std::strlen(y.name));
+        const std::size_t bad = utf8_error_offset(name);
+        if (bad != name.size())
+          r.report(Check::MetadataSchema, s.index,
+                   "yarn_materials[%" PRIu64 "]: name is not UTF-8 (byte %zu)", i, bad);
+      }
       uint64_t at;
       if (!all_zero(y.reserved, sizeof y.reserved, &at))
         r.report(Check::Padding, s.index,
                  "yarn_materials[%" PRIu64 "]: reserved byte %" PRIu64 " is not zero", i,
                  uint64_t(offsetof(YarnMaterialRecord, reserved)) + at);
-      if (!in_range(y.roughness, 1e-9, 1.0))
+      if (!model::roughness_in_range(y.roughness))
         r.report(Check::ValueRange, s.index,
-                 "yarn_materials[%" PRIu64 "]: roughness %g is outside (0, 1]", i, y.roughness);
+                 "yarn_materials[%" PRIu64 "]: roughness %g is outside [1e-4, 1]", i, y.roughness);
       if (!(y.optical_thickness > 0) || !std::isfinite(y.optical_thickness))
         r.report(Check::ValueRange, s.index,
                  "yarn_materials[%" PRIu64 "]: optical_thickness %g is not > 0", i,

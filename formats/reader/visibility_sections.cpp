@@ -34,6 +34,10 @@ Status VisibilityAsgView::open(const Asset& asset) noexcept {
                          "visibility_asg instance 0 must be u8 {1, 64} (one VisibilityInfoRecord)");
   VisibilityInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
+  for (unsigned char b : info.reserved)
+    if (b != 0)
+      return Status::error(ErrorCode::Malformed, Check::Padding,
+                           "visibility_asg: reserved bytes of the info record are not zero");
   if (info.resolution < 1 || info.resolution > kMaxVisibilityResolution || info.dirs < 1 ||
       info.dirs > 256)
     return Status::error(ErrorCode::Malformed, Check::ValueRange,

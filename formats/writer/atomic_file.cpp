@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
 
 #include <cerrno>
 #include <cstring>
@@ -67,7 +68,12 @@ TempFile::TempFile(const fs::path& destination, const std::string& suffix)
   const fs::path dir = directory_of(destination);
   // Built with append: GCC 12 warns falsely (-Wrestrict) on "." + std::string.
   std::string leaf(1, '.');
-  leaf.append(destination.filename().string()).append(".tmp-XXXXXX").append(suffix);
+  // A file name may be 255 bytes: the temporary's adds 12 and the suffix, so a long name is cut
+  // to its first 200 bytes here (the temporary only needs to be unique, which mkstemp ensures).
+  const std::string file_name = destination.filename().string();
+  leaf.append(file_name, 0, std::min<std::size_t>(file_name.size(), 200))
+      .append(".tmp-XXXXXX")
+      .append(suffix);
   const std::string name = (dir / leaf).string();
   std::vector<char> buffer(name.begin(), name.end());
   buffer.push_back('\0');

@@ -8,7 +8,10 @@ file(COPY ${_seeds} DESTINATION ${WORK_DIR}/corpus)
 if(CLANGXX)
   string(REPLACE "|" ";" _sources "${SOURCES}")
   string(REPLACE "|" ";" _flags "${FLAGS}")
-  execute_process(COMMAND ${CLANGXX} -std=c++17 ${_flags} -I${INCLUDE_DIR} ${_sources} -o ${FUZZER}
+  if(NOT STD)
+    set(STD c++17)
+  endif()
+  execute_process(COMMAND ${CLANGXX} -std=${STD} ${_flags} -I${INCLUDE_DIR} ${_sources} -o ${FUZZER}
                   RESULT_VARIABLE rc ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "compiling the fuzzer with ${CLANGXX} failed:\n${err}")
@@ -19,7 +22,7 @@ execute_process(COMMAND ${FUZZER} -max_total_time=${SECONDS} -print_final_stats=
                 WORKING_DIRECTORY ${WORK_DIR}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 string(REGEX MATCH "stat::number_of_executed_units: *[0-9]+" _runs "${err}")
-message(STATUS "reader fuzzer: ${_runs}")
+message(STATUS "${FUZZER}: ${_runs}")
 if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the reader fuzzer found a crash (exit ${rc}):\n${err}")
+  message(FATAL_ERROR "${FUZZER} found a crash (exit ${rc}):\n${err}")
 endif()

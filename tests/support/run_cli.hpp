@@ -4,8 +4,8 @@
 //
 // The executable is CLOTHBAKE_EXE when the test target defines it (preferred:
 // target_compile_definitions(T PRIVATE CLOTHBAKE_EXE="$<TARGET_FILE:clothbake>")), else
-// CLOTHBAKE_BINARY_DIR/bin/clothbake. POSIX only (fork/exec); not thread-safe with respect to
-// other fork()s in the same test process.
+// CLOTHBAKE_BINARY_DIR/bin/clothbake; $CLOTHBAKE_TEST_EXE overrides both. POSIX only (fork/exec);
+// not thread-safe with respect to other fork()s in the same test process.
 #pragma once
 
 #include <fcntl.h>
@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -29,6 +30,8 @@ struct CliRun {
 };
 
 inline std::string clothbake_executable() {
+  // $CLOTHBAKE_TEST_EXE overrides, e.g. to check that a regression test fails on an older build.
+  if (const char* exe = std::getenv("CLOTHBAKE_TEST_EXE"); exe && *exe) return exe;
 #ifdef CLOTHBAKE_EXE
   return CLOTHBAKE_EXE;
 #else

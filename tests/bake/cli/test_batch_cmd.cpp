@@ -144,8 +144,9 @@ TEST_F(Batch, FullDiskFailsOneFabricAndLeavesNothingPartial) {
   EXPECT_EQ(s.at("plain"), "baked");
   EXPECT_EQ(s.at("twill"), "baked");
   for (const auto& f : doc["fabrics"]) {
-    if (f["status"] == "failed")
+    if (f["status"] == "failed") {
       EXPECT_NE(f["note"].get<std::string>().find("big.cbk"), std::string::npos) << f["note"];
+    }
   }
   EXPECT_FALSE(fs::exists(dir_ / "out" / "big.cbk"));
   EXPECT_TRUE(no_temporary_files(dir_ / "out"));

@@ -167,7 +167,7 @@ TEST_F(FabricLoad, WrongTypeAndOutOfRange) {
               HasSubstr("bake.clusters = 0 is out of range; valid range is [1, 64]"));
   f = write_image_fabric(dir, 8, "", "[[yarn]]\nroughness = 1.5\n");
   EXPECT_THAT(load_error(f.toml),
-              HasSubstr("yarn[0].roughness = 1.5 is out of range; valid range is (0, 1]"));
+              HasSubstr("yarn[0].roughness = 1.5 is out of range; valid range is [0.0001, 1]"));
   f = write_image_fabric(dir, 8, "", "[sheen]\ncolor = [0.1, 0.2]\n");
   EXPECT_THAT(load_error(f.toml),
               HasSubstr("sheen.color must be a number or an array of 3 numbers"));
