@@ -186,7 +186,8 @@ Action setup_bsdf(CLI::App& app) {
   auto o = std::make_shared<BsdfOptions>();
   app.add_option("--tangent", o->tangent, "fibre tangent x,y,z in the local frame (z = normal)")
       ->required();
-  app.add_option("--roughness", o->roughness, "SGGX fibre roughness sigma in [1e-4, 1]")->required();
+  app.add_option("--roughness", o->roughness, "SGGX fibre roughness sigma in [1e-4, 1]")
+      ->required();
   app.add_option("--thickness", o->thickness, "SpongeCake optical thickness T >= 0 (or inf)")
       ->required();
   app.add_option("--albedo", o->albedo, "specular albedo alpha: v or r,g,b in [0, 1]")->required();
