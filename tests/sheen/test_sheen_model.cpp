@@ -73,8 +73,11 @@ TEST(SheenLtc, SamplesFollowThePdf) {
                                     {0.999, 0.5, 0.6}}) {
     const Vec3d wo = direction(mu, phi);
     const auto result = clothbake::sheen_test::chi_square_hemisphere(
-        [&] { return model::sheen_sample(wo, roughness, rng.uniform(), rng.uniform()); },
-        [&](const Vec3d& wi) { return model::sheen_pdf(wi, wo, roughness); }, 300000);
+        [&, roughness = roughness] {
+          return model::sheen_sample(wo, roughness, rng.uniform(), rng.uniform());
+        },
+        [&, roughness = roughness](const Vec3d& wi) { return model::sheen_pdf(wi, wo, roughness); },
+        300000);
     EXPECT_TRUE(result.passed) << result.message << " (mu " << mu << ", roughness " << roughness
                                << ")";
   }
@@ -121,7 +124,10 @@ TEST(SheenLtc, WhiteFurnaceGivesTheAlbedo) {
        {std::array<double, 2>{0.05, 0.3}, {0.3, 0.9}, {0.6, 0.5}, {1.0, 1.0}, {0.15, 0.1}}) {
     const Vec3d wo = direction(mu, 0.8);
     const double integral = integrate_hemisphere_grazing(
-        [&](const Vec3d& wi) { return model::sheen_eval(wi, wo, roughness) * wi.z; }, 3000, 256);
+        [&, roughness = roughness](const Vec3d& wi) {
+          return model::sheen_eval(wi, wo, roughness) * wi.z;
+        },
+        3000, 256);
     const double albedo = model::sheen_albedo(mu, roughness);
     EXPECT_NEAR(integral, albedo, 2e-3 * albedo + 1e-9) << "mu " << mu;
     EXPECT_LE(integral, 1.0);

@@ -428,7 +428,10 @@ TEST(WeaveMaps, BadSpecsAreRejectedNamingTheField) {
        }),
        "end 1"},
   };
-  for (const auto& [spec, fragment] : cases) {
+  for (const auto& entry : cases) {
+    // Not a structured binding: clang 14 cannot capture one in a lambda.
+    const WeaveSpec& spec = entry.first;
+    const std::string& fragment = entry.second;
     expect_input_error([&] { generate_weave_maps(spec, 8); }, fragment);
     expect_input_error([&] { validate_weave_spec(spec, "fabric.toml: [weave]"); },
                        "fabric.toml: [weave]");
