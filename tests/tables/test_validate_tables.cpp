@@ -53,7 +53,7 @@ std::vector<formats::Section> sections_of(const std::vector<std::byte>& bytes) {
     w.element = s.element_type;
     w.dims.assign(s.dims, s.dims + s.rank);
     w.payload.resize(s.stored_size);
-    std::memcpy(w.payload.data(), s.data, s.stored_size);
+    if (s.stored_size) std::memcpy(w.payload.data(), s.data, s.stored_size);
     out.push_back(std::move(w));
   }
   return out;
