@@ -1,6 +1,8 @@
 // Principal components of the parallax table (parallax_pca.hpp).
 #include "compress/parallax_pca.hpp"
 
+#include "compress/parallax_codes.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -27,15 +29,10 @@ struct ErrorSums {
 }  // namespace
 
 std::vector<double> parallax_offset_weights(int resolution, int dirs, double min_cos) {
-  const model::DirectionGrid<double> grid{dirs, min_cos};
-  std::vector<double> w(std::size_t(dirs) * dirs);
-  for (int j = 0; j < dirs; ++j)
-    for (int i = 0; i < dirs; ++i) {
-      const model::Vec3d o = grid.bin_center(i, j);
-      const double tan_theta = std::sqrt(std::max(0.0, o.x * o.x + o.y * o.y)) / o.z;
-      w[std::size_t(grid.bin_index(i, j))] =
-          double(resolution) * std::max(tan_theta, kParallaxMinWeight);
-    }
+  // N tan(theta) per bin (the codes' own factor), floored so that the nadir bin still counts.
+  std::vector<double> w = parallax_offset_per_depth(resolution, dirs, min_cos);
+  for (double& x : w)
+    x = std::max(x, double(resolution) * kParallaxMinWeight);
   return w;
 }
 
