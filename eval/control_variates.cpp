@@ -92,13 +92,25 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
   const uint32_t n = data.n, clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
 
-  // The parallax transition (Sec. 5.2): one shift of P by its mean offset for o.
-  const double view[3] = {frame.view.x, frame.view.y, frame.view.z};
-  reader::ParallaxSample mean;
-  Status status = data.parallax.footprint_depth(p, view, &mean);
-  if (!status.ok()) return status;
-  const double shift = data.options.parallax ? double(n) : 0.0;
-  const double dx = mean.offset[0] * shift, dy = mean.offset[1] * shift;
+  // The parallax transition (Sec. 5.2): one shift of P by its mean offset for o. The paper form
+  // takes the exact footprint mean from the parallax SATs; the unbiased form may shift by any
+  // constant and takes the mean of the block-constant depth (parallax_blocks.hpp), which reads a
+  // table small enough to stay in cache.
+  double dx = 0.0, dy = 0.0;
+  if (paper_form) {
+    const double view[3] = {frame.view.x, frame.view.y, frame.view.z};
+    reader::ParallaxSample mean;
+    Status status = data.parallax.footprint_depth(p, view, &mean);
+    if (!status.ok()) return status;
+    const double shift = data.options.parallax ? double(n) : 0.0;
+    dx = mean.offset[0] * shift;
+    dy = mean.offset[1] * shift;
+  } else if (data.options.parallax) {
+    const double r =
+        data.parallax_blocks.mean_depth(p, frame.parallax_bins.index, frame.parallax_bins.weight);
+    dx = r * frame.offset_per_depth[0];
+    dy = r * frame.offset_per_depth[1];
+  }
   const Footprint shifted{p.x0 + dx, p.y0 + dy, p.x1 + dx, p.y1 + dy};
   reader::FootprintPlan plan;
   if (!reader::make_footprint_plan(shifted, n, &plan))
@@ -158,9 +170,7 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     for (uint32_t c = 0; c < clusters; ++c) {
       const Rgb scale = paper_form ? footprint_scale
                                    : data.cluster_albedo[c] * t_sheen *
-                                         (attenuation(model::ClothBsdf<double>(
-                                              data.texel_params(data.cluster_texel[c]))) *
-                                          cos_i);
+                                         (attenuation(data.cluster_bsdf[c]) * cos_i);
       for (int ch = 0; ch < 3; ++ch)
         k.specular_scale[3 * c + ch] = scale[ch];
     }

@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "eval/eval_data.hpp"
 #include "eval/evaluator.hpp"
 #include "eval/texel_shading.hpp"
 #include "formats/reader/visibility_sections.hpp"
@@ -382,6 +383,42 @@ TEST(Multiscale, HasLessVarianceThanBruteForceOnFarFieldFootprints) {
                   wo[0], wo[1], wo[2], p.x1 - p.x0, p.y1 - p.y0, ratio);
       EXPECT_GT(ratio, 2.5);
     }
+}
+
+TEST(ParallaxBlocks, AreTheExactFootprintMeanOnWholeBlocksAndTheBlockMeanInside) {
+  // The unbiased form's shift (eval/parallax_blocks.hpp): on footprints made of whole blocks the
+  // block-constant depth integrates to the exact footprint mean of the parallax SATs; inside one
+  // block it is the mean depth of the block's texels.
+  auto o = open(assets().twill);
+  const EvalData& data = *o->evaluator.data();
+  const uint32_t b = data.parallax_blocks.block_size();
+  ASSERT_EQ(b, 4u);  // N = 64
+  const Footprint whole[] = {{4, 8, 36, 40}, {-8, 12, 60, 76}, {0, 0, 64, 64}, {56, 60, 72, 68},
+                             {-200, -64, 120, 256}};
+  const double views[][3] = {{-0.1, 0.1, 0.99}, {-0.4, 0.1, 0.85}, {0.5, 0.5, 0.7}};
+  for (const auto& wo : views) {
+    ShadingFrame frame;
+    Status status;
+    ASSERT_TRUE(make_frame(data, kReflectWi, wo, kAllLobes, &frame, &status));
+    const double view[3] = {frame.view.x, frame.view.y, frame.view.z};
+    for (const Footprint& p : whole) {
+      reader::ParallaxSample exact;
+      ASSERT_TRUE(data.parallax.footprint_depth(p, view, &exact).ok());
+      const double blocks = data.parallax_blocks.mean_depth(p, frame.parallax_bins.index,
+                                                            frame.parallax_bins.weight);
+      EXPECT_NEAR(blocks, exact.r, 1e-12 + 1e-9 * std::abs(exact.r)) << p.x0 << "," << p.y0;
+    }
+    // Inside block (1, 2): the mean of its 16 texels' depths.
+    double mean = 0;
+    for (int y = 8; y < 12; ++y)
+      for (int x = 4; x < 8; ++x)
+        mean += texel_depth(data, frame, x, y) / 16.0;
+    const Footprint inside{5.2, 9.1, 6.7, 10.4};
+    EXPECT_NEAR(data.parallax_blocks.mean_depth(inside, frame.parallax_bins.index,
+                                                frame.parallax_bins.weight),
+                mean, 1e-12);
+    EXPECT_LT(mean, 0.0);  // a real relief: the check is not 0 = 0
+  }
 }
 
 TEST(MultiscalePaper, IsBiasedWhereTheFootprintMeanAlbedoDoesNotHold) {
