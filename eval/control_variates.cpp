@@ -215,7 +215,9 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     out->counters.table_queries += 1;
   }
 
-  // The residual: spp stratified points p in P.
+  // The residual: spp stratified points p in P (and, in the unbiased form, the warp's own points).
+  const uint64_t warp_total = paper_form ? 0 : uint64_t(spp) * data.options.warp_samples_per_sample;
+  const uint32_t warp_samples = warp_total > (1u << 24) ? (1u << 24) : uint32_t(warp_total);
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   stratified_points(p, spp, rng, [&](double x, double y) {
@@ -235,16 +237,37 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
       }
       return;
     }
-    // f at the sample's own x'(p) (Eq. 2, per-texel depth), g at p + mean offset.
+    // f at the sample's own x'(p) (Eq. 2, per-texel depth); g at the same destination texel when
+    // the warp has its own samples (two-level residual), else at p + mean offset.
     const double r = texel_depth(data, frame, int64_t(std::floor(x)), int64_t(std::floor(y)));
     const double xp = x + r * frame.offset_per_depth[0], yp = y + r * frame.offset_per_depth[1];
-    shade_texel(data, frame, int64_t(std::floor(xp)), int64_t(std::floor(yp)), &shading);
-    control_variate(data, frame, k, qx, qy, true, g);
+    const int64_t tx = int64_t(std::floor(xp)), ty = int64_t(std::floor(yp));
+    shade_texel(data, frame, tx, ty, &shading);
+    if (warp_samples > 0)
+      control_variate(data, frame, k, tx, ty, true, g);
+    else
+      control_variate(data, frame, k, qx, qy, true, g);
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - g[l];
   });
-  for (int l = 0; l < model::kLobeCount; ++l)
+  // The warp term E_p[g(x'(p)) - g(p + mean offset)]: cheap, no BSDF, its own stratified points.
+  Rgb warp[model::kLobeCount];
+  if (!paper_form && warp_samples > 0)
+    stratified_points(p, warp_samples, rng, [&](double x, double y) {
+      const double r = texel_depth(data, frame, int64_t(std::floor(x)), int64_t(std::floor(y)));
+      const double xp = x + r * frame.offset_per_depth[0], yp = y + r * frame.offset_per_depth[1];
+      Rgb at_destination[model::kLobeCount], shifted[model::kLobeCount];
+      control_variate(data, frame, k, int64_t(std::floor(xp)), int64_t(std::floor(yp)), true,
+                      at_destination);
+      control_variate(data, frame, k, int64_t(std::floor(x + dx)), int64_t(std::floor(y + dy)),
+                      true, shifted);
+      for (int l = 0; l < model::kLobeCount; ++l)
+        warp[l] += at_destination[l] - shifted[l];
+    });
+  for (int l = 0; l < model::kLobeCount; ++l) {
     out->lobes[l] += base[l] + residual[l] / double(spp);
+    if (warp_samples > 0) out->lobes[l] += warp[l] / double(warp_samples);
+  }
   out->counters.samples += spp;
   out->counters.texel_evals += spp;
   return {};

@@ -97,11 +97,11 @@ class CompressedRadianceTables final : public RadianceTables {
   bool wide_ = false;                 // int64 SATs (N > 256)
   std::unique_ptr<int32_t[]> sat32_;  // (N + 1)^2 x images, exclusive prefix sums
   std::unique_ptr<int64_t[]> sat64_;
-  std::unique_ptr<float[]> basis_;            // bins x images: scale[i] * basis[i][b]
-  std::unique_ptr<uint8_t[]> cell_map_;       // N x N
-  std::unique_ptr<uint32_t[]> cell_cluster_;  // per cell
-  std::unique_ptr<uint32_t[]> cell_images_;   // per cell: first_image, rank
-  std::unique_ptr<int16_t[]> coefficients_;   // the stored coefficients (M)
+  std::unique_ptr<float[]> basis_;                 // bins x images: scale[i] * basis[i][b]
+  std::unique_ptr<uint8_t[]> cell_map_;            // N x N
+  std::unique_ptr<uint32_t[]> cell_cluster_;       // per cell
+  std::unique_ptr<uint32_t[]> cell_images_;        // per cell: first_image, rank
+  std::unique_ptr<int16_t[]> coefficients_;        // the stored coefficients (M)
   std::unique_ptr<uint32_t[]> first_coefficient_;  // N x N: index of the texel's first coefficient
   // Images of cluster c: [image_begin_[c], image_begin_[c + 1]) (cells sorted by cluster).
   uint32_t image_begin_[kMaxRadianceClusters + 1] = {};
