@@ -92,13 +92,25 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
   const uint32_t n = data.n, clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
 
-  // The parallax transition (Sec. 5.2): one shift of P by its mean offset for o.
-  const double view[3] = {frame.view.x, frame.view.y, frame.view.z};
-  reader::ParallaxSample mean;
-  Status status = data.parallax.footprint_depth(p, view, &mean);
-  if (!status.ok()) return status;
-  const double shift = data.options.parallax ? double(n) : 0.0;
-  const double dx = mean.offset[0] * shift, dy = mean.offset[1] * shift;
+  // The parallax transition (Sec. 5.2): one shift of P by its mean offset for o. The paper form
+  // takes the exact footprint mean from the parallax SATs; the unbiased form may shift by any
+  // constant and takes the mean of the block-constant depth (parallax_blocks.hpp), which reads a
+  // table small enough to stay in cache.
+  double dx = 0.0, dy = 0.0;
+  if (paper_form) {
+    const double view[3] = {frame.view.x, frame.view.y, frame.view.z};
+    reader::ParallaxSample mean;
+    Status status = data.parallax.footprint_depth(p, view, &mean);
+    if (!status.ok()) return status;
+    const double shift = data.options.parallax ? double(n) : 0.0;
+    dx = mean.offset[0] * shift;
+    dy = mean.offset[1] * shift;
+  } else if (data.options.parallax) {
+    const double r =
+        data.parallax_blocks.mean_depth(p, frame.parallax_bins.index, frame.parallax_bins.weight);
+    dx = r * frame.offset_per_depth[0];
+    dy = r * frame.offset_per_depth[1];
+  }
   const Footprint shifted{p.x0 + dx, p.y0 + dy, p.x1 + dx, p.y1 + dy};
   reader::FootprintPlan plan;
   if (!reader::make_footprint_plan(shifted, n, &plan))
@@ -158,9 +170,7 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     for (uint32_t c = 0; c < clusters; ++c) {
       const Rgb scale = paper_form ? footprint_scale
                                    : data.cluster_albedo[c] * t_sheen *
-                                         (attenuation(model::ClothBsdf<double>(
-                                              data.texel_params(data.cluster_texel[c]))) *
-                                          cos_i);
+                                         (attenuation(data.cluster_bsdf[c]) * cos_i);
       for (int ch = 0; ch < 3; ++ch)
         k.specular_scale[3 * c + ch] = scale[ch];
     }
@@ -205,7 +215,9 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     out->counters.table_queries += 1;
   }
 
-  // The residual: spp stratified points p in P.
+  // The residual: spp stratified points p in P (and, in the unbiased form, the warp's own points).
+  const uint64_t warp_total = paper_form ? 0 : uint64_t(spp) * data.options.warp_samples_per_sample;
+  const uint32_t warp_samples = warp_total > (1u << 24) ? (1u << 24) : uint32_t(warp_total);
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   stratified_points(p, spp, rng, [&](double x, double y) {
@@ -225,16 +237,37 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
       }
       return;
     }
-    // f at the sample's own x'(p) (Eq. 2, per-texel depth), g at p + mean offset.
+    // f at the sample's own x'(p) (Eq. 2, per-texel depth); g at the same destination texel when
+    // the warp has its own samples (two-level residual), else at p + mean offset.
     const double r = texel_depth(data, frame, int64_t(std::floor(x)), int64_t(std::floor(y)));
     const double xp = x + r * frame.offset_per_depth[0], yp = y + r * frame.offset_per_depth[1];
-    shade_texel(data, frame, int64_t(std::floor(xp)), int64_t(std::floor(yp)), &shading);
-    control_variate(data, frame, k, qx, qy, true, g);
+    const int64_t tx = int64_t(std::floor(xp)), ty = int64_t(std::floor(yp));
+    shade_texel(data, frame, tx, ty, &shading);
+    if (warp_samples > 0)
+      control_variate(data, frame, k, tx, ty, true, g);
+    else
+      control_variate(data, frame, k, qx, qy, true, g);
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - g[l];
   });
-  for (int l = 0; l < model::kLobeCount; ++l)
+  // The warp term E_p[g(x'(p)) - g(p + mean offset)]: cheap, no BSDF, its own stratified points.
+  Rgb warp[model::kLobeCount];
+  if (!paper_form && warp_samples > 0)
+    stratified_points(p, warp_samples, rng, [&](double x, double y) {
+      const double r = texel_depth(data, frame, int64_t(std::floor(x)), int64_t(std::floor(y)));
+      const double xp = x + r * frame.offset_per_depth[0], yp = y + r * frame.offset_per_depth[1];
+      Rgb at_destination[model::kLobeCount], shifted[model::kLobeCount];
+      control_variate(data, frame, k, int64_t(std::floor(xp)), int64_t(std::floor(yp)), true,
+                      at_destination);
+      control_variate(data, frame, k, int64_t(std::floor(x + dx)), int64_t(std::floor(y + dy)),
+                      true, shifted);
+      for (int l = 0; l < model::kLobeCount; ++l)
+        warp[l] += at_destination[l] - shifted[l];
+    });
+  for (int l = 0; l < model::kLobeCount; ++l) {
     out->lobes[l] += base[l] + residual[l] / double(spp);
+    if (warp_samples > 0) out->lobes[l] += warp[l] / double(warp_samples);
+  }
   out->counters.samples += spp;
   out->counters.texel_evals += spp;
   return {};

@@ -8,6 +8,7 @@
 
 #include "eval/evaluator.hpp"
 #include "eval/footprint_sums.hpp"
+#include "eval/parallax_blocks.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -49,6 +50,7 @@ struct EvalData {
   model::Rgb<double> sheen_color;
   double sheen_roughness = 0.5;
   reader::ParallaxView parallax;
+  ParallaxBlockMeans parallax_blocks;  // the unbiased form's shift (parallax_blocks.hpp)
   reader::VisibilityAsgView visibility;
   reader::VisibilityClusterView clusters;
   TableSource specular, gap;
@@ -57,6 +59,7 @@ struct EvalData {
   // A representative texel per cluster: the one whose fibre (tangent line and roughness) is
   // nearest the cluster's mean, where the unbiased form evaluates the cluster's G-bar.
   std::vector<uint64_t> cluster_texel;
+  std::vector<model::ClothBsdf<double>> cluster_bsdf;  // the BSDF of each cluster_texel
 
   uint32_t cluster_count() const { return clusters.cluster_count(); }
   uint64_t texel(int64_t x, int64_t y) const {

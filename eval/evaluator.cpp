@@ -240,6 +240,12 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
       dist += (f[k] - mean[label][k]) * (f[k] - mean[label][k]);
     if (dist < best[label]) best[label] = dist, d->cluster_texel[label] = t;
   }
+  d->cluster_bsdf.clear();
+  for (uint32_t c = 0; c < clusters; ++c)
+    d->cluster_bsdf.emplace_back(d->texel_params(d->cluster_texel[c]));
+  if (!d->parallax_blocks.init(&d->parallax, d->n))
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "cannot allocate the block-mean parallax tables");
   data_ = std::move(d);
   return {};
 }

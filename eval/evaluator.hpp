@@ -78,6 +78,13 @@ struct EvalOptions {
   // false: the model without parallax (x'(p) = p, no footprint shift): for measuring what the
   // parallax offsets are worth (the near-field report, docs/rendering.md).
   bool parallax = true;
+  // The unbiased multi-scale form's cheap samples of the parallax warp (docs/evaluator.md,
+  // "Two-level residual"): this many per sample of spp, each two evaluations of the control
+  // variate and one per-texel depth, no BSDF. 0 (the default): the one-level residual
+  // f(x'(p)) - g(p + mean offset). Any value keeps the estimate unbiased; 6 cuts the variance at a
+  // given spp by a third to a half but doubles the cost, so per unit time it does not pay on the
+  // example fabrics (docs/performance.md, "Evaluator").
+  uint32_t warp_samples_per_sample = 0;
 };
 
 // The random source of the sampling methods: the project's SplitMix64 (model/splitmix64.hpp), bit

@@ -42,6 +42,9 @@ class FootprintSums {
   // (t = y * N + x). Returns false when the memory cannot be allocated.
   template <class TexelChannels>
   bool build(uint32_t n, SumChannels layout, TexelChannels values);
+  // The same for any `channels` channels (layout() is then empty): the block-mean parallax depths.
+  template <class TexelChannels>
+  bool build(uint32_t n, uint32_t channels, TexelChannels values);
 
   bool empty() const { return n_ == 0; }
   uint32_t resolution() const { return n_; }
@@ -68,7 +71,14 @@ class FootprintSums {
 
 template <class TexelChannels>
 bool FootprintSums::build(uint32_t n, SumChannels layout, TexelChannels values) {
-  const uint32_t stride = layout.count();
+  if (!build(n, layout.count(), values)) return false;
+  layout_ = layout;
+  return true;
+}
+
+template <class TexelChannels>
+bool FootprintSums::build(uint32_t n, uint32_t channels, TexelChannels values) {
+  const uint32_t stride = channels;
   const uint64_t points = uint64_t(n + 1) * (n + 1);
   std::vector<double> prefix;
   std::vector<double> texel(stride), row(stride);
@@ -92,7 +102,7 @@ bool FootprintSums::build(uint32_t n, SumChannels layout, TexelChannels values) 
   }
   n_ = n;
   stride_ = stride;
-  layout_ = layout;
+  layout_ = SumChannels{};
   prefix_ = std::move(prefix);
   return true;
 }

@@ -228,12 +228,13 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   // Decode.
   const bool wide = uint64_t(n) > 256;  // N^2 * 32767 must stay below 2^31 for int32 sums
   const uint64_t sat_count = uint64_t(n + 1) * (n + 1) * (images ? images : 1);
-  if (sat_count * (wide ? 8 : 4) > kMaxCompressedDecodedBytes)
+  const uint64_t decoded = sat_count * (wide ? 8 : 4) + uint64_t(n) * n * sizeof(uint32_t);
+  if (decoded > kMaxCompressedDecodedBytes)
     return Status::error(ErrorCode::Malformed, Check::ResourceLimit,
                          "compressed_tables %s: %u x %u texels with %u images decode to %" PRIu64
                          " bytes, more than the reader's limit of %" PRIu64,
-                         kind_name(kind), unsigned(n), unsigned(n), unsigned(images),
-                         sat_count * (wide ? 8 : 4), kMaxCompressedDecodedBytes);
+                         kind_name(kind), unsigned(n), unsigned(n), unsigned(images), decoded,
+                         kMaxCompressedDecodedBytes);
   std::unique_ptr<int32_t[]> sat32;
   std::unique_ptr<int64_t[]> sat64;
   if (wide)
@@ -244,7 +245,11 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   auto scaled = allocate<float>(uint64_t(bins) * (images ? images : 1));
   auto map_copy = allocate<uint8_t>(uint64_t(n) * n);
   auto cell_cluster = allocate<uint32_t>(cells_n ? cells_n : 1);
-  if ((wide ? !sat64 : !sat32) || !row || !scaled || !map_copy || !cell_cluster)
+  auto cell_images = allocate<uint32_t>(2 * (cells_n ? cells_n : 1));
+  auto coefficient_copy = allocate<int16_t>(coefficients.size ? coefficients.size : 1);
+  auto first_coefficient = allocate<uint32_t>(uint64_t(n) * n);
+  if ((wide ? !sat64 : !sat32) || !row || !scaled || !map_copy || !cell_cluster || !cell_images ||
+      !coefficient_copy || !first_coefficient)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "compressed_tables %s: cannot allocate %" PRIu64
                          " bytes for the decoded tables",
@@ -259,8 +264,23 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     for (uint32_t b = 0; b < bins; ++b)
       scaled[uint64_t(b) * images + i] = scales[i] * half_to_float(basis[uint64_t(i) * bins + b]);
   std::memcpy(map_copy.get(), map.data, uint64_t(n) * n);
-  for (uint32_t g = 0; g < cells_n; ++g)
+  for (uint32_t g = 0; g < cells_n; ++g) {
     cell_cluster[g] = cells[g].cluster;
+    cell_images[2 * g] = cells[g].first_image;
+    cell_images[2 * g + 1] = cells[g].rank;
+  }
+  // Each texel's first coefficient (the coefficient order: texel by texel, r_g values per texel
+  // with a cell), so that a texel's value reads its own weights instead of SAT differences.
+  if (coefficients.size > 0)
+    std::memcpy(coefficient_copy.get(), coefficients.data, sizeof(int16_t) * coefficients.size);
+  {
+    uint64_t next = 0;
+    for (uint64_t t = 0; t < uint64_t(n) * n; ++t) {
+      first_coefficient[t] = uint32_t(next);
+      const uint8_t g = map.data[t];
+      if (g != kNoCell) next += cells[g].rank;
+    }
+  }
 
   info_ = info;
   n_ = n;
@@ -273,6 +293,9 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   basis_ = std::move(scaled);
   cell_map_ = std::move(map_copy);
   cell_cluster_ = std::move(cell_cluster);
+  cell_images_ = std::move(cell_images);
+  coefficients_ = std::move(coefficient_copy);
+  first_coefficient_ = std::move(first_coefficient);
   // Cells are sorted by cluster: each cluster's images are one contiguous range.
   uint32_t g = 0;
   for (uint32_t c = 0; c <= cluster_count_; ++c) {
@@ -287,7 +310,8 @@ uint64_t CompressedRadianceTables::decoded_bytes() const noexcept {
   if (!is_open()) return 0;
   const uint64_t bins = uint64_t(bins_per_side_) * bins_per_side_;
   return uint64_t(n_ + 1) * (n_ + 1) * images_ * (wide_ ? 8 : 4) + bins * images_ * 4 +
-         uint64_t(n_) * n_;
+         uint64_t(n_) * n_ * (1 + sizeof(uint32_t)) + uint64_t(info_.coefficient_count) * 2 +
+         uint64_t(info_.cell_count) * 3 * sizeof(uint32_t);
 }
 
 int CompressedRadianceTables::cluster_of_texel(uint32_t x, uint32_t y) const noexcept {
@@ -296,27 +320,27 @@ int CompressedRadianceTables::cluster_of_texel(uint32_t x, uint32_t y) const noe
   return g == kNoCell ? -1 : int(cell_cluster_[g]);
 }
 
-int64_t CompressedRadianceTables::weight(uint32_t image, uint32_t x, uint32_t y) const noexcept {
-  const uint64_t stride = uint64_t(n_ + 1) * images_;
-  const uint64_t i00 = uint64_t(y) * stride + uint64_t(x) * images_ + image;
-  const uint64_t i10 = i00 + images_, i01 = i00 + stride, i11 = i01 + images_;
-  if (wide_) {
-    const int64_t* s = sat64_.get();
-    return s[i11] - s[i10] - s[i01] + s[i00];
-  }
-  const int32_t* s = sat32_.get();
-  return int64_t(s[i11]) - s[i10] - s[i01] + s[i00];
+CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights(
+    uint32_t x, uint32_t y) const noexcept {
+  TexelWeights tw;
+  const uint64_t t = uint64_t(y) * n_ + x;
+  const uint8_t g = cell_map_[t];
+  if (g == kNoCell) return tw;
+  tw.first_image = cell_images_[2 * g];
+  tw.rank = int(cell_images_[2 * g + 1]);
+  tw.q = coefficients_.get() + first_coefficient_[t];
+  return tw;
 }
 
 double CompressedRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
   if (!is_open() || x >= n_ || y >= n_ || bin >= bins_per_side_ * bins_per_side_) return 0.0;
-  const int c = cluster_of_texel(x, y);
-  if (c < 0) return 0.0;
+  const TexelWeights tw = texel_weights(x, y);
+  if (tw.rank < 0) return 0.0;
   double v = 0.0;
-  const float* row = basis_.get() + uint64_t(bin) * images_;
-  for (uint32_t i = image_begin_[c]; i < image_begin_[c + 1]; ++i) {
-    const int64_t w = weight(i, x, y);
-    if (w != 0) v += double(w) * double(row[i]);
+  const float* row = basis_.get() + uint64_t(bin) * images_ + tw.first_image;
+  for (int j = 0; j <= tw.rank; ++j) {
+    const int64_t w = tw.weight(j);
+    if (w != 0) v += double(w) * double(row[j]);
   }
   return v;
 }
@@ -331,10 +355,12 @@ double CompressedRadianceTables::texel_value(const BinWeights& weights, uint32_t
   const int c = cluster_of_texel(x, y);
   if (cluster != nullptr) *cluster = c;
   if (c < 0) return 0.0;
+  const TexelWeights tw = texel_weights(x, y);
   double v = 0.0;
-  for (uint32_t i = image_begin_[c]; i < image_begin_[c + 1]; ++i) {
-    const int64_t w = weight(i, x, y);
+  for (int j = 0; j <= tw.rank; ++j) {
+    const int64_t w = tw.weight(j);
     if (w == 0) continue;
+    const uint32_t i = tw.first_image + uint32_t(j);
     double basis = 0.0;
     for (uint32_t k = 0; k < weights.count; ++k)
       basis += weights.weight[k] * double(basis_[uint64_t(weights.bin[k]) * images_ + i]);
@@ -355,7 +381,10 @@ int CompressedRadianceTables::decode_texel(uint32_t x, uint32_t y, float* out) c
   const uint32_t first = image_begin_[c], last = image_begin_[c + 1];
   double w[kMaxCompressedImages];
   for (uint32_t i = first; i < last; ++i)
-    w[i - first] = double(weight(i, x, y));
+    w[i - first] = 0.0;
+  const TexelWeights tw = texel_weights(x, y);
+  for (int j = 0; j <= tw.rank; ++j)
+    w[tw.first_image + uint32_t(j) - first] = double(tw.weight(j));
   for (uint32_t b = 0; b < bins; ++b) {
     const float* row = basis_.get() + uint64_t(b) * images_ + first;
     double v = 0.0;

@@ -11,7 +11,9 @@
 // O(images of the clusters asked for), independent of the footprint size.
 //
 // Memory: (N + 1)^2 * images * 4 bytes (8 when N > 256, where 32-bit prefix sums could overflow)
-// plus bins * images * 4 bytes, allocated once by open(); queries do not allocate.
+// plus bins * images * 4 bytes, plus a copy of the coefficients (2 bytes each) and each texel's
+// first coefficient (N^2 * 4 bytes) for per-texel values, allocated once by open(); queries do not
+// allocate.
 //
 // C++17, standard library only, noexcept. Safe on untrusted assets that Asset::open accepted:
 // open() checks every shape, count, index and value range before anything is indexed. The Asset
@@ -78,8 +80,16 @@ class CompressedRadianceTables final : public RadianceTables {
   template <class E>
   bool query_impl(const Footprint& rect, const double h[3], int cluster,
                   double* out) const noexcept;
-  // Weight of image i at texel (x, y), from the SAT (exact).
-  int64_t weight(uint32_t image, uint32_t x, uint32_t y) const noexcept;
+  // The image weights of texel (x, y) (x, y < N): images first_image .. first_image + rank of its
+  // cell, weight 1 for the mean and the stored coefficient q_j for basis image j; rank -1 without
+  // a cell. What the per-image SATs hold as differences, read directly.
+  struct TexelWeights {
+    uint32_t first_image = 0;
+    int rank = -1;
+    const int16_t* q = nullptr;
+    int64_t weight(int j) const noexcept { return j == 0 ? 1 : int64_t(q[j - 1]); }
+  };
+  TexelWeights texel_weights(uint32_t x, uint32_t y) const noexcept;
 
   CompressedTableInfoRecord info_{};
   RadianceTableKind kind_ = RadianceTableKind::Specular;
@@ -87,9 +97,12 @@ class CompressedRadianceTables final : public RadianceTables {
   bool wide_ = false;                 // int64 SATs (N > 256)
   std::unique_ptr<int32_t[]> sat32_;  // (N + 1)^2 x images, exclusive prefix sums
   std::unique_ptr<int64_t[]> sat64_;
-  std::unique_ptr<float[]> basis_;            // bins x images: scale[i] * basis[i][b]
-  std::unique_ptr<uint8_t[]> cell_map_;       // N x N
-  std::unique_ptr<uint32_t[]> cell_cluster_;  // per cell
+  std::unique_ptr<float[]> basis_;                 // bins x images: scale[i] * basis[i][b]
+  std::unique_ptr<uint8_t[]> cell_map_;            // N x N
+  std::unique_ptr<uint32_t[]> cell_cluster_;       // per cell
+  std::unique_ptr<uint32_t[]> cell_images_;        // per cell: first_image, rank
+  std::unique_ptr<int16_t[]> coefficients_;        // the stored coefficients (M)
+  std::unique_ptr<uint32_t[]> first_coefficient_;  // N x N: index of the texel's first coefficient
   // Images of cluster c: [image_begin_[c], image_begin_[c + 1]) (cells sorted by cluster).
   uint32_t image_begin_[kMaxRadianceClusters + 1] = {};
 };

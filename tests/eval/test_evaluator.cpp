@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "eval/eval_data.hpp"
 #include "eval/evaluator.hpp"
 #include "eval/texel_shading.hpp"
 #include "formats/reader/visibility_sections.hpp"
@@ -24,12 +25,15 @@ struct Opened {
   Evaluator evaluator;
 };
 
-std::unique_ptr<Opened> open(const std::string& path, TableChoice tables = TableChoice::Auto) {
+std::unique_ptr<Opened> open(
+    const std::string& path, TableChoice tables = TableChoice::Auto,
+    uint32_t warp_samples_per_sample = EvalOptions().warp_samples_per_sample) {
   auto o = std::make_unique<Opened>();
   const Status s = o->asset.open_file(path.c_str());
   EXPECT_TRUE(s.ok()) << s.message();
   EvalOptions options;
   options.tables = tables;
+  options.warp_samples_per_sample = warp_samples_per_sample;
   const Status e = o->evaluator.open(o->asset, options);
   EXPECT_TRUE(e.ok()) << e.message();
   return o;
@@ -341,15 +345,20 @@ TEST(Multiscale, IsUnbiasedOnTheTwillWithRawAndCompressedTables) {
                                   {3.1, 40.2, 35.1, 72.2},   // 32^2
                                   {0, 0, 64, 64}};           // a whole tile
   for (TableChoice tables : {TableChoice::Raw, TableChoice::Compressed}) {
-    auto o = open(assets().twill, tables);
-    for (const Directions& dirs : kConfigurations)
-      for (const Footprint& p : footprints) {
-        const Stats st = repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 2, 4000, 11);
-        // The compressed tables' footprint sums carry float rounding of partly covered texels.
-        expect_mean_within_3se(st, reference(o->evaluator, p, dirs.wi, dirs.wo),
-                               tables == TableChoice::Raw ? 1e-9 : 2e-4,
-                               o->evaluator.table_source());
-      }
+    // Both forms of the residual: two-level (6 warp samples per sample) and one-level (the
+    // default).
+    for (uint32_t warp : {6u, 0u}) {
+      auto o = open(assets().twill, tables, warp);
+      for (const Directions& dirs : kConfigurations)
+        for (const Footprint& p : footprints) {
+          const Stats st =
+              repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 2, 4000, 11);
+          // The compressed tables' footprint sums carry float rounding of partly covered texels.
+          expect_mean_within_3se(st, reference(o->evaluator, p, dirs.wi, dirs.wo),
+                                 tables == TableChoice::Raw ? 1e-9 : 2e-4,
+                                 o->evaluator.table_source());
+        }
+    }
   }
 }
 
@@ -369,19 +378,62 @@ TEST(Multiscale, SmallFootprintsAreSummedExactly) {
 }
 
 TEST(Multiscale, HasLessVarianceThanBruteForceOnFarFieldFootprints) {
-  auto o = open(assets().twill);
+  auto o = open(assets().twill, TableChoice::Auto, 6);
   // Measured ratios (docs/evaluator.md, "Variance"); the assertion keeps a margin below them.
   const Footprint footprints[] = {{3.1, 40.2, 35.1, 72.2}, {0, 0, 64, 64}, {-100, 7, 156, 263}};
   const double views[][3] = {{-0.1, 0.1, 0.99}, {-0.4, 0.1, 0.85}};
+  auto one_level = open(assets().twill, TableChoice::Auto, 0);
   for (const auto& wo : views)
     for (const Footprint& p : footprints) {
       const Stats ms = repeat(o->evaluator, p, kReflectWi, wo, Method::Multiscale, 2, 3000, 21);
+      const Stats ms1 =
+          repeat(one_level->evaluator, p, kReflectWi, wo, Method::Multiscale, 2, 3000, 21);
       const Stats brute = repeat(o->evaluator, p, kReflectWi, wo, Method::Brute, 2, 3000, 21);
       const double ratio = (brute.sd_green * brute.sd_green) / (ms.sd_green * ms.sd_green);
-      std::printf("variance ratio brute / multiscale at 2 spp, view (%g, %g, %g), %gx%g: %.2f\n",
-                  wo[0], wo[1], wo[2], p.x1 - p.x0, p.y1 - p.y0, ratio);
-      EXPECT_GT(ratio, 2.5);
+      const double ratio1 = (brute.sd_green * brute.sd_green) / (ms1.sd_green * ms1.sd_green);
+      std::printf(
+          "variance ratio brute / multiscale at 2 spp, view (%g, %g, %g), %gx%g: "
+          "%.2f two-level, %.2f one-level\n",
+          wo[0], wo[1], wo[2], p.x1 - p.x0, p.y1 - p.y0, ratio, ratio1);
+      EXPECT_GT(ratio1, 2.5);
+      EXPECT_GT(ratio, 1.5 * ratio1);  // measured 1.7-2.5 times the one-level ratio
     }
+}
+
+TEST(ParallaxBlocks, AreTheExactFootprintMeanOnWholeBlocksAndTheBlockMeanInside) {
+  // The unbiased form's shift (eval/parallax_blocks.hpp): on footprints made of whole blocks the
+  // block-constant depth integrates to the exact footprint mean of the parallax SATs; inside one
+  // block it is the mean depth of the block's texels.
+  auto o = open(assets().twill);
+  const EvalData& data = *o->evaluator.data();
+  const uint32_t b = data.parallax_blocks.block_size();
+  ASSERT_EQ(b, 4u);  // N = 64
+  const Footprint whole[] = {
+      {4, 8, 36, 40}, {-8, 12, 60, 76}, {0, 0, 64, 64}, {56, 60, 72, 68}, {-200, -64, 120, 256}};
+  const double views[][3] = {{-0.1, 0.1, 0.99}, {-0.4, 0.1, 0.85}, {0.5, 0.5, 0.7}};
+  for (const auto& wo : views) {
+    ShadingFrame frame;
+    Status status;
+    ASSERT_TRUE(make_frame(data, kReflectWi, wo, kAllLobes, &frame, &status));
+    const double view[3] = {frame.view.x, frame.view.y, frame.view.z};
+    for (const Footprint& p : whole) {
+      reader::ParallaxSample exact;
+      ASSERT_TRUE(data.parallax.footprint_depth(p, view, &exact).ok());
+      const double blocks =
+          data.parallax_blocks.mean_depth(p, frame.parallax_bins.index, frame.parallax_bins.weight);
+      EXPECT_NEAR(blocks, exact.r, 1e-12 + 1e-9 * std::abs(exact.r)) << p.x0 << "," << p.y0;
+    }
+    // Inside block (1, 2): the mean of its 16 texels' depths.
+    double mean = 0;
+    for (int y = 8; y < 12; ++y)
+      for (int x = 4; x < 8; ++x)
+        mean += texel_depth(data, frame, x, y) / 16.0;
+    const Footprint inside{5.2, 9.1, 6.7, 10.4};
+    EXPECT_NEAR(data.parallax_blocks.mean_depth(inside, frame.parallax_bins.index,
+                                                frame.parallax_bins.weight),
+                mean, 1e-12);
+    EXPECT_LT(mean, 0.0);  // a real relief: the check is not 0 = 0
+  }
 }
 
 TEST(MultiscalePaper, IsBiasedWhereTheFootprintMeanAlbedoDoesNotHold) {
