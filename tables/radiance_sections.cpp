@@ -51,14 +51,15 @@ RadianceSectionView find_radiance_sections(std::span<const formats::Section> sec
           s.instance == reader::radiance_instance(kind, RadiancePart(p)))
         parts[p] = &s;
   if (!parts[0] || !parts[1] || !parts[2] || !parts[3]) return view;
-  if (parts[0]->payload.size() != sizeof(reader::RadianceTableInfoRecord))
+  // bytes(): a section from the stage cache may be mapped rather than owned (8-byte aligned).
+  if (parts[0]->bytes().size() != sizeof(reader::RadianceTableInfoRecord))
     throw_internal_error("radiance tables: bad info section");
-  view.info = reinterpret_cast<const reader::RadianceTableInfoRecord*>(parts[0]->payload.data());
-  view.clusters = {reinterpret_cast<const uint32_t*>(parts[1]->payload.data()),
-                   parts[1]->payload.size() / 4};
-  view.units = {reinterpret_cast<const double*>(parts[2]->payload.data()),
-                parts[2]->payload.size() / 8};
-  view.sat = parts[3]->payload.data();
+  view.info = reinterpret_cast<const reader::RadianceTableInfoRecord*>(parts[0]->bytes().data());
+  view.clusters = {reinterpret_cast<const uint32_t*>(parts[1]->bytes().data()),
+                   parts[1]->bytes().size() / 4};
+  view.units = {reinterpret_cast<const double*>(parts[2]->bytes().data()),
+                parts[2]->bytes().size() / 8};
+  view.sat = parts[3]->bytes().data();
   return view;
 }
 

@@ -24,7 +24,9 @@ static_assert(sizeof(Fabric) == sizeof(std::string) + sizeof(FabricMaps) +
                                     sizeof(std::vector<YarnMaterial>) + sizeof(SheenParams) +
                                     sizeof(BakeSettings) + sizeof(std::vector<InputFile>) + 8,
               "Fabric changed: update encode_fabric in bake/cache/basic_codecs.cpp");
-static_assert(sizeof(formats::Section) == 8 + 8 + 2 * sizeof(std::vector<uint32_t>),
+static_assert(sizeof(formats::Section) == 8 + 8 + 2 * sizeof(std::vector<uint32_t>) +
+                                              sizeof(std::span<const std::byte>) +
+                                              sizeof(std::shared_ptr<const void>),
               "formats::Section changed: update the section codec in bake/cache/basic_codecs.cpp");
 
 void encode_fabric(const Fabric& f, ByteWriter& w) {
@@ -117,6 +119,8 @@ Fabric decode_fabric(ByteReader& r) {
   return f;
 }
 
+// Each payload starts at a multiple of 64 bytes of the encoding (the entry puts encodings at
+// multiples of 64 too), so that a mapped entry lends it in place with the alignment of any element.
 void encode_sections(const std::vector<formats::Section>& sections, ByteWriter& w) {
   w.pod(uint64_t(sections.size()));
   for (const auto& s : sections) {
@@ -125,9 +129,13 @@ void encode_sections(const std::vector<formats::Section>& sections, ByteWriter& 
     w.pod(s.version);
     w.pod(uint16_t(s.element));
     w.vec(s.dims);
-    w.vec(s.payload);
+    w.pad_before(8 + 8, 64);  // the pad's own length and the payload's length follow
+    w.span(s.bytes());
   }
 }
+
+// Payloads of at least this size are borrowed from a mapped entry rather than copied.
+constexpr std::size_t kBorrowBytes = 4096;
 
 std::vector<formats::Section> decode_sections(ByteReader& r) {
   std::vector<formats::Section> out;
@@ -139,7 +147,14 @@ std::vector<formats::Section> decode_sections(ByteReader& r) {
     s.version = r.pod<uint16_t>();
     s.element = formats::ElementType(r.pod<uint16_t>());
     s.dims = r.vec<uint32_t>();
-    s.payload = r.vec<std::byte>();
+    r.skip_pad();
+    const std::span<const std::byte> bytes = r.borrow();
+    if (r.owner() && bytes.size() >= kBorrowBytes) {
+      s.mapped = bytes;
+      s.mapped_owner = r.owner();
+    } else {
+      s.payload.assign(bytes.begin(), bytes.end());
+    }
     out.push_back(std::move(s));
   }
   return out;
@@ -169,7 +184,7 @@ void add_basic_codecs(Codecs& codecs) {
       "json/cbor",
       [](const nlohmann::json& j, ByteWriter& w) { w.vec(nlohmann::json::to_cbor(j)); },
       [](ByteReader& r) { return nlohmann::json::from_cbor(r.vec<uint8_t>()); });
-  codecs.add<std::vector<formats::Section>>("sections/1", encode_sections, decode_sections);
+  codecs.add<std::vector<formats::Section>>("sections/2", encode_sections, decode_sections);
   codecs.add<Fabric>("fabric/1", encode_fabric, decode_fabric);
 }
 

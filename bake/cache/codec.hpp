@@ -9,48 +9,95 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <memory>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <typeindex>
 #include <typeinfo>
 #include <vector>
 
+#include <xxhash.h>
+
 #include "bake/pipeline/artifacts.hpp"
 #include "common/error.hpp"
 
 namespace clothbake::cache {
 
-// Little-endian (host order on the supported x86-64/aarch64 Linux) byte buffer.
+// Little-endian (host order on the supported x86-64/aarch64 Linux) byte buffer, or, when built
+// with a hash state, a stream into XXH3-128 (content digests hash an encoding without holding it).
 class ByteWriter {
  public:
+  ByteWriter() = default;
+  explicit ByteWriter(XXH3_state_t* hash) : hash_(hash) {}
   template <class T>
   void pod(const T& v) {
     static_assert(std::is_trivially_copyable_v<T>);
-    const auto* p = reinterpret_cast<const std::byte*>(&v);
-    bytes_.insert(bytes_.end(), p, p + sizeof(T));
+    put(&v, sizeof(T));
   }
   void str(const std::string& s) {
     pod(uint64_t(s.size()));
-    const auto* p = reinterpret_cast<const std::byte*>(s.data());
-    bytes_.insert(bytes_.end(), p, p + s.size());
+    put(s.data(), s.size());
   }
   template <class T>
   void vec(const std::vector<T>& v) {
     static_assert(std::is_trivially_copyable_v<T>);
     pod(uint64_t(v.size()));
-    const auto* p = reinterpret_cast<const std::byte*>(v.data());
-    bytes_.insert(bytes_.end(), p, p + v.size() * sizeof(T));
+    put(v.data(), v.size() * sizeof(T));
+  }
+  void span(std::span<const std::byte> b) {
+    pod(uint64_t(b.size()));
+    put(b.data(), b.size());
+  }
+  // Zero bytes up to the next multiple of `alignment` after `extra` more bytes (payloads that a
+  // reader may map in place start aligned).
+  void pad_before(uint64_t extra, uint64_t alignment) {
+    static const std::byte zeros[64] = {};
+    const uint64_t n = (alignment - (size_ + extra) % alignment) % alignment;
+    pod(n);
+    put(zeros, std::size_t(n));
   }
   std::vector<std::byte>& bytes() { return bytes_; }
+  uint64_t size() const { return size_; }
 
  private:
+  void put(const void* p, std::size_t n) {
+    size_ += n;
+    if (hash_) {
+      XXH3_128bits_update(hash_, p, n);
+      return;
+    }
+    const auto* b = static_cast<const std::byte*>(p);
+    bytes_.insert(bytes_.end(), b, b + n);
+  }
   std::vector<std::byte> bytes_;
+  XXH3_state_t* hash_ = nullptr;
+  uint64_t size_ = 0;
 };
 
 // Reads what ByteWriter wrote; every read is bounds-checked (Error(Input) "truncated").
+// A reader over memory that stays mapped while `owner` lives may lend spans of it (borrow) to
+// values that keep `owner` (large section payloads are then not copied).
 class ByteReader {
  public:
-  ByteReader(const std::byte* data, std::size_t size) : p_(data), end_(data + size) {}
+  ByteReader(const std::byte* data, std::size_t size, std::shared_ptr<const void> owner = nullptr)
+      : p_(data), end_(data + size), owner_(std::move(owner)) {}
+  const std::shared_ptr<const void>& owner() const { return owner_; }
+  // What pad_before wrote.
+  void skip_pad() {
+    const uint64_t n = pod<uint64_t>();
+    if (n >= 64) throw_input_error("bad padding");
+    need(n);
+    p_ += n;
+  }
+  // The next u64-length-prefixed bytes (as written by span or vec<std::byte>), in place.
+  std::span<const std::byte> borrow() {
+    const uint64_t n = pod<uint64_t>();
+    need(n);
+    std::span<const std::byte> out(p_, std::size_t(n));
+    p_ += n;
+    return out;
+  }
   template <class T>
   T pod() {
     static_assert(std::is_trivially_copyable_v<T>);
@@ -90,6 +137,7 @@ class ByteReader {
   }
   const std::byte* p_;
   const std::byte* end_;
+  std::shared_ptr<const void> owner_;
 };
 
 struct Codec {

@@ -115,11 +115,10 @@ std::optional<DiskCache::Key> DiskCache::content_digest(const pipeline::Artifact
                                                         const std::string& name) const {
   const Codec* codec = codecs_.for_artifact(a, name);
   if (codec == nullptr) return std::nullopt;
-  ByteWriter w;
-  codec->encode(a, name, w);
   Hasher h;
   h.str(codec->tag);
-  h.bytes(w.bytes().data(), w.bytes().size());
+  ByteWriter w(h.state);  // streams the encoding into the hash
+  codec->encode(a, name, w);
   const XXH128_hash_t d = h.finish();
   return Key{d.high64, d.low64};
 }
@@ -253,7 +252,8 @@ bool DiskCache::read_entry(const std::string& path, const pipeline::Stage& stage
             ::close(f);
             throw_input_error("'" + name + "' is truncated");
           }
-          // Mapped, not copied: the payload is read once by the checksum, once by the decoder.
+          // Mapped, not copied: the payload is read once by the checksum; the decoder may lend
+          // large parts of it to the value (the mapping lives as long as the value needs it).
           const uint64_t page = uint64_t(::sysconf(_SC_PAGESIZE));
           const uint64_t start = offset / page * page, length = offset + bytes - start;
           void* map = length ? ::mmap(nullptr, length, PROT_READ, MAP_PRIVATE | MAP_POPULATE, f,
@@ -261,18 +261,14 @@ bool DiskCache::read_entry(const std::string& path, const pipeline::Stage& stage
                              : nullptr;
           ::close(f);
           if (map == MAP_FAILED) throw_input_error("cannot map '" + name + "': " + errno_text());
-          struct Unmap {
-            void* p;
-            uint64_t n;
-            ~Unmap() {
-              if (p) ::munmap(p, n);
-            }
-          } unmap{map, length};
+          const std::shared_ptr<const void> mapping(map, [length](void* p) {
+            if (p) ::munmap(p, length);
+          });
           const std::byte* payload =
               map ? static_cast<const std::byte*>(map) + (offset - start) : nullptr;
           if (XXH3_64bits(payload, bytes) != hash)
             throw_input_error("'" + name + "' fails its checksum");
-          ByteReader pr(payload, bytes);
+          ByteReader pr(payload, bytes, mapping);
           copy.decode(pr, into, name);
           if (!pr.done()) throw_input_error("'" + name + "' has trailing bytes");
           return;
@@ -379,10 +375,15 @@ bool DiskCache::store(const pipeline::Stage& stage, const pipeline::Artifacts& a
           sink.write(head.bytes().data(), head.bytes().size());
           uint64_t offset = head.bytes().size();
           ByteWriter index;
+          static const std::byte zeros[64] = {};
           for (std::size_t k = 0; k < stage.outputs.size(); ++k) {
             ByteWriter payload;  // one output in memory at a time
             codecs[k]->encode(produced, stage.outputs[k], payload);
             const auto& b = payload.bytes();
+            // Payloads start at multiples of 64 (a mapped payload keeps its alignment).
+            const uint64_t pad = (64 - offset % 64) % 64;
+            sink.write(zeros, std::size_t(pad));
+            offset += pad;
             sink.write(b.data(), b.size());
             index.str(stage.outputs[k]);
             index.str(codecs[k]->tag);
@@ -430,26 +431,39 @@ struct EntryFile {
   fs::path path;
   uint64_t bytes;
   int64_t mtime_ns;
+  std::string stage;
 };
 
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() > suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The entries (entries/<stage>-<key>.entry) and the scene renders' assets (assets/*.cbk); files
+// starting with '.' are temporary files of stores or bakes in progress (or killed).
 std::vector<EntryFile> list_entries(const std::string& dir, std::vector<EntryFile>* temporary) {
-  const fs::path entries = fs::path(dir) / "entries";
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw_input_error("cache " + dir + " is not a folder");
   std::vector<EntryFile> out;
-  if (!fs::is_directory(entries, ec)) return out;
-  for (fs::directory_iterator it(entries, ec), end; !ec && it != end; it.increment(ec)) {
-    struct stat st {};
-    if (::stat(it->path().c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
-    EntryFile e{it->path(), uint64_t(st.st_size),
-                int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec};
-    const std::string name = it->path().filename().string();
-    if (name.size() > 6 && name.compare(name.size() - 6, 6, ".entry") == 0 && name[0] != '.')
-      out.push_back(e);
-    else if (temporary && name[0] == '.')
-      temporary->push_back(e);
+  for (const char* sub : {"entries", kAssetFolder}) {
+    const fs::path folder = fs::path(dir) / sub;
+    const bool assets = std::string(sub) == kAssetFolder;
+    if (!fs::is_directory(folder, ec)) continue;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+      struct stat st {};
+      if (::stat(it->path().c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
+      const std::string name = it->path().filename().string();
+      EntryFile e{it->path(), uint64_t(st.st_size),
+                  int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec,
+                  assets ? "asset" : name.substr(0, name.rfind('-'))};
+      if (name[0] == '.') {
+        if (temporary) temporary->push_back(e);
+      } else if (ends_with(name, assets ? ".cbk" : ".entry")) {
+        out.push_back(e);
+      }
+    }
+    if (ec) throw_input_error("cannot list cache " + folder.string() + ": " + ec.message());
   }
-  if (ec) throw_input_error("cannot list cache " + entries.string() + ": " + ec.message());
   return out;
 }
 }  // namespace
@@ -460,10 +474,8 @@ CacheInfo cache_info(const std::string& dir) {
   for (const auto& e : list_entries(dir, &temporary)) {
     ++info.entries;
     info.bytes += e.bytes;
-    const std::string name = e.path.filename().string();
-    const std::string stage = name.substr(0, name.rfind('-'));
-    info.per_stage[stage].first += 1;
-    info.per_stage[stage].second += e.bytes;
+    info.per_stage[e.stage].first += 1;
+    info.per_stage[e.stage].second += e.bytes;
   }
   info.temporary_files = temporary.size();
   return info;

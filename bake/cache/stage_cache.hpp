@@ -24,7 +24,10 @@
 namespace clothbake::cache {
 
 inline constexpr uint64_t kDefaultCacheMaxBytes = uint64_t(10) << 30;  // 10 GiB
-inline constexpr uint32_t kCacheSchema = 1;  // bump when the entry layout or a codec changes
+inline constexpr uint32_t kCacheSchema = 2;  // bump when the entry layout or a codec changes
+// Subfolder of finished assets that scene renders keep beside the entries (bake/cli/scene_bake):
+// counted by cache_info as stage "asset" and bounded with the entries (least recently used out).
+inline constexpr const char* kAssetFolder = "assets";
 
 struct CacheOptions {
   std::string dir;
@@ -63,6 +66,9 @@ class DiskCache final : public pipeline::StageCache {
   // Keys of the stages seen so far (stage name -> 32 hex digits); the last one of a bake (the
   // compress stage's, or any stage's) identifies the bake's computed content.
   const std::map<std::string, std::string>& keys() const { return keys_; }
+  // Prunes the folder to the bound when it holds more (done after each store; a caller that adds
+  // files of its own, such as the assets of scene renders, calls it after adding them).
+  void enforce_bound();
 
  private:
   struct Key {
@@ -77,7 +83,6 @@ class DiskCache final : public pipeline::StageCache {
                   pipeline::Artifacts& out);
   void publish(const pipeline::Stage& stage, const Key& key);
   void release(const std::string& stage);
-  void enforce_bound();
 
   CacheOptions options_;
   Codecs codecs_;
@@ -95,15 +100,15 @@ struct CacheInfo {
   uint64_t bytes = 0;
   uint64_t temporary_files = 0;                                    // left by killed stores
   std::map<std::string, std::pair<uint64_t, uint64_t>> per_stage;  // stage -> entries, bytes
-};
+};                                                                 // ("asset": kAssetFolder)
 // What the folder holds. Error(Input) if it is not a readable folder.
 CacheInfo cache_info(const std::string& dir);
 
 struct PruneResult {
   uint64_t removed_entries = 0, removed_bytes = 0, kept_entries = 0, kept_bytes = 0;
 };
-// Removes least recently used entries (oldest mtime first; a hit refreshes the mtime) until the
-// rest fit in `max_bytes` (0: remove all), and temporary files older than an hour.
+// Removes least recently used entries and assets (oldest mtime first; a hit refreshes the mtime)
+// until the rest fit in `max_bytes` (0: remove all), and temporary files older than an hour.
 PruneResult prune_cache(const std::string& dir, uint64_t max_bytes);
 
 }  // namespace clothbake::cache

@@ -1,20 +1,69 @@
-// Fabrics of a scene baked into the cache (scene_bake.hpp).
+// Fabrics of a scene baked through the stage cache (scene_bake.hpp).
 #include "bake/cli/scene_bake.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <xxhash.h>
+
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 
-#include "bake/inputs/fabric_files.hpp"
+#include "bake/cache/stage_cache.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "common/version.hpp"
-#include "fabric/fabric_json.hpp"
+#include "formats/reader/layout.hpp"
 
 namespace clothbake::cli {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// XXH3-128 of everything the asset's bytes depend on (scene_bake.hpp), as 32 hex digits.
+std::string asset_key(const Fabric& fabric, const cache::Codecs& codecs) {
+  pipeline::Artifacts a;
+  a.put("fabric", fabric);
+  const cache::Codec* codec = codecs.for_artifact(a, "fabric");
+  if (codec == nullptr) throw_internal_error("no cache codec for the fabric");
+  cache::ByteWriter w;
+  w.str("clothbake scene asset");
+  w.str(CLOTHBAKE_VERSION_STRING);
+  w.pod(cache::kCacheSchema);
+  w.pod(uint16_t(reader::kFormatMajor));
+  w.pod(uint16_t(reader::kFormatMinor));
+  w.str(codec->tag);
+  codec->encode(a, "fabric", w);
+  const XXH128_hash_t h = XXH3_128bits(w.bytes().data(), w.bytes().size());
+  char hex[33];
+  std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(h.high64),
+                static_cast<unsigned long long>(h.low64));
+  return hex;
+}
+
+// Holds flock on `path` (created if needed) until destroyed; a no-op when it cannot be opened.
+struct FileLock {
+  explicit FileLock(const fs::path& path) {
+    fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) return;
+    while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+    }
+  }
+  ~FileLock() {
+    if (fd >= 0) ::close(fd);
+  }
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+  int fd = -1;
+};
+
+}  // namespace
 
 std::string scene_cache_dir(const std::string& option) {
   if (!option.empty()) return option;
@@ -26,31 +75,42 @@ std::string scene_cache_dir(const std::string& option) {
 
 void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_option, bool quiet) {
   std::string cache;
+  std::unique_ptr<cache::DiskCache> stage_cache;
+  const cache::Codecs codecs = stages::artifact_codecs();
   for (std::size_t k = 0; k < loaded.fabrics.size(); ++k) {
     if (loaded.fabrics[k].empty()) continue;
     if (cache.empty()) {
       cache = scene_cache_dir(cache_option);
       std::error_code ec;
-      fs::create_directories(cache, ec);
-      if (ec || !fs::is_directory(cache))
+      fs::create_directories(fs::path(cache) / cache::kAssetFolder, ec);
+      if (!ec) fs::create_directories(fs::path(cache) / "locks", ec);
+      if (ec || !fs::is_directory(fs::path(cache) / cache::kAssetFolder))
         throw_input_error(cache + ": cannot create the asset cache (" + ec.message() + ")");
     }
-    Fabric fabric = load_fabric(loaded.fabrics[k]);
-    std::string key = std::string(CLOTHBAKE_VERSION_STRING) + "\n" +
-                      bake_settings_json(fabric.bake)
-                          .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) +
-                      "\n";
-    for (const InputFile& f : fabric.inputs)
-      key += f.role + " " + f.xxh64 + "\n";
+    const Fabric fabric = load_fabric(loaded.fabrics[k]);
+    const std::string key = asset_key(fabric, codecs);
     const std::string stem = fs::path(loaded.fabrics[k]).stem().string();
-    const fs::path asset = fs::path(cache) / (stem + "-" + inputs::xxh64_hex(key) + ".cbk");
+    const fs::path asset = fs::path(cache) / cache::kAssetFolder / (stem + "-" + key + ".cbk");
+    // One process bakes a given asset; a concurrent render of the same fabric waits, then uses it.
+    const FileLock lock(fs::path(cache) / "locks" / ("asset-" + key + ".lock"));
     std::error_code ec;
-    if (!fs::is_regular_file(asset, ec)) {
+    if (fs::is_regular_file(asset, ec)) {
+      ::utimensat(AT_FDCWD, asset.c_str(), nullptr, 0);  // most recently used
+    } else {
+      if (!stage_cache) {
+        cache::CacheOptions options;
+        options.dir = cache;
+        stage_cache = std::make_unique<cache::DiskCache>(options, codecs);
+      }
+      // From the path, as `clothbake bake f.toml` does (the asset's metadata lists load_fabric
+      // among the stages), so that the asset has the bytes of that command's.
       pipeline::BakeRequest request;
-      request.fabric = std::move(fabric);
+      request.fabric_path = loaded.fabrics[k];
       request.output_path = asset.string();
       request.run.show_progress = !quiet;
+      request.run.cache = stage_cache->enabled() ? stage_cache.get() : nullptr;
       pipeline::bake(request, stages::bake_stages());
+      stage_cache->enforce_bound();  // the asset counts towards the bound as well
     }
     loaded.scene.objects[k].asset = asset.string();
   }

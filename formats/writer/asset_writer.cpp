@@ -75,8 +75,10 @@ void check_section(const Section& s) {
       throw_internal_error("section " + label + ": shape overflows 64 bits");
     expected *= d;
   }
-  if (expected != s.payload.size())
-    throw_internal_error("section " + label + ": payload has " + std::to_string(s.payload.size()) +
+  if (s.mapped_owner && !s.payload.empty())
+    throw_internal_error("section " + label + ": both an owned and a mapped payload");
+  if (expected != s.bytes().size())
+    throw_internal_error("section " + label + ": payload has " + std::to_string(s.bytes().size()) +
                          " bytes, its shape needs " + std::to_string(expected));
 }
 
@@ -87,9 +89,10 @@ reader::SectionEntry entry_of(const Section& s, uint64_t offset) {
   e.version = s.version;
   e.codec = uint16_t(reader::Codec::Raw);
   e.offset = offset;
-  e.stored_size = s.payload.size();
-  e.checksum = XXH64(s.payload.data(), s.payload.size(), 0);
-  e.raw_size = s.payload.size();
+  const std::span<const std::byte> bytes = s.bytes();
+  e.stored_size = bytes.size();
+  e.checksum = XXH64(bytes.data(), bytes.size(), 0);
+  e.raw_size = bytes.size();
   e.element_type = uint16_t(s.element);
   e.rank = uint16_t(s.dims.size());
   for (std::size_t d = 0; d < s.dims.size(); ++d)
@@ -204,7 +207,7 @@ uint64_t asset_size(SectionRefs sections) {
   uint64_t offset =
       align_up(sizeof(reader::FileHeader) + sections.size() * sizeof(reader::SectionEntry));
   for (const Section* s : table_order(sections))
-    offset = align_up(offset + s->payload.size());
+    offset = align_up(offset + s->bytes().size());
   return offset;
 }
 
@@ -224,7 +227,7 @@ uint64_t write_asset(SectionRefs sections, Sink& sink) {
   uint64_t offset = align_up(table_end);
   for (const Section* s : order) {
     table.push_back(entry_of(*s, offset));
-    offset = align_up(offset + s->payload.size());
+    offset = align_up(offset + s->bytes().size());
   }
   const uint64_t file_size = offset;
 
@@ -258,7 +261,7 @@ uint64_t write_asset(SectionRefs sections, Sink& sink) {
   put(table.data(), table.size() * sizeof(reader::SectionEntry));
   for (std::size_t i = 0; i < order.size(); ++i) {
     put(zeros, table[i].offset - written);
-    put(order[i]->payload.data(), order[i]->payload.size());
+    put(order[i]->bytes().data(), order[i]->bytes().size());
   }
   put(zeros, file_size - written);
   return file_size;

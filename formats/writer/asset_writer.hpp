@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
@@ -31,6 +32,14 @@ struct Section {
   ElementType element = ElementType::U8;
   std::vector<uint32_t> dims;  // rank = dims.size() <= 4; empty only for Opaque
   std::vector<std::byte> payload;
+  // Instead of `payload` (which is then empty): bytes held elsewhere, valid while `mapped_owner`
+  // lives (the stage cache hands out payloads of mapped entries this way, so that a large section
+  // is written without a copy). Read a section's bytes through bytes(), which sees either form.
+  std::span<const std::byte> mapped;
+  std::shared_ptr<const void> mapped_owner;
+  std::span<const std::byte> bytes() const {
+    return mapped_owner ? mapped : std::span<const std::byte>(payload);
+  }
 };
 
 // "height" or "type 0x0777", plus " instance I" when instance != 0: for messages.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <numeric>
 
 #include "common/error.hpp"
@@ -238,6 +239,26 @@ TEST(RoundTrip, SameSectionsGiveSameBytesWhateverTheOrder) {
   std::vector<Section> b = a;
   std::reverse(b.begin(), b.end());
   EXPECT_EQ(formats::serialize_asset(a), formats::serialize_asset(b));
+}
+
+// A section whose bytes are held elsewhere (Section::mapped, as the stage cache hands them out)
+// is written exactly like the same section owning them; having both forms at once is refused.
+TEST(RoundTrip, MappedPayloadsGiveTheOwnedBytes) {
+  const Fabric fabric = test_support::make_test_fabric(8);
+  std::vector<Section> owned = feature_map_sections(fabric.maps);
+  owned.push_back(metadata());
+  std::vector<Section> mapped = owned;
+  auto keep = std::make_shared<std::vector<std::vector<std::byte>>>();
+  for (Section& s : mapped) {
+    keep->push_back(std::move(s.payload));
+    s.payload.clear();
+    s.mapped = keep->back();
+    s.mapped_owner = keep;
+  }
+  EXPECT_EQ(formats::serialize_asset(owned), formats::serialize_asset(mapped));
+  EXPECT_EQ(formats::asset_size(owned), formats::asset_size(mapped));
+  mapped[0].payload = owned[0].payload;
+  EXPECT_THROW(formats::serialize_asset(mapped), Error);
 }
 
 // Patches the header (minor or major version) and fixes the header checksum.

@@ -2,7 +2,8 @@
 // bake is all hits with the same bytes; an albedo-only change reuses every ray-casting, cluster,
 // table and compression stage and gives the bytes of an uncached bake; a corrupted entry is
 // detected, removed and recomputed; an unusable cache is warned about and bypassed; concurrent
-// bakes of one key agree; a bake killed while storing leaves no torn entry; the size bound holds.
+// bakes of one key agree; a bake killed while storing leaves no torn entry; the size bound holds;
+// scene renders bake their fabrics through the same cache.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -133,7 +134,7 @@ TEST_F(Cache, CorruptedEntriesAreRecomputedNeverUsed) {
       ASSERT_EQ(entries(stage).size(), 1u);
       const fs::path entry = entries(stage)[0];
       std::string bytes = slurp(entry);
-      if (kind == 0) bytes[40] ^= 0x10;                 // payload
+      if (kind == 0) bytes[72] ^= 0x10;  // payload (the first starts at 64, after the pad)
       if (kind == 1) bytes[bytes.size() - 30] ^= 0x10;  // index
       if (kind == 2) bytes.resize(bytes.size() / 2);    // truncated
       std::ofstream(entry, std::ios::binary | std::ios::trunc) << bytes;
@@ -250,6 +251,67 @@ TEST_F(Cache, SizeBoundAndPrune) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["kept_entries"], 0);
   EXPECT_EQ(run_clothbake({"cache", "prune", (dir_ / "cache").string(), "--max-size", "lots"}).code,
             1);
+}
+
+// `clothbake render` with a `fabric =` object: the fabric is baked through the stage cache and the
+// asset kept in CACHE/assets (byte-identical to a plain bake); a second render bakes nothing; a
+// colour edit reuses every geometry stage and adds one asset; `cache info` counts the assets and
+// `cache prune --all` removes them.
+TEST_F(Cache, SceneRendersBakeTheirFabricsThroughTheStageCache) {
+  std::ofstream(dir_ / "scene.toml")
+      << "[camera]\nposition = [0, 0, 2]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov_deg = 30\n"
+         "resolution = [8, 6]\n[[light]]\ntype = \"point\"\nposition = [0.5, 0.5, 1.5]\n"
+         "intensity = 3\n[[object]]\nshape = \"plane\"\ncenter = [0, 0, 0]\nnormal = [0, 0, 1]\n"
+         "tangent = [1, 0, 0]\nsize = [2, 2]\nfabric = \"f.toml\"\n";
+  auto render = [&](const std::string& out) {
+    const CliRun r =
+        run_clothbake({"render", (dir_ / "scene.toml").string(), "-o", (dir_ / out).string(),
+                       "--spp", "1", "--cache", (dir_ / "cache").string(), "--json"});
+    EXPECT_EQ(r.code, 0) << r.err;
+  };
+  auto assets = [&] {
+    std::vector<fs::path> out;
+    for (const auto& e : fs::directory_iterator(dir_ / "cache" / "assets"))
+      if (e.path().extension() == ".cbk") out.push_back(e.path());
+    return out;
+  };
+  render("a.exr");
+  ASSERT_EQ(assets().size(), 1u);
+  for (const std::string stage : {"fabric_records", "feature_maps", "parallax", "visibility",
+                                  "cluster", "tables", "compress"})
+    EXPECT_EQ(entries(stage + "-").size(), 1u) << stage;
+  bake("plain.cbk", false);
+  const fs::path first = assets()[0];
+  EXPECT_EQ(slurp(first), slurp(dir_ / "plain.cbk"));
+
+  const auto before = fs::last_write_time(first);
+  render("b.exr");  // nothing to bake
+  EXPECT_EQ(assets().size(), 1u);
+  EXPECT_EQ(entries().size(), 7u);
+  EXPECT_EQ(slurp(dir_ / "a.exr"), slurp(dir_ / "b.exr"));
+  EXPECT_GE(fs::last_write_time(first), before);
+
+  std::string text = kFabric;
+  text.replace(text.find("0.05, 0.09, 0.26"), 16, "0.50, 0.10, 0.02");
+  std::ofstream(dir_ / "f.toml") << text;
+  render("c.exr");
+  EXPECT_EQ(assets().size(), 2u);
+  for (const auto& s : kReused)
+    EXPECT_EQ(entries(s + "-").size(), 1u) << s;  // reused, not baked again
+  EXPECT_EQ(entries("fabric_records-").size(), 2u);
+  bake("plain2.cbk", false);
+  bool found = false;
+  for (const auto& a : assets())
+    found |= a != first && slurp(a) == slurp(dir_ / "plain2.cbk");
+  EXPECT_TRUE(found);
+
+  const auto info = nlohmann::json::parse(
+      run_clothbake({"cache", "info", (dir_ / "cache").string(), "--json"}).out);
+  EXPECT_EQ(info["stages"]["asset"]["entries"], 2);
+  EXPECT_EQ(info["entries"], 9 + 2);
+  const CliRun pruned = run_clothbake({"cache", "prune", (dir_ / "cache").string(), "--all"});
+  EXPECT_EQ(pruned.code, 0) << pruned.err;
+  EXPECT_TRUE(assets().empty());
 }
 
 }  // namespace
