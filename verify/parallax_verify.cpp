@@ -47,9 +47,11 @@ uint64_t stored_bytes(const reader::Asset& asset, reader::SectionType type) {
 }  // namespace
 
 bool has_compressed_parallax(const reader::Asset& asset) {
-  for (uint32_t i = 0; i < 3; ++i) {
+  for (uint32_t i = 0; i < 5; ++i) {
     reader::SectionInfo info;
-    if (asset.find(reader::SectionType::ParallaxCompressed, i, &info).ok()) return true;
+    if (asset.find(reader::SectionType::ParallaxCompressed, i, &info).ok() ||
+        asset.find(reader::SectionType::ParallaxEntropy, i, &info).ok())
+      return true;
   }
   return false;
 }
@@ -67,6 +69,7 @@ ParallaxVerifyReport verify_parallax(const reader::Asset& asset, const Fabric& f
   report.dirs = dirs;
   report.min_cos = packed.info().min_cos;
   report.bits = int(packed.compressed_info().bits);
+  report.section = packed.is_entropy_coded() ? "parallax_entropy" : "parallax_compressed";
 
   // The raw reference: the asset's own, else recomputed (the bake's ray casting) and held in an
   // in-memory asset so that the same reader answers both.
@@ -170,7 +173,10 @@ ParallaxVerifyReport verify_parallax(const reader::Asset& asset, const Fabric& f
       report.classes[c].rms_error = std::sqrt(class_err2[c] / double(report.classes[c].footprints));
 
   // Sizes.
-  report.compressed_bytes = stored_bytes(asset, reader::SectionType::ParallaxCompressed);
+  // The form the view read (an asset holds one; parallax_entropy is preferred when both are).
+  report.compressed_bytes =
+      stored_bytes(asset, packed.is_entropy_coded() ? reader::SectionType::ParallaxEntropy
+                                                    : reader::SectionType::ParallaxCompressed);
   report.raw_bytes = 64 + report.entries * 6;
   report.ratio =
       report.compressed_bytes > 0 ? double(report.raw_bytes) / double(report.compressed_bytes) : 0;
@@ -219,6 +225,7 @@ nlohmann::json parallax_report_json(const ParallaxVerifyReport& r) {
           {"dirs", r.dirs},
           {"min_cos", r.min_cos},
           {"bits", r.bits},
+          {"section", r.section},
           {"raw_reference", r.raw_reference_from_asset ? "asset" : "recomputed from the fabric"},
           {"entries", r.entries},
           {"texel",
@@ -238,8 +245,8 @@ nlohmann::json parallax_report_json(const ParallaxVerifyReport& r) {
 
 std::string parallax_report_text(const ParallaxVerifyReport& r) {
   std::ostringstream s;
-  s << "parallax (compressed, " << r.bits << "-bit codes, " << r.resolution << "^2 x " << r.dirs
-    << "^2 directions) against the raw table "
+  s << "parallax (compressed, " << r.section << ", " << r.bits << "-bit codes, " << r.resolution
+    << "^2 x " << r.dirs << "^2 directions) against the raw table "
     << (r.raw_reference_from_asset ? "in the asset" : "recomputed from the fabric") << ":\n";
   s << "  per texel (" << r.entries << " entries): RMS offset error " << fixed(r.rms_error, 4)
     << " texel, max " << fixed(r.max_error, 4) << ", above 0.25 texel "

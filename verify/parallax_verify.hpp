@@ -56,6 +56,7 @@ struct ParallaxVerifyReport {
   int resolution = 0, dirs = 0;
   double min_cos = 0.0;
   int bits = 0;                           // of the compressed codes
+  std::string section;                    // "parallax_entropy" or "parallax_compressed"
   bool raw_reference_from_asset = false;  // false: recomputed from the fabric
   uint64_t entries = 0;                   // texels x directions
   double rms_error = 0.0, max_error = 0.0, share_above_quarter = 0.0;  // per texel, texels
