@@ -2,6 +2,10 @@
 //   raw tables:        [--max-rel-error E] [--max-dir-error E]
 //   compressed tables: [--max-footprint-error E] [--footprint-min-side S] [--min-ratio R]
 //                      [--max-texel-error E] [--compressed-samples N] [--no-throughput]
+//   compressed parallax: [--max-parallax-rms-error E] [--max-parallax-error E]
+//                      [--max-parallax-share-above S] [--max-parallax-footprint-error E]
+//                      [--parallax-footprint-min-side S] [--min-parallax-ratio R]
+//                      [--parallax-samples N] [--no-parallax]
 //
 // Checks what the asset holds against the fabric it was baked from:
 //  - raw Integral-Radiance tables (when kept): SAT answers against direct summation over the same
@@ -12,10 +16,13 @@
 //    quadrature: per-table RMSE / max / PSNR, footprint
 //    error per size class, ratio, compressed vs raw query throughput, and the footprint side below
 //    which a renderer should evaluate texels directly (verify/compressed_verify.hpp,
-//    docs/compression.md "Verify").
+//    docs/compression.md "Verify");
+//  - the compressed parallax table (when present): per-texel and footprint Eq. 2 offset errors in
+//    texels against the asset's raw table when kept, else the table recomputed from the fabric,
+//    and the size ratio (verify/parallax_verify.hpp, docs/compression.md "Compressed parallax").
 // Exit codes: 0 passed, 5 a threshold exceeded (verification failed), 3 the asset is unreadable
-// or holds no Integral-Radiance tables (raw or compressed), 2 bad fabric or a fabric that does not
-// match the asset, 1 usage.
+// or holds nothing to verify (no Integral-Radiance tables, raw or compressed, and no compressed
+// parallax), 2 bad fabric or a fabric that does not match the asset, 1 usage.
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -28,6 +35,7 @@
 #include "formats/reader/radiance_layout.hpp"
 #include "formats/writer/open_asset.hpp"
 #include "verify/compressed_verify.hpp"
+#include "verify/parallax_verify.hpp"
 #include "verify/radiance_verify.hpp"
 
 namespace clothbake::cli {
@@ -49,6 +57,12 @@ struct VerifyOptions {
   double max_texel_error = 0;  // 0: not given
   int compressed_samples = verify::CompressedVerifyOptions{}.samples;
   bool no_throughput = false;
+  // Compressed parallax.
+  verify::ParallaxVerifyOptions parallax;
+  double max_parallax_error = 0;         // 0: not given
+  double max_parallax_share_above = -1;  // < 0: not given
+  double min_parallax_ratio = 0;         // 0: not given
+  bool no_parallax = false;
 };
 
 Action setup_verify(CLI::App& app) {
@@ -88,16 +102,46 @@ Action setup_verify(CLI::App& app) {
       ->check(CLI::Range(7, 1000000));
   app.add_flag("--no-throughput", o->no_throughput,
                "compressed tables: skip the compressed-vs-raw query throughput measurement");
+  app.add_option("--max-parallax-rms-error", o->parallax.max_rms_error,
+                 "compressed parallax: largest per-texel RMS Eq. 2 offset error accepted, texels "
+                 "(default 0.05)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-parallax-error", o->max_parallax_error,
+                 "compressed parallax: largest per-texel offset error accepted, texels (default: "
+                 "report only)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-parallax-share-above", o->max_parallax_share_above,
+                 "compressed parallax: largest share of (texel, direction) entries with an offset "
+                 "error above 0.25 texel accepted, [0, 1] (default: report only)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--max-parallax-footprint-error", o->parallax.max_footprint_error,
+                 "compressed parallax: largest RMS footprint-mean offset error accepted for "
+                 "footprints of side >= --parallax-footprint-min-side, texels (default 0.02)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--parallax-footprint-min-side", o->parallax.footprint_min_side,
+                 "compressed parallax: smallest footprint side (texels) held to "
+                 "--max-parallax-footprint-error (default 4)")
+      ->check(CLI::Range(1.0, 1e9));
+  app.add_option("--min-parallax-ratio", o->min_parallax_ratio,
+                 "compressed parallax: smallest raw/compressed size ratio accepted (default: "
+                 "report only)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--parallax-samples", o->parallax.samples,
+                 "compressed parallax: random footprints (default 1400)")
+      ->check(CLI::Range(7, 1000000));
+  app.add_flag("--no-parallax", o->no_parallax, "do not verify the compressed parallax table");
   return [o] {
     const reader::Asset asset = formats::open_asset(o->asset, reader::Verify::Checksums);
     const bool raw = verify::has_raw_tables(asset);
     const bool compressed = verify::has_compressed_tables(asset);
-    if (!raw && !compressed)
+    const bool parallax = !o->no_parallax && verify::has_compressed_parallax(asset);
+    if (!raw && !compressed && !parallax)
       throw Error(ExitCode::InvalidAsset,
                   o->asset +
-                      ": the asset has no Integral-Radiance tables, raw or compressed, to verify "
-                      "(bake it with the tables stage: without --stages, or with --stages "
-                      "tables,compress)");
+                      ": the asset has nothing to verify: no Integral-Radiance tables, raw or "
+                      "compressed, and no compressed parallax table (bake it with the tables "
+                      "stage: without --stages, or with --stages tables,compress; or with the "
+                      "parallax stage and compression on)");
     const Fabric fabric = load_fabric(o->fabric);
 
     std::optional<verify::RadianceVerifyReport> raw_report;
@@ -121,12 +165,24 @@ Action setup_verify(CLI::App& app) {
       options.throughput = !o->no_throughput;
       compressed_report = verify::verify_compressed(asset, fabric, options);
     }
+    std::optional<verify::ParallaxVerifyReport> parallax_report;
+    if (parallax) {
+      verify::ParallaxVerifyOptions options = o->parallax;
+      options.seed = o->seed;
+      if (o->max_parallax_error > 0) options.max_error = o->max_parallax_error;
+      if (o->max_parallax_share_above >= 0) options.max_share_above = o->max_parallax_share_above;
+      if (o->min_parallax_ratio > 0) options.min_ratio = o->min_parallax_ratio;
+      parallax_report = verify::verify_parallax(asset, fabric, options);
+    }
 
     std::vector<std::string> failures;
     if (raw_report) failures = raw_report->failures;
     if (compressed_report)
       failures.insert(failures.end(), compressed_report->failures.begin(),
                       compressed_report->failures.end());
+    if (parallax_report)
+      failures.insert(failures.end(), parallax_report->failures.begin(),
+                      parallax_report->failures.end());
     const bool passed = failures.empty();
     if (o->json) {
       // The raw-table report's keys at the top level (as before compression existed), the
@@ -144,6 +200,13 @@ Action setup_verify(CLI::App& app) {
       } else {
         doc["compressed"] = nlohmann::json::array();
       }
+      if (parallax_report)
+        doc["parallax"] = verify::parallax_report_json(*parallax_report);
+      else
+        doc["parallax"] = {
+            {"verified", false},
+            {"reason",
+             o->no_parallax ? "--no-parallax" : "the asset has no compressed parallax table"}};
       doc["passed"] = passed;
       doc["failures"] = failures;
       doc["asset"] = o->asset;
@@ -156,7 +219,8 @@ Action setup_verify(CLI::App& app) {
     } else {
       if (raw_report) std::cout << verify::report_text(*raw_report);
       if (compressed_report) std::cout << verify::compressed_report_text(*compressed_report);
-      if (!raw)
+      if (parallax_report) std::cout << verify::parallax_report_text(*parallax_report);
+      if (!raw && compressed)
         std::cout << "raw tables: not in the asset (the compressed tables were compared with raw "
                      "tables recomputed from the fabric)\n";
       std::cout << (passed ? "verification passed" : "VERIFICATION FAILED") << "\n";
@@ -173,8 +237,8 @@ Action setup_verify(CLI::App& app) {
 
 const bool registered = register_command(
     {"verify",
-     "Check an asset's Integral-Radiance tables (raw and compressed) against the fabric they "
-     "came from",
+     "Check an asset's Integral-Radiance tables (raw and compressed) and compressed parallax "
+     "against the fabric they came from",
      setup_verify});
 
 }  // namespace

@@ -5,9 +5,11 @@
 // Form (docs/compression.md, "Compressed parallax"): when compression is on (the default; the
 // bake's compress request, artifact kCompressSettingsArtifact, or [bake] compress), the table is
 // requantised to 8 bits per direction (compress/parallax_codes.hpp) if that meets [bake]
-// parallax_max_error (RMS offset error, texels; otherwise a warning and 16-bit codes, still
-// without SATs), and the raw codes and their SATs are written only with --keep-raw. `--no-compress`
-// (or compress = false) writes the raw codes and SATs alone, exactly as format 1.0 did.
+// parallax_max_error (RMS offset error, texels) and entropy-coded (compress/parallax_entropy.hpp,
+// section parallax_entropy, format 1.2); otherwise a warning and 16-bit codes (parallax_compressed,
+// format 1.1), still without SATs. The raw codes and their SATs are written only with --keep-raw.
+// `--no-compress` (or compress = false) writes the raw codes and SATs alone, exactly as format 1.0
+// did.
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/cache_support.hpp"
@@ -15,6 +17,7 @@
 #include "common/diagnostics.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/parallax_codes.hpp"
+#include "compress/parallax_entropy.hpp"
 #include "fabric/fabric.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "raycast/parallax.hpp"
@@ -80,7 +83,21 @@ void run_parallax(pipeline::StageContext& ctx) {
                           {"raw_bytes", uint64_t(table.depth.size()) * 6},
                           {"seconds", ctx.options().record_timings ? packed.seconds : 0.0}};
     meta["keep_raw"] = form.keep_raw;
-    sections = compress::compressed_parallax_sections(packed);
+    if (packed.bits == 8) {  // format 1.2: the 8-bit codes entropy-coded per direction
+      const compress::EntropyParallax coded = compress::entropy_code_parallax(packed);
+      sections = compress::entropy_parallax_sections(packed, coded);
+      nlohmann::json shifts = nlohmann::json::array();
+      for (const auto& [sx, sy] : coded.candidates)
+        shifts.push_back({sx, sy});
+      meta["compressed"]["section"] = "parallax_entropy";
+      meta["compressed"]["entropy_coded_bytes"] = coded.stream.size();
+      meta["compressed"]["shift_candidates"] = shifts;
+      meta["compressed"]["shifted_blocks"] = coded.shifted_blocks;
+      meta["compressed"]["entropy_seconds"] = ctx.options().record_timings ? coded.seconds : 0.0;
+    } else {
+      meta["compressed"]["section"] = "parallax_compressed";
+      sections = compress::compressed_parallax_sections(packed);
+    }
   }
   if (!compressed || form.keep_raw)
     for (auto& s : parallax_sections(std::move(table)))

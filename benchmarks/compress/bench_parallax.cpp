@@ -3,14 +3,21 @@
 // the content), opening the compressed form with every checksum, and the requantisation itself
 // (docs/performance.md, "Compressed parallax").
 //
-//   build/bin/bench_parallax --benchmark_min_time=0.3
+// The entropy-coded form (format 1.2) is measured on a real asset, since its cost depends on the
+// content: CLOTHBAKE_BENCH_ASSET=twill.cbk (a default bake); without it those benchmarks skip.
+//
+//   CLOTHBAKE_BENCH_ASSET=twill.cbk build/bin/bench_parallax --benchmark_min_time=0.3
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <random>
 
 #include "compress/parallax_codes.hpp"
+#include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "raycast/parallax.hpp"
@@ -127,6 +134,100 @@ void BM_OpenCompressedWithChecksums(benchmark::State& state) {
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(f.packed_size));
 }
 
+// The asset of CLOTHBAKE_BENCH_ASSET in memory, with its entropy-coded parallax opened and, for
+// the queries, every plane decoded and every SAT built (a renderer's steady state).
+struct EntropyFixture {
+  std::vector<uint64_t> bytes;
+  std::size_t size = 0;
+  reader::Asset asset;
+  reader::ParallaxView view;
+  bool ok = false;
+  EntropyFixture() {
+    const char* path = std::getenv("CLOTHBAKE_BENCH_ASSET");
+    if (!path) return;
+    std::ifstream in(path, std::ios::binary);
+    std::vector<char> b((std::istreambuf_iterator<char>(in)), {});
+    size = b.size();
+    bytes.resize((size + 7) / 8);
+    std::memcpy(bytes.data(), b.data(), size);
+    ok = asset.open_memory(bytes.data(), size, {reader::Verify::Structure}).ok() &&
+         view.open(asset, reader::ParallaxSource::Compressed).ok() && view.is_entropy_coded();
+  }
+};
+
+EntropyFixture& entropy() {
+  static EntropyFixture f;
+  return f;
+}
+
+void BM_EntropyOpenWithChecksums(benchmark::State& state) {
+  EntropyFixture& f = entropy();
+  if (!f.ok)
+    return state.SkipWithError("set CLOTHBAKE_BENCH_ASSET to an asset with parallax_entropy");
+  for (auto _ : state) {
+    reader::Asset a;
+    reader::ParallaxView v;
+    benchmark::DoNotOptimize(
+        a.open_memory(f.bytes.data(), f.size, {reader::Verify::Checksums}).ok() && v.open(a).ok());
+  }
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(f.size));
+}
+
+void BM_EntropyDecodeAll(benchmark::State& state) {
+  EntropyFixture& f = entropy();
+  if (!f.ok)
+    return state.SkipWithError("set CLOTHBAKE_BENCH_ASSET to an asset with parallax_entropy");
+  for (auto _ : state)
+    benchmark::DoNotOptimize(f.view.decode_all().ok());
+  const int64_t codes =
+      int64_t(f.view.dirs()) * f.view.dirs() * f.view.resolution() * f.view.resolution();
+  state.SetItemsProcessed(int64_t(state.iterations()) * codes);
+}
+
+void entropy_steady(EntropyFixture& f) {
+  static bool done = false;
+  if (done) return;
+  for (uint32_t b = 0; b < f.view.dirs() * f.view.dirs(); ++b)
+    (void)f.view.ensure_sat(b);
+  done = true;
+}
+
+void BM_TexelEntropy(benchmark::State& state) {
+  EntropyFixture& f = entropy();
+  if (!f.ok)
+    return state.SkipWithError("set CLOTHBAKE_BENCH_ASSET to an asset with parallax_entropy");
+  entropy_steady(f);
+  const auto p = positions();
+  const double v[3] = {0.3, -0.2, 0.9};
+  reader::ParallaxSample s;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    (void)f.view.depth(int64_t(p[2 * (i & 4095)]), int64_t(p[2 * (i & 4095) + 1]), v, &s);
+    benchmark::DoNotOptimize(s.r);
+    ++i;
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+
+void BM_FootprintEntropy(benchmark::State& state) {
+  EntropyFixture& f = entropy();
+  if (!f.ok)
+    return state.SkipWithError("set CLOTHBAKE_BENCH_ASSET to an asset with parallax_entropy");
+  entropy_steady(f);
+  const auto p = positions();
+  const double size = double(state.range(0)) + 0.5;
+  const double v[3] = {0.3, -0.2, 0.9};
+  reader::ParallaxSample s;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const double x0 = p[2 * (i & 4095)], y0 = p[2 * (i & 4095) + 1];
+    (void)f.view.footprint_depth({x0, y0, x0 + size, y0 + size}, v, &s);
+    benchmark::DoNotOptimize(s.r);
+    ++i;
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+
 void BM_Quantise(benchmark::State& state) {
   Fixture& f = fixture();
   for (auto _ : state) {
@@ -143,5 +244,9 @@ BENCHMARK(BM_TexelCompressed);
 BENCHMARK(BM_FootprintRaw)->Arg(1)->Arg(4)->Arg(64);
 BENCHMARK(BM_FootprintCompressed)->Arg(1)->Arg(4)->Arg(64);
 BENCHMARK(BM_OpenCompressedWithChecksums)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EntropyOpenWithChecksums)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EntropyDecodeAll)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_TexelEntropy);
+BENCHMARK(BM_FootprintEntropy)->Arg(1)->Arg(4)->Arg(64);
 BENCHMARK(BM_Quantise)->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK_MAIN();

@@ -19,12 +19,14 @@ namespace clothbake::reader {
 // minor number grows when section types, codecs or element types are added in a way that an
 // older reader can skip; an older reader reads a newer minor and ignores what it does not know.
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 1;  // 1.1: ParallaxCompressed
+inline constexpr uint16_t kFormatMinor = 2;  // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy
 
 // The minor version that introduced a section type: writers stamp an asset with the largest minor
 // its sections need (so that an asset without 1.1 sections stays a byte-identical 1.0 file).
 constexpr uint16_t format_minor_of(uint32_t section_type) {
-  return section_type == 0x0202 ? 1 : 0;  // SectionType::ParallaxCompressed: 1.1
+  return section_type == 0x0203   ? 2  // SectionType::ParallaxEntropy: 1.2
+         : section_type == 0x0202 ? 1  // SectionType::ParallaxCompressed: 1.1
+                                  : 0;
 }
 
 // "\x89CBK\r\n\x1a\n": the high byte catches 7-bit transfers, CR LF / LF catch newline conversion,
@@ -54,7 +56,8 @@ enum class SectionType : uint32_t {
   // Reserved for later stages; their payload layout is defined where they are written.
   ParallaxTable = 0x0200,             // parallax offsets per view direction and texel
   ParallaxSat = 0x0201,               // summed-area tables of the parallax offsets
-  ParallaxCompressed = 0x0202,        // PCA-compressed parallax table (format 1.1)
+  ParallaxCompressed = 0x0202,        // 8/16-bit per-direction parallax codes (format 1.1)
+  ParallaxEntropy = 0x0203,           // entropy-coded 8-bit parallax codes (format 1.2)
   VisibilityAsg = 0x0300,             // per-texel ASG visibility parameters
   AsgFitError = 0x0301,               // per-texel ASG fit error
   ClusterLabels = 0x0400,             // visibility cluster label map

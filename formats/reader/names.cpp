@@ -24,6 +24,7 @@ constexpr SectionName kSectionNames[] = {
     {SectionType::ParallaxTable, "parallax"},
     {SectionType::ParallaxSat, "parallax_sat"},
     {SectionType::ParallaxCompressed, "parallax_compressed"},
+    {SectionType::ParallaxEntropy, "parallax_entropy"},
     {SectionType::VisibilityAsg, "visibility_asg"},
     {SectionType::AsgFitError, "asg_fit_error"},
     {SectionType::ClusterLabels, "cluster_labels"},

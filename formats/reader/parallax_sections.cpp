@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "formats/reader/detail/open_sections.hpp"
+#include "formats/reader/parallax_entropy.hpp"
 #include "model/directions.hpp"
 
 namespace clothbake::reader {
@@ -20,40 +21,61 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 }  // namespace
 
 // The compressed form's on-demand SATs: one u32 inclusive SAT per direction (the ParallaxSat
-// layout), built once under its flag and published through the atomic pointer.
+// layout), built once under its flag and published through the atomic pointer; for the
+// entropy-coded form also the decoded planes, likewise.
 struct ParallaxView::Packed {
   explicit Packed(uint64_t dirs)
-      : flags(new std::once_flag[dirs]), sats(new std::atomic<uint32_t*>[dirs]) {
-    for (uint64_t d = 0; d < dirs; ++d)
+      : flags(new (std::nothrow) std::once_flag[dirs]),
+        sats(new (std::nothrow) std::atomic<uint32_t*>[dirs]),
+        plane_flags(new (std::nothrow) std::once_flag[dirs]),
+        planes(new (std::nothrow) std::atomic<uint8_t*>[dirs]) {
+    if (!flags || !sats || !plane_flags || !planes) return;
+    for (uint64_t d = 0; d < dirs; ++d) {
       sats[d].store(nullptr, std::memory_order_relaxed);
+      planes[d].store(nullptr, std::memory_order_relaxed);
+    }
     count = dirs;
   }
   ~Packed() {
-    for (uint64_t d = 0; d < count; ++d)
+    for (uint64_t d = 0; d < count; ++d) {
       delete[] sats[d].load(std::memory_order_relaxed);
+      delete[] planes[d].load(std::memory_order_relaxed);
+    }
   }
   Packed(const Packed&) = delete;
   Packed& operator=(const Packed&) = delete;
   uint64_t count = 0;
   std::unique_ptr<std::once_flag[]> flags;
   std::unique_ptr<std::atomic<uint32_t*>[]> sats;
+  std::unique_ptr<std::once_flag[]> plane_flags;
+  std::unique_ptr<std::atomic<uint8_t*>[]> planes;
   std::atomic<uint64_t> bytes{0};
 };
+
+namespace {
+// Any section of `type` with an instance below `instances`.
+bool any_instance(const Asset& asset, SectionType type, uint32_t instances) noexcept {
+  for (uint32_t i = 0; i < instances; ++i) {
+    SectionInfo unused;
+    if (asset.find(type, i, &unused).ok()) return true;
+  }
+  return false;
+}
+}  // namespace
 
 Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
   *this = ParallaxView();
   Status s;
+  const bool entropy = any_instance(asset, SectionType::ParallaxEntropy, 5);
   if (source == ParallaxSource::Compressed) {
-    s = open_compressed(asset);
+    s = entropy ? open_entropy(asset) : open_compressed(asset);
   } else {
     s = open_raw(asset);
     if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound) {
-      bool any = false;
-      for (uint32_t i = 0; i < 3 && !any; ++i) {
-        SectionInfo unused;
-        any = asset.find(SectionType::ParallaxCompressed, i, &unused).ok();
-      }
-      if (any) s = open_compressed(asset);
+      if (entropy)
+        s = open_entropy(asset);
+      else if (any_instance(asset, SectionType::ParallaxCompressed, 3))
+        s = open_compressed(asset);
     }
   }
   if (!s.ok()) *this = ParallaxView();
@@ -66,6 +88,189 @@ uint64_t ParallaxView::decoded_bytes() const noexcept {
 
 double ParallaxView::depth_step(uint32_t bin) const noexcept {
   return steps_ ? steps_[bin] : info_.depth_scale;
+}
+
+namespace {
+// The range checks of a CompressedParallaxInfoRecord (both compressed forms).
+Status check_compressed_record(const CompressedParallaxInfoRecord& info,
+                               const char* name) noexcept {
+  if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
+      info.dirs > kMaxParallaxDirs)
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "%s: resolution %u or directions %u out of range (1..%u, 1..%u)", name,
+                         unsigned(info.resolution), unsigned(info.dirs),
+                         unsigned(kMaxParallaxResolution), unsigned(kMaxParallaxDirs));
+  if (!(info.min_cos >= 0.0 && info.min_cos < 1.0) || !std::isfinite(info.reference_height) ||
+      !(info.max_offset >= 0.0 && std::isfinite(info.max_offset)) ||
+      !(info.rms_offset_error >= 0.0 && std::isfinite(info.rms_offset_error)) ||
+      !(info.max_offset_error >= 0.0 && std::isfinite(info.max_offset_error)) ||
+      !(info.max_depth_error >= 0.0 && std::isfinite(info.max_depth_error)))
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "%s: min_cos, reference height, max offset or an error out of range",
+                         name);
+  return {};
+}
+
+Status check_steps(const ArrayView<double>& steps, uint64_t d, const char* name) noexcept {
+  if (steps.rank != 1 || steps.dims[0] != d)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "%s instance 1 must be f64 {%llu} (one step per direction)", name,
+                         static_cast<unsigned long long>(d));
+  for (uint64_t i = 0; i < d; ++i)
+    if (!(steps.data[i] >= 0.0 && steps.data[i] <= 1.0))  // also NaN
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "%s: step of direction %llu is not in [0, 1] tile-side units", name,
+                           static_cast<unsigned long long>(i));
+  return {};
+}
+}  // namespace
+
+// Largest total of decoded planes the entropy form may describe (D * N^2 bytes): 4 GiB.
+constexpr uint64_t kMaxEntropyDecodedBytes = uint64_t(1) << 32;
+
+Status ParallaxView::open_entropy(const Asset& asset) noexcept {
+  const char* name = "parallax_entropy";
+  ArrayView<uint8_t> info_bytes;
+  ArrayView<double> steps;
+  Status s = detail::view_required_pair(
+      asset, {SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance},
+      {SectionType::ParallaxEntropy, kEntropyParallaxStepsInstance},
+      "this asset has no entropy-coded parallax table (parallax_entropy instances 0 to 3)",
+      "parallax_entropy: payload version must be 1 (this reader knows version 1)", &info_bytes,
+      &steps);
+  if (!s.ok()) return s;
+  if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
+      info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_entropy instance 0 must be u8 {1, 64} (one "
+                         "CompressedParallaxInfoRecord)");
+  CompressedParallaxInfoRecord info;
+  std::memcpy(&info, info_bytes.data, sizeof info);
+  if (info.flags != 0 || info.bits != 8)
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "parallax_entropy: bits %u / flags %u unknown to this reader (version "
+                         "1 has 8 / 0)",
+                         unsigned(info.bits), unsigned(info.flags));
+  s = check_compressed_record(info, name);
+  if (!s.ok()) return s;
+  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
+  s = check_steps(steps, d, name);
+  if (!s.ok()) return s;
+  ArrayView<uint64_t> offsets;
+  ArrayView<uint8_t> stream;
+  s = detail::view_required_pair(
+      asset, {SectionType::ParallaxEntropy, kEntropyParallaxOffsetsInstance},
+      {SectionType::ParallaxEntropy, kEntropyParallaxStreamInstance},
+      "this asset has no entropy-coded parallax table (parallax_entropy instance 2, the block "
+      "offsets, or 3, the blocks, is missing)",
+      "parallax_entropy: payload version must be 1 (this reader knows version 1)", &offsets,
+      &stream);
+  if (!s.ok()) return s;
+  if (offsets.rank != 1 || offsets.dims[0] != d + 1 || stream.rank != 1)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_entropy instance 2 must be u64 {%llu} (block offsets) and "
+                         "instance 3 u8 {bytes}",
+                         static_cast<unsigned long long>(d + 1));
+  if (offsets.data[0] != 0 || offsets.data[d] != stream.dims[0])
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "parallax_entropy: block offsets must run from 0 to the stream's size "
+                         "%llu",
+                         static_cast<unsigned long long>(stream.dims[0]));
+  for (uint64_t i = 0; i < d; ++i)
+    if (offsets.data[i + 1] < offsets.data[i])
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "parallax_entropy: block offsets decrease at direction %llu",
+                           static_cast<unsigned long long>(i));
+  ArrayView<uint16_t> tables;
+  bool have_tables = false;
+  s = detail::view_optional(asset, {SectionType::ParallaxEntropy, kEntropyParallaxTablesInstance},
+                            "parallax_entropy: payload version must be 1", &tables, &have_tables);
+  if (!s.ok()) return s;
+  if (!have_tables)
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no entropy-coded parallax table (parallax_entropy "
+                         "instance 4, the frequency tables, is missing)");
+  if (tables.rank != 3 || tables.dims[0] < 1 || tables.dims[0] > kMaxEntropyGroups ||
+      tables.dims[1] != uint32_t(kEntropyContexts) || tables.dims[2] != 256)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_entropy instance 4 must be u16 {groups, 5, 256} with 1 to "
+                         "65536 groups");
+  for (uint32_t g = 0; g < tables.dims[0]; ++g) {
+    const Status t = check_parallax_tables(tables.data + uint64_t(g) * kEntropyContexts * 256);
+    if (!t.ok())
+      return Status::error(ErrorCode::Malformed, Check::ValueRange, "group %u: %s", unsigned(g),
+                           t.message());
+  }
+  if (d * n * n > kMaxEntropyDecodedBytes)
+    return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
+                         "parallax_entropy: %llu directions of %llu^2 codes would decode to more "
+                         "than 4 GiB",
+                         static_cast<unsigned long long>(d), static_cast<unsigned long long>(n));
+  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
+  if (!packed || packed->count != d)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "parallax_entropy: cannot allocate the block directory");
+  info_ = ParallaxInfoRecord{};
+  info_.resolution = info.resolution;
+  info_.dirs = info.dirs;
+  info_.min_cos = info.min_cos;
+  info_.reference_height = info.reference_height;
+  info_.max_quantization_error = info.max_depth_error;
+  info_.max_offset = info.max_offset;
+  packed_info_ = info;
+  steps_ = steps.data;
+  offsets_ = offsets.data;
+  tables_ = tables.data;
+  groups_ = tables.dims[0];
+  stream_ = stream.data != nullptr ? stream.data : reinterpret_cast<const uint8_t*>("");
+  packed_ = std::move(packed);
+  return {};
+}
+
+bool ParallaxView::ensure_plane(uint32_t bin) const noexcept {
+  if (stream_ == nullptr) return true;
+  return plane8(bin) != nullptr;
+}
+
+const uint8_t* ParallaxView::plane8(uint32_t bin) const noexcept {
+  Packed& p = *packed_;
+  const uint8_t* ready = p.planes[bin].load(std::memory_order_acquire);
+  if (ready) return ready;
+  std::call_once(p.plane_flags[bin], [&] {
+    const uint64_t n = info_.resolution;
+    uint8_t* plane = new (std::nothrow) uint8_t[n * n];
+    ParallaxEntropyScratch* scratch = new (std::nothrow) ParallaxEntropyScratch;
+    if (plane && scratch) {
+      // A block that does not decode exactly is zero-filled by the decoder (decode_all says so).
+      (void)decode_parallax_block(stream_ + offsets_[bin], offsets_[bin + 1] - offsets_[bin],
+                                  tables_, groups_, uint32_t(n), plane, scratch);
+      p.bytes.fetch_add(n * n, std::memory_order_relaxed);
+      p.planes[bin].store(plane, std::memory_order_release);
+    } else {
+      delete[] plane;
+    }
+    delete scratch;
+  });
+  return p.planes[bin].load(std::memory_order_acquire);
+}
+
+Status ParallaxView::decode_all() const noexcept {
+  if (stream_ == nullptr) return {};
+  const uint64_t n = info_.resolution, d = uint64_t(info_.dirs) * info_.dirs;
+  std::unique_ptr<uint8_t[]> plane(new (std::nothrow) uint8_t[n * n]);
+  std::unique_ptr<ParallaxEntropyScratch> scratch(new (std::nothrow) ParallaxEntropyScratch);
+  if (!plane || !scratch)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "parallax_entropy: cannot allocate a plane to decode");
+  for (uint64_t i = 0; i < d; ++i) {
+    const Status s =
+        decode_parallax_block(stream_ + offsets_[i], offsets_[i + 1] - offsets_[i], tables_,
+                              groups_, uint32_t(n), plane.get(), scratch.get());
+    if (!s.ok())
+      return Status::error(ErrorCode::Malformed, Check::ValueRange, "direction %llu: %s",
+                           static_cast<unsigned long long>(i), s.message());
+  }
+  return {};
 }
 
 Status ParallaxView::open_compressed(const Asset& asset) noexcept {
@@ -146,7 +351,7 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
                            "tile-side units",
                            static_cast<unsigned long long>(i));
   auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
-  if (!packed)
+  if (!packed || packed->count != d)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_compressed: cannot allocate the SAT directory");
   info_ = ParallaxInfoRecord{};
@@ -169,16 +374,17 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
 
 bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
   if (!packed_) return true;
+  const uint8_t* decoded = nullptr;
+  if (stream_ && (decoded = plane8(bin)) == nullptr) return false;
   Packed& p = *packed_;
   std::call_once(p.flags[bin], [&] {
     const uint64_t n = info_.resolution;
     uint32_t* sat = new (std::nothrow) uint32_t[n * n];
     if (!sat) return;  // stays null: the query reports it
-    const uint64_t first = uint64_t(bin) * n * n;
     for (uint64_t y = 0; y < n; ++y) {
       uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
       for (uint64_t x = 0; x < n; ++x) {
-        row += code(first + y * n + x);
+        row += decoded ? uint32_t(decoded[y * n + x]) : code(bin, y * n + x);
         sat[y * n + x] = row + (y > 0 ? sat[(y - 1) * n + x] : 0u);
       }
     }
@@ -252,11 +458,16 @@ Status ParallaxView::open_raw(const Asset& asset) noexcept {
   return {};
 }
 
+uint32_t ParallaxView::bin_code(uint32_t bin, int64_t x, int64_t y) const noexcept {
+  const int64_t n = info_.resolution;
+  return code(bin, uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n)));
+}
+
 double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
   const uint64_t index =
       (uint64_t(bin) * uint64_t(n) + uint64_t(wrap(y, n))) * uint64_t(n) + uint64_t(wrap(x, n));
-  return -double(code(index)) * depth_step(bin);
+  return -double(code(bin, index - uint64_t(bin) * uint64_t(n) * uint64_t(n))) * depth_step(bin);
 }
 
 Status ParallaxView::view_direction(const double view[3], double o[3]) const noexcept {
@@ -287,6 +498,14 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
   const uint64_t n = info_.resolution;
   const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
   double r = 0.0;
+  if (stream_) {
+    for (int k = 0; k < 4; ++k)
+      if (weight[k] > 0.0) {
+        const uint8_t* p = plane8(uint32_t(bin[k]));
+        if (p) r += weight[k] * (-double(p[texel]) * steps_[bin[k]]);
+      }
+    return r;
+  }
   if (codes8_) {
     for (int k = 0; k < 4; ++k)
       if (weight[k] > 0.0)
@@ -355,8 +574,7 @@ double ParallaxView::prefix_integral(uint32_t bin, double x, double y) const noe
   if (fy > 0.0) value += fy * double(code_prefix_sum(bin, i, j1) - e00);
   if (fx > 0.0 && fy > 0.0) {
     // The texel (i, j) itself: its code times the covered fraction fx * fy.
-    const uint64_t texel = (uint64_t(bin) * n + j) * n + i;
-    value += fx * fy * double(code(texel));
+    value += fx * fy * double(code(bin, uint64_t(j) * n + i));
   }
   return value;
 }

@@ -30,6 +30,16 @@
 // at most 255 * 2^24 < 2^32 over any rectangle for N <= 4096: the SAT is exact there (larger N
 // is summed in bands like the raw form).
 //
+// Entropy-coded form (format 1.2; formats/reader/parallax_entropy.hpp has the block format,
+// compress/parallax_entropy.hpp writes it): the same 8-bit codes and steps, coded per direction:
+//   ParallaxEntropy instance 0: u8 {1, 64}   one CompressedParallaxInfoRecord (bits = 8)
+//   ParallaxEntropy instance 1: f64 {D}      step[d]
+//   ParallaxEntropy instance 2: u64 {D + 1}  block offsets into instance 3 (0, ..., its size)
+//   ParallaxEntropy instance 3: u8 {bytes}   the D blocks
+//   ParallaxEntropy instance 4: u16 {G, 5, 256} frequency tables of G block groups
+// The view decodes a direction's block the first time a query needs that direction (thread-safe,
+// once per direction, N^2 bytes owned), so that opening costs a check of the offsets only.
+//
 // Queries take the view direction as any finite non-zero vector; it is normalised and, below the
 // cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
 // direction is used both for the table lookup (bilinear between the 4 nearest bin centres) and in
@@ -111,7 +121,7 @@ static_assert(offsetof(CompressedParallaxInfoRecord, max_depth_error) == 56);
 enum class ParallaxSource {
   Auto,        // the raw table when the asset has one (exact), the compressed one otherwise
   Raw,         // the raw table only
-  Compressed,  // the compressed table only
+  Compressed,  // the compressed table only (entropy-coded when present, else 8/16-bit codes)
 };
 
 // The answer of a query.
@@ -134,10 +144,19 @@ class ParallaxView {
   bool is_open() const noexcept { return codes_ != nullptr || packed_ != nullptr; }
   bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
   bool is_compressed() const noexcept { return packed_ != nullptr; }
+  // True for the entropy-coded form (format 1.2).
+  bool is_entropy_coded() const noexcept { return stream_ != nullptr; }
   // Compressed form: its record (zero for the raw form).
   const CompressedParallaxInfoRecord& compressed_info() const noexcept { return packed_info_; }
-  // Bytes of the SATs the compressed form has built so far (0 for raw).
+  // Bytes of the SATs and decoded planes the compressed form has built so far (0 for raw).
   uint64_t decoded_bytes() const noexcept;
+  // Entropy-coded form: decodes the block of `bin` now (no-op for the other forms); false if it
+  // cannot be allocated. A block that does not decode exactly reads as zero codes (validate
+  // reports it: decode_all). Thread-safe. Precondition: bin < dirs^2.
+  bool ensure_plane(uint32_t bin) const noexcept;
+  // Entropy-coded form: decodes every block and reports the first that does not decode exactly
+  // (CBK-E021) or cannot be allocated (Unsupported). OK for the other forms.
+  Status decode_all() const noexcept;
   // The depth step of `bin` (tile-side units per code; the raw form's depth_scale for every bin).
   double depth_step(uint32_t bin) const noexcept;
 
@@ -145,6 +164,9 @@ class ParallaxView {
   uint32_t resolution() const noexcept { return info_.resolution; }
   uint32_t dirs() const noexcept { return info_.dirs; }
 
+  // The stored code of one bin at texel (x, y) (any integers: the tile wraps); the entropy form
+  // decodes the bin's block first. Precondition: bin < dirs^2.
+  uint32_t bin_code(uint32_t bin, int64_t x, int64_t y) const noexcept;
   // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2.
   double bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept;
   // sum over k < 4 with weight[k] > 0 of weight[k] * bin_depth(bin[k], x, y), wrapping (x, y)
@@ -181,19 +203,30 @@ class ParallaxView {
   double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
   double prefix_integral(uint32_t bin, double x, double y) const noexcept;
   const uint32_t* bin_sat(uint32_t bin) const noexcept;
-  uint32_t code(uint64_t index) const noexcept {
-    return codes_ ? uint32_t(codes_[index]) : uint32_t(codes8_[index]);
+  // Code of texel index t (y * N + x) in direction bin; 0 when an entropy block is unavailable.
+  uint32_t code(uint32_t bin, uint64_t t) const noexcept {
+    const uint64_t plane = uint64_t(info_.resolution) * info_.resolution;
+    if (codes_) return uint32_t(codes_[bin * plane + t]);
+    if (codes8_) return uint32_t(codes8_[bin * plane + t]);
+    const uint8_t* p = plane8(bin);
+    return p ? uint32_t(p[t]) : 0u;
   }
+  const uint8_t* plane8(uint32_t bin) const noexcept;  // entropy form: the decoded plane
 
   struct Packed;  // the compressed form's steps and on-demand SATs
   Status open_raw(const Asset& asset) noexcept;
   Status open_compressed(const Asset& asset) noexcept;
+  Status open_entropy(const Asset& asset) noexcept;
 
   ParallaxInfoRecord info_{};
   const uint16_t* codes_ = nullptr;
   const uint32_t* sat_ = nullptr;
   const uint8_t* codes8_ = nullptr;  // compressed form
   const double* steps_ = nullptr;    // compressed form, D values in the asset
+  const uint8_t* stream_ = nullptr;  // entropy form: the blocks
+  const uint64_t* offsets_ = nullptr;
+  const uint16_t* tables_ = nullptr;  // entropy form: groups_ x 5 x 256
+  uint32_t groups_ = 0;
   CompressedParallaxInfoRecord packed_info_{};
   std::shared_ptr<Packed> packed_;
 };

@@ -11,6 +11,7 @@
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/metadata_limits.hpp"
+#include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/reader/visibility_sections.hpp"
@@ -413,29 +414,37 @@ void check_parallax_sat(const Asset& asset, const ParallaxView& view, Reporter& 
 
 // A compressed parallax table beside the raw one must decode to it within its recorded depth
 // error (CBK-E022); codes of an all-zero direction (step 0) must be 0. O(D N^2).
+// The same for the entropy-coded form, after every block has decoded exactly (CBK-E021).
 void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, Reporter& r) {
   SectionInfo codes_info;
-  ArrayView<uint8_t> codes8;
-  ArrayView<uint16_t> codes16;
-  if (!asset.find(SectionType::ParallaxCompressed, kCompressedParallaxCodesInstance, &codes_info)
-           .ok() ||
-      (packed.compressed_info().bits == 8 ? !asset.view_of(codes_info, &codes8).ok()
-                                          : !asset.view_of(codes_info, &codes16).ok()))
+  const bool entropy = packed.is_entropy_coded();
+  const char* name = entropy ? "parallax_entropy" : "parallax_compressed";
+  if (!asset
+           .find(entropy ? SectionType::ParallaxEntropy : SectionType::ParallaxCompressed,
+                 entropy ? kEntropyParallaxStreamInstance : kCompressedParallaxCodesInstance,
+                 &codes_info)
+           .ok())
     return;
-  auto code = [&](uint64_t i) -> unsigned {
-    return codes8.data ? unsigned(codes8.data[i]) : unsigned(codes16.data[i]);
-  };
+  if (entropy) {
+    const Status s = packed.decode_all();
+    if (!s.ok()) {
+      r.report_status(s, codes_info.index);
+      return;
+    }
+  }
   const uint64_t n = packed.resolution(), dirs = uint64_t(packed.dirs()) * packed.dirs();
   for (uint64_t d = 0; d < dirs; ++d)
     if (packed.depth_step(uint32_t(d)) == 0.0)
-      for (uint64_t t = 0; t < n * n; ++t)
-        if (code(d * n * n + t) != 0) {
+      for (uint64_t t = 0; t < n * n; ++t) {
+        const unsigned c = packed.bin_code(uint32_t(d), int64_t(t % n), int64_t(t / n));
+        if (c != 0) {
           r.report(Check::ValueRange, codes_info.index,
-                   "parallax_compressed: direction %" PRIu64 " has step 0 but texel (%" PRIu64
-                   ", %" PRIu64 ") has code %u",
-                   d, t % n, t / n, code(d * n * n + t));
+                   "%s: direction %" PRIu64 " has step 0 but texel (%" PRIu64 ", %" PRIu64
+                   ") has code %u",
+                   name, d, t % n, t / n, c);
           return;
         }
+      }
   ParallaxView raw;
   if (!raw.open(asset, ParallaxSource::Raw).ok() || raw.resolution() != n ||
       raw.dirs() != packed.dirs())
@@ -447,9 +456,9 @@ void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, R
       const double b = packed.bin_depth(uint32_t(d), int64_t(t % n), int64_t(t / n));
       if (!(std::fabs(a - b) <= tolerance)) {
         r.report(kCheckCrossSection, codes_info.index,
-                 "parallax_compressed: direction %" PRIu64 " texel (%" PRIu64 ", %" PRIu64
+                 "%s: direction %" PRIu64 " texel (%" PRIu64 ", %" PRIu64
                  ") decodes to %.9g, the raw table has %.9g (recorded max error %.3g)",
-                 d, t % n, t / n, b, a, packed.compressed_info().max_depth_error);
+                 name, d, t % n, t / n, b, a, packed.compressed_info().max_depth_error);
         return;
       }
     }
@@ -481,13 +490,17 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
       if (parallax.has_sat()) check_parallax_sat(asset, parallax, r);
     }
   }
-  if (has_type(asset, SectionType::ParallaxCompressed)) {
+  if (has_type(asset, SectionType::ParallaxCompressed) ||
+      has_type(asset, SectionType::ParallaxEntropy)) {
+    // Compressed opens the entropy-coded form when present, else parallax_compressed (a writer
+    // stores one of them; a second one beside an entropy-coded table is not checked).
     ParallaxView packed;
     const Status s = packed.open(asset, ParallaxSource::Compressed);
     if (!s.ok()) {
       r.report_status(s, kNoSection);
     } else {
-      check_resolution("parallax_compressed", packed.resolution());
+      check_resolution(packed.is_entropy_coded() ? "parallax_entropy" : "parallax_compressed",
+                       packed.resolution());
       check_compressed_parallax(asset, packed, r);
     }
   }

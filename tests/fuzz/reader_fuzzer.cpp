@@ -64,6 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       const double n = parallax.resolution(), view[3] = {0.3, -0.7, 0.5};
       ParallaxSample sample;
       (void)parallax.depth(-1, int64_t(n), view, &sample);
+      (void)parallax.decode_all();  // the entropy-coded form: every block
       if (parallax.has_sat())
         (void)parallax.footprint_depth({-0.5, n - 0.25, n + 1.5, 2 * n}, view, &sample);
       sink = sink + uint64_t(sample.r < 0);

@@ -253,3 +253,81 @@ TEST_F(CliVerifyCompressed, AssetWithoutTablesGivesAClearMessage) {
   EXPECT_NE(r.err.find("no Integral-Radiance tables, raw or compressed"), std::string::npos)
       << r.err;
 }
+
+TEST_F(CliVerifyCompressed, CompressedParallaxIsVerifiedAgainstTheRecomputedTable) {
+  // Parallax alone: verify has no radiance tables to check but checks the compressed parallax
+  // against the table recomputed from the fabric.
+  const std::string asset = bake("p.cbk", "--stages parallax");
+  CliRun r = verify(asset, "--json --parallax-samples 140");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  const auto& p = doc["parallax"];
+  ASSERT_EQ(p["verified"], true) << p;
+  EXPECT_EQ(p["raw_reference"], "recomputed from the fabric");
+  EXPECT_EQ(p["resolution"], 32);
+  EXPECT_EQ(p["dirs"], 8);
+  EXPECT_EQ(p["entries"].get<uint64_t>(), 32u * 32u * 64u);
+  const double rms = p["texel"]["rms_offset_error_texels"].get<double>();
+  const double max = p["texel"]["max_offset_error_texels"].get<double>();
+  EXPECT_LE(rms, 0.05);
+  EXPECT_LE(rms, max);
+  if (p["bits"] == 8) {
+    EXPECT_GT(rms, 0.0) << "8-bit codes are lossy";
+  }
+  // Raw form: 6 bytes per entry plus the info record.
+  EXPECT_EQ(p["raw_bytes"].get<uint64_t>(), 64u + 6u * 32u * 32u * 64u);
+  EXPECT_NEAR(p["ratio"].get<double>(),
+              p["raw_bytes"].get<double>() / p["compressed_bytes"].get<double>(), 1e-9);
+  ASSERT_GE(p["footprints"].size(), 4u);
+  for (const auto& c : p["footprints"]) {
+    EXPECT_GT(c["footprints"].get<int>(), 0) << c;
+    EXPECT_LE(c["rms_offset_error_texels"].get<double>(),
+              c["max_offset_error_texels"].get<double>());
+  }
+  r = verify(asset, "--parallax-samples 140");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("parallax (compressed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("recomputed from the fabric"), std::string::npos) << r.out;
+
+  // Planted thresholds the asset cannot meet: exit 5, each failure named.
+  r = verify(asset, "--parallax-samples 140 --min-parallax-ratio 1000000");
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_NE(r.err.find("verification failed: parallax: size ratio"), std::string::npos) << r.err;
+  if (rms > 0.0) {
+    r = verify(asset,
+               "--parallax-samples 140 --json --max-parallax-rms-error " + std::to_string(rms / 2));
+    EXPECT_EQ(r.code, 5) << r.err;
+    const auto bad = nlohmann::json::parse(r.out);
+    EXPECT_EQ(bad["passed"], false);
+    EXPECT_EQ(bad["parallax"]["passed"], false);
+    EXPECT_NE(r.err.find("parallax: per-texel RMS offset error"), std::string::npos) << r.err;
+    r = verify(asset, "--parallax-samples 140 --max-parallax-error " + std::to_string(max / 2));
+    EXPECT_EQ(r.code, 5) << r.err;
+    r = verify(asset,
+               "--parallax-samples 140 --parallax-footprint-min-side 1 "
+               "--max-parallax-footprint-error 1e-12");
+    EXPECT_EQ(r.code, 5) << r.err;
+    EXPECT_NE(r.err.find("parallax: footprint class 1:"), std::string::npos) << r.err;
+  }
+  // --no-parallax leaves nothing to verify in this asset.
+  EXPECT_EQ(verify(asset, "--no-parallax").code, 3);
+  EXPECT_EQ(verify(asset, "--max-parallax-share-above 2").code, 1);
+}
+
+TEST_F(CliVerifyCompressed, KeptRawParallaxGivesTheBakesOwnError) {
+  const std::string asset = bake("pr.cbk", "--keep-raw");
+  const CliRun r = verify(asset, "--json --no-throughput --samples 14 --parallax-samples 70");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto p = nlohmann::json::parse(r.out)["parallax"];
+  EXPECT_EQ(p["raw_reference"], "asset");
+  // The same raw table as the bake's: verify measures exactly what the stage recorded.
+  const CliRun info = run("info " + asset + " --json");
+  ASSERT_EQ(info.code, 0) << info.err;
+  const auto meta = nlohmann::json::parse(info.out);
+  const auto& claimed = meta["metadata"]["parameters"]["parallax"]["compressed"];
+  ASSERT_TRUE(claimed.is_object()) << meta.dump().substr(0, 2000);
+  EXPECT_NEAR(p["texel"]["rms_offset_error_texels"].get<double>(),
+              claimed["rms_offset_error_texels"].get<double>(), 1e-9);
+  EXPECT_NEAR(p["texel"]["max_offset_error_texels"].get<double>(),
+              claimed["max_offset_error_texels"].get<double>(), 1e-9);
+}

@@ -1,0 +1,257 @@
+// Encoder of the entropy-coded parallax section (parallax_entropy.hpp).
+#include "compress/parallax_entropy.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "common/error.hpp"
+#include "formats/reader/parallax_entropy.hpp"
+#include "formats/reader/parallax_sections.hpp"
+#include "formats/writer/asset_writer.hpp"
+
+namespace clothbake::compress {
+namespace {
+
+using reader::kEntropyContexts;
+using reader::kRansLow;
+using reader::kRansScale;
+using reader::kRansScaleBits;
+
+// Counts scaled to sum to 4096, every present symbol at least 1 (deterministic).
+void normalise(const uint64_t* counts, uint16_t* freq) {
+  uint64_t total = 0;
+  for (int s = 0; s < 256; ++s)
+    total += counts[s];
+  std::memset(freq, 0, 256 * sizeof(uint16_t));
+  if (total == 0) return;
+  int64_t sum = 0;
+  for (int s = 0; s < 256; ++s)
+    if (counts[s] > 0) {
+      const uint64_t f = (counts[s] * kRansScale + total / 2) / total;
+      freq[s] = uint16_t(std::max<uint64_t>(1, std::min<uint64_t>(f, kRansScale)));
+      sum += freq[s];
+    }
+  while (sum != int64_t(kRansScale)) {  // adjust the largest frequency (ties: lowest symbol)
+    int best = 0;
+    for (int s = 1; s < 256; ++s)
+      if (freq[s] > freq[best]) best = s;
+    if (sum > int64_t(kRansScale)) {
+      if (freq[best] <= 1) break;  // cannot happen: at most 256 symbols of frequency 1
+      --freq[best];
+      --sum;
+    } else {
+      ++freq[best];
+      ++sum;
+    }
+  }
+}
+
+void put16(std::vector<uint8_t>& out, uint32_t v) {
+  out.push_back(uint8_t(v));
+  out.push_back(uint8_t(v >> 8));
+}
+
+}  // namespace
+
+std::vector<uint64_t> parallax_residual_counts(const uint8_t* plane, uint32_t n, uint32_t sx,
+                                               uint32_t sy) {
+  std::vector<uint64_t> counts(std::size_t(kEntropyContexts) * 256, 0);
+  for (uint32_t y = 0; y < n; ++y)
+    for (uint32_t x = 0; x < n; ++x) {
+      const reader::EntropyPrediction p = reader::predict_parallax_code(plane, n, x, y, sx, sy);
+      ++counts[std::size_t(p.context) * 256 + uint8_t(plane[uint64_t(y) * n + x] - p.value)];
+    }
+  return counts;
+}
+
+std::vector<uint16_t> parallax_frequencies(const std::vector<uint64_t>& counts) {
+  std::vector<uint16_t> freq(std::size_t(kEntropyContexts) * 256, 0);
+  for (int c = 0; c < kEntropyContexts; ++c)
+    normalise(counts.data() + std::size_t(c) * 256, freq.data() + std::size_t(c) * 256);
+  return freq;
+}
+
+std::vector<uint8_t> encode_parallax_block(const uint8_t* plane, uint32_t n, uint32_t sx,
+                                           uint32_t sy, uint32_t group, const uint16_t* freq) {
+  const uint64_t count = uint64_t(n) * n;
+  std::vector<uint8_t> ctx(count), sym(count);
+  for (uint32_t y = 0; y < n; ++y)
+    for (uint32_t x = 0; x < n; ++x) {
+      const reader::EntropyPrediction p = reader::predict_parallax_code(plane, n, x, y, sx, sy);
+      const uint64_t i = uint64_t(y) * n + x;
+      ctx[i] = uint8_t(p.context);
+      sym[i] = uint8_t(plane[i] - p.value);
+    }
+  uint16_t start[kEntropyContexts][256];
+  for (int c = 0; c < kEntropyContexts; ++c) {
+    uint32_t total = 0;
+    for (int s = 0; s < 256; ++s) {
+      start[c][s] = uint16_t(total);
+      total += freq[c * 256 + s];
+    }
+  }
+  std::vector<uint8_t> out;
+  out.reserve(64 + count / 4);
+  put16(out, sx);
+  put16(out, sy);
+  put16(out, group);
+  put16(out, 0);  // flags
+  // rANS, symbols in reverse; the decoder reads the final state, then the bytes backwards.
+  std::vector<uint8_t> emitted;
+  emitted.reserve(count / 4);
+  uint32_t x = kRansLow;
+  for (uint64_t i = count; i-- > 0;) {
+    const uint32_t f = freq[ctx[i] * 256 + sym[i]], st = start[ctx[i]][sym[i]];
+    if (f == 0) throw_internal_error("encode_parallax_block: a residual without a frequency");
+    const uint32_t x_max = ((kRansLow >> kRansScaleBits) << 8) * f;
+    while (x >= x_max) {
+      emitted.push_back(uint8_t(x));
+      x >>= 8;
+    }
+    x = ((x / f) << kRansScaleBits) + (x % f) + st;
+  }
+  for (int k = 0; k < 4; ++k)
+    out.push_back(uint8_t(x >> (8 * k)));
+  out.insert(out.end(), emitted.rbegin(), emitted.rend());
+  return out;
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8_t* plane,
+                                                                     uint32_t n, int count) {
+  const uint32_t samples = std::min<uint32_t>(n, 64), sample_step = std::max<uint32_t>(1, n / 64);
+  const uint32_t shift_step = std::max<uint32_t>(1, n / 256);
+  struct Scored {
+    double score;
+    uint32_t sx, sy;
+  };
+  std::vector<Scored> scored;
+  for (uint32_t sy = 0; sy < n; sy += shift_step)
+    for (uint32_t sx = 0; sx < n; sx += shift_step) {
+      if (sx == 0 && sy == 0) continue;
+      uint32_t match = 0;
+      for (uint32_t j = 0; j < samples; ++j)
+        for (uint32_t i = 0; i < samples; ++i) {
+          const uint32_t x = i * sample_step, y = j * sample_step;
+          const uint32_t rx = (x + n - sx) % n, ry = (y + n - sy) % n;
+          match += plane[uint64_t(y) * n + x] == plane[uint64_t(ry) * n + rx];
+        }
+      const double share = double(match) / double(samples * samples);
+      if (share < 0.5) continue;
+      const double causal = sy > 0 ? double(n - sy) / n : double(n - sx) / n;
+      scored.push_back({share * causal, sx, sy});
+    }
+  std::stable_sort(scored.begin(), scored.end(),
+                   [](const Scored& a, const Scored& b) { return a.score > b.score; });
+  std::vector<std::pair<uint32_t, uint32_t>> out;
+  for (const Scored& s : scored) {
+    if (int(out.size()) >= count) break;
+    out.push_back({s.sx, s.sy});
+  }
+  return out;
+}
+
+EntropyParallax entropy_code_parallax(const QuantisedParallax& packed) {
+  const auto begin = std::chrono::steady_clock::now();
+  if (packed.bits != 8) throw_internal_error("entropy_code_parallax: needs 8-bit codes");
+  const uint32_t n = uint32_t(packed.resolution);
+  const std::size_t d_count = std::size_t(packed.dirs) * packed.dirs;
+  const uint64_t plane = uint64_t(n) * n;
+  EntropyParallax out;
+  {
+    const int mid = packed.dirs / 2;
+    const std::size_t d = std::size_t(mid) * packed.dirs + mid;
+    out.candidates = parallax_shift_candidates(packed.codes.data() + d * plane, n);
+  }
+  // Shift per block by the entropy of its own residuals (an estimate of its coded size).
+  struct Choice {
+    uint32_t sx = 0, sy = 0;
+    std::vector<uint64_t> counts;
+  };
+  std::vector<Choice> choice(d_count);
+  auto entropy_bits = [](const std::vector<uint64_t>& counts) {
+    double bits = 0.0;
+    for (int c = 0; c < kEntropyContexts; ++c) {
+      uint64_t total = 0;
+      for (int s = 0; s < 256; ++s)
+        total += counts[std::size_t(c) * 256 + s];
+      for (int s = 0; s < 256; ++s)
+        if (const uint64_t k = counts[std::size_t(c) * 256 + s])
+          bits -= double(k) * std::log2(double(k) / double(total));
+    }
+    return bits;
+  };
+  tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
+    const uint8_t* codes = packed.codes.data() + d * plane;
+    Choice best{0, 0, parallax_residual_counts(codes, n, 0, 0)};
+    double best_bits = entropy_bits(best.counts);
+    for (const auto& [sx, sy] : out.candidates) {
+      std::vector<uint64_t> c = parallax_residual_counts(codes, n, sx, sy);
+      const double bits = entropy_bits(c);
+      if (bits < best_bits) {
+        best_bits = bits;
+        best = {sx, sy, std::move(c)};
+      }
+    }
+    choice[d] = std::move(best);
+  });
+  // One table set per row of the direction grid (counts summed in block order: deterministic).
+  const uint32_t dirs = uint32_t(packed.dirs);
+  out.groups = dirs;
+  out.tables.assign(std::size_t(dirs) * kEntropyContexts * 256, 0);
+  for (uint32_t g = 0; g < dirs; ++g) {
+    std::vector<uint64_t> sum(std::size_t(kEntropyContexts) * 256, 0);
+    for (uint32_t i = 0; i < dirs; ++i) {
+      const Choice& c = choice[std::size_t(g) * dirs + i];
+      for (std::size_t k = 0; k < sum.size(); ++k)
+        sum[k] += c.counts[k];
+    }
+    const std::vector<uint16_t> f = parallax_frequencies(sum);
+    std::copy(f.begin(), f.end(), out.tables.begin() + std::ptrdiff_t(g) * f.size());
+  }
+  std::vector<std::vector<uint8_t>> blocks(d_count);
+  std::vector<uint8_t> shifted(d_count, 0);
+  tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
+    const uint32_t g = uint32_t(d / dirs);
+    blocks[d] =
+        encode_parallax_block(packed.codes.data() + d * plane, n, choice[d].sx, choice[d].sy, g,
+                              out.tables.data() + std::size_t(g) * kEntropyContexts * 256);
+    shifted[d] = (choice[d].sx | choice[d].sy) != 0;
+  });
+  out.offsets.assign(d_count + 1, 0);
+  for (std::size_t d = 0; d < d_count; ++d) {
+    out.offsets[d + 1] = out.offsets[d] + blocks[d].size();
+    out.shifted_blocks += shifted[d];
+  }
+  out.stream.reserve(out.offsets.back());
+  for (auto& b : blocks)
+    out.stream.insert(out.stream.end(), b.begin(), b.end());
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+  return out;
+}
+
+std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& p,
+                                                        const EntropyParallax& coded) {
+  std::vector<formats::Section> out = compressed_parallax_sections(p);  // info, steps, codes
+  out.pop_back();                                                       // not the plain codes
+  for (auto& s : out)
+    s.type = reader::SectionType::ParallaxEntropy;
+  const uint32_t d = uint32_t(p.dirs * p.dirs);
+  if (coded.stream.size() > 0xFFFFFFFFull)
+    throw_input_error("parallax: the entropy-coded table exceeds 4 GiB");
+  out.push_back(formats::make_array_section<uint64_t>(reader::SectionType::ParallaxEntropy,
+                                                      reader::kEntropyParallaxOffsetsInstance,
+                                                      coded.offsets, {d + 1}));
+  out.push_back(formats::make_array_section<uint8_t>(
+      reader::SectionType::ParallaxEntropy, reader::kEntropyParallaxStreamInstance, coded.stream,
+      {uint32_t(coded.stream.size())}));
+  out.push_back(formats::make_array_section<uint16_t>(
+      reader::SectionType::ParallaxEntropy, reader::kEntropyParallaxTablesInstance, coded.tables,
+      {coded.groups, uint32_t(reader::kEntropyContexts), 256u}));
+  return out;
+}
+
+}  // namespace clothbake::compress

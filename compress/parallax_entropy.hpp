@@ -1,0 +1,59 @@
+// Encoder of the entropy-coded parallax section (format 1.2, parallax_entropy 0x0203; the block
+// format and the decoder: formats/reader/parallax_entropy.hpp; why: docs/compression.md,
+// "Entropy-coded parallax").
+//
+// Input: the 8-bit per-direction codes of compress/parallax_codes.hpp (bits = 8). Each direction
+// is one block, coded independently (so that a reader decodes only the directions it uses). For
+// each block the encoder estimates the coded size (the entropy of its residuals) without a shift
+// and with each candidate shift and keeps the smallest; the candidates are the tile's
+// translational self-similarities, found once per table on one direction's codes (the shifts
+// (sx, sy) with the most exactly repeated codes). The frequency tables are then those of each
+// group of blocks (one group per row j of the direction grid), and every block is coded with its
+// group's tables.
+//
+// Deterministic: blocks are coded in parallel (TBB) but each one's bytes depend only on its codes
+// and the candidate list, which is computed serially. C++20.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "compress/parallax_codes.hpp"
+
+namespace clothbake::compress {
+
+struct EntropyParallax {
+  std::vector<uint64_t> offsets;  // D + 1 block offsets into stream
+  std::vector<uint8_t> stream;    // the blocks, concatenated
+  std::vector<uint16_t> tables;   // groups x 5 x 256 frequencies
+  uint32_t groups = 0;
+  std::vector<std::pair<uint32_t, uint32_t>> candidates;  // the shifts tried
+  uint32_t shifted_blocks = 0;                            // blocks that use a shift
+  double seconds = 0.0;
+};
+
+// Residual counts of a plane with shift (sx, sy): 5 x 256 values.
+std::vector<uint64_t> parallax_residual_counts(const uint8_t* plane, uint32_t n, uint32_t sx,
+                                               uint32_t sy);
+// 5 x 256 frequencies summing to 4096 per context (0 for an unused context) from counts.
+std::vector<uint16_t> parallax_frequencies(const std::vector<uint64_t>& counts);
+// Encodes one plane (n * n codes) with shift (sx, sy) ((0, 0): none) as a block of `group`, whose
+// tables `freq` (5 x 256) must give every residual of the plane a non-zero frequency. Exposed for
+// tests.
+std::vector<uint8_t> encode_parallax_block(const uint8_t* plane, uint32_t n, uint32_t sx,
+                                           uint32_t sy, uint32_t group, const uint16_t* freq);
+
+// The candidate shifts of a plane: up to `count` shifts (sx, sy), sy in [1, N) or sy = 0 and sx
+// in [1, N), whose exact-repeat share over a 1/4 x 1/4 subsample is at least 1/2, best first.
+std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8_t* plane,
+                                                                     uint32_t n, int count = 3);
+
+// Codes every direction of an 8-bit table. Precondition: packed.bits == 8.
+EntropyParallax entropy_code_parallax(const QuantisedParallax& packed);
+
+// ParallaxEntropy instances 0 (info, bits 8), 1 (steps), 2 (offsets), 3 (stream), 4 (tables).
+std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& packed,
+                                                        const EntropyParallax& coded);
+
+}  // namespace clothbake::compress
