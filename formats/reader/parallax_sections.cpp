@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "formats/reader/detail/open_sections.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 #include "model/directions.hpp"
 
 namespace clothbake::reader {
@@ -23,7 +24,10 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 // layout), built once under its flag and published through the atomic pointer.
 struct ParallaxView::Packed {
   explicit Packed(uint64_t dirs)
-      : flags(new std::once_flag[dirs]), sats(new std::atomic<uint32_t*>[dirs]) {
+      : flags(new (std::nothrow) std::once_flag[dirs]),
+        sats(new (std::nothrow) std::atomic<uint32_t*>[dirs]),
+        plane(new (std::nothrow) int32_t[dirs]) {
+    if (!flags || !sats || !plane) return;
     for (uint64_t d = 0; d < dirs; ++d)
       sats[d].store(nullptr, std::memory_order_relaxed);
     count = dirs;
@@ -37,24 +41,31 @@ struct ParallaxView::Packed {
   uint64_t count = 0;
   std::unique_ptr<std::once_flag[]> flags;
   std::unique_ptr<std::atomic<uint32_t*>[]> sats;
+  std::unique_ptr<int32_t[]> plane;  // planned form: bin -> stored plane, -1 = left out
   std::atomic<uint64_t> bytes{0};
 };
 
 Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
   *this = ParallaxView();
   Status s;
+  auto has = [&](SectionType type) {
+    for (uint32_t i = 0; i < 3; ++i) {
+      SectionInfo unused;
+      if (asset.find(type, i, &unused).ok()) return true;
+    }
+    return false;
+  };
+  // The compressed form of the asset: the full one, else the planned one (format 1.2).
+  const SectionType packed_type =
+      !has(SectionType::ParallaxCompressed) && has(SectionType::ParallaxPlanned)
+          ? SectionType::ParallaxPlanned
+          : SectionType::ParallaxCompressed;
   if (source == ParallaxSource::Compressed) {
-    s = open_compressed(asset);
+    s = open_compressed(asset, packed_type);
   } else {
     s = open_raw(asset);
-    if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound) {
-      bool any = false;
-      for (uint32_t i = 0; i < 3 && !any; ++i) {
-        SectionInfo unused;
-        any = asset.find(SectionType::ParallaxCompressed, i, &unused).ok();
-      }
-      if (any) s = open_compressed(asset);
-    }
+    if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound && has(packed_type))
+      s = open_compressed(asset, packed_type);
   }
   if (!s.ok()) *this = ParallaxView();
   return s;
@@ -65,16 +76,34 @@ uint64_t ParallaxView::decoded_bytes() const noexcept {
 }
 
 double ParallaxView::depth_step(uint32_t bin) const noexcept {
-  return steps_ ? steps_[bin] : info_.depth_scale;
+  if (!covers(bin)) return 0.0;
+  return steps_ ? steps_[plane(bin)] : info_.depth_scale;
 }
 
-Status ParallaxView::open_compressed(const Asset& asset) noexcept {
+uint32_t ParallaxView::stored_dirs() const noexcept {
+  if (!plane_) return info_.dirs * info_.dirs;
+  uint32_t k = 0;
+  for (uint32_t b = 0; b < info_.dirs * info_.dirs; ++b)
+    k += plane_[b] >= 0 ? 1u : 0u;
+  return k;
+}
+
+Status ParallaxView::out_of_plan(int bin) const noexcept {
+  return Status::error(ErrorCode::OutOfPlan, Check::None,
+                       "parallax: view direction bin %d was left out of this scene-planned asset "
+                       "(bin_map instance 1)",
+                       bin);
+}
+
+Status ParallaxView::open_compressed(const Asset& asset, SectionType type) noexcept {
+  const bool planned = type == SectionType::ParallaxPlanned;
   ArrayView<uint8_t> info_bytes;
   ArrayView<double> steps;
   Status s = detail::view_required_pair(
-      asset, {SectionType::ParallaxCompressed, kCompressedParallaxInfoInstance},
-      {SectionType::ParallaxCompressed, kCompressedParallaxStepsInstance},
-      "this asset has no compressed parallax table (parallax_compressed instances 0, 1 and 2)",
+      asset, {type, kCompressedParallaxInfoInstance}, {type, kCompressedParallaxStepsInstance},
+      planned ? "this asset has no planned parallax table (parallax_planned instances 0, 1 and 2)"
+              : "this asset has no compressed parallax table (parallax_compressed instances 0, 1 "
+                "and 2)",
       "parallax_compressed: payload version must be 1 (this reader knows version 1)", &info_bytes,
       &steps);
   if (!s.ok()) return s;
@@ -94,8 +123,7 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
   ArrayView<uint8_t> codes;
   ArrayView<uint16_t> codes16;
   bool have_codes = false;
-  const detail::SectionKey codes_key{SectionType::ParallaxCompressed,
-                                     kCompressedParallaxCodesInstance};
+  const detail::SectionKey codes_key{type, kCompressedParallaxCodesInstance};
   s = info.bits == 8 ? detail::view_optional(asset, codes_key,
                                              "parallax_compressed: payload version must be 1",
                                              &codes, &have_codes)
@@ -127,7 +155,17 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
     return Status::error(ErrorCode::Malformed, Check::ValueRange,
                          "parallax_compressed: min_cos, reference height, max offset or an error "
                          "out of range");
-  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
+  const uint64_t n = info.resolution, bins = uint64_t(info.dirs) * info.dirs;
+  uint64_t d = bins;  // stored planes
+  BinMapView map;
+  if (planned) {
+    s = read_bin_map(asset, kViewBinMap, info.dirs, &map);
+    if (!s.ok()) return s;
+    if (!map.present())
+      return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                           "parallax_planned needs bin_map instance 1 (its view directions)");
+    d = map.kept;
+  }
   if (steps.rank != 1 || steps.dims[0] != d)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
                          "parallax_compressed instance 1 must be f64 {%llu} (one step per "
@@ -145,8 +183,8 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
                            "parallax_compressed: step of direction %llu is not in [0, 1] "
                            "tile-side units",
                            static_cast<unsigned long long>(i));
-  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
-  if (!packed)
+  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(bins));
+  if (!packed || packed->count == 0)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_compressed: cannot allocate the SAT directory");
   info_ = ParallaxInfoRecord{};
@@ -163,6 +201,12 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
   else
     codes_ = codes16.data;
   steps_ = steps.data;
+  if (planned) {
+    int32_t next = 0;
+    for (uint64_t b = 0; b < bins; ++b)
+      packed->plane[b] = map.covers(uint32_t(b)) ? next++ : -1;
+    plane_ = packed->plane.get();
+  }
   packed_ = std::move(packed);
   return {};
 }
@@ -174,7 +218,8 @@ bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
     const uint64_t n = info_.resolution;
     uint32_t* sat = new (std::nothrow) uint32_t[n * n];
     if (!sat) return;  // stays null: the query reports it
-    const uint64_t first = uint64_t(bin) * n * n;
+    if (!covers(bin)) return;
+    const uint64_t first = plane(bin) * n * n;
     for (uint64_t y = 0; y < n; ++y) {
       uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
       for (uint64_t x = 0; x < n; ++x) {
@@ -254,8 +299,9 @@ Status ParallaxView::open_raw(const Asset& asset) noexcept {
 
 double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
+  if (!covers(bin)) return 0.0;
   const uint64_t index =
-      (uint64_t(bin) * uint64_t(n) + uint64_t(wrap(y, n))) * uint64_t(n) + uint64_t(wrap(x, n));
+      (plane(bin) * uint64_t(n) + uint64_t(wrap(y, n))) * uint64_t(n) + uint64_t(wrap(x, n));
   return -double(code(index)) * depth_step(bin);
 }
 
@@ -287,6 +333,14 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
   const uint64_t n = info_.resolution;
   const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
   double r = 0.0;
+  if (plane_) {  // planned: through the plane map (uncovered bins count 0; callers check)
+    for (int k = 0; k < 4; ++k)
+      if (weight[k] > 0.0 && plane_[bin[k]] >= 0) {
+        const uint64_t p = uint64_t(plane_[bin[k]]);
+        r += weight[k] * (-double(code(p * n * n + texel)) * steps_[p]);
+      }
+    return r;
+  }
   if (codes8_) {
     for (int k = 0; k < 4; ++k)
       if (weight[k] > 0.0)
@@ -309,6 +363,8 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  for (int k = 0; k < 4; ++k)
+    if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
   double r = 0.0;
   for (int k = 0; k < 4; ++k)
     if (w.weight[k] > 0.0) r += w.weight[k] * bin_depth(uint32_t(w.index[k]), x, y);
@@ -355,7 +411,7 @@ double ParallaxView::prefix_integral(uint32_t bin, double x, double y) const noe
   if (fy > 0.0) value += fy * double(code_prefix_sum(bin, i, j1) - e00);
   if (fx > 0.0 && fy > 0.0) {
     // The texel (i, j) itself: its code times the covered fraction fx * fy.
-    const uint64_t texel = (uint64_t(bin) * n + j) * n + i;
+    const uint64_t texel = (plane(bin) * n + j) * n + i;
     value += fx * fy * double(code(texel));
   }
   return value;
@@ -390,6 +446,8 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  for (int k = 0; k < 4; ++k)
+    if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
   double sum = 0.0;
   if (steps_ == nullptr) {  // raw: one depth scale
     for (int k = 0; k < 4; ++k)
@@ -401,7 +459,8 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
         if (!ensure_sat(uint32_t(w.index[k])))
           return Status::error(ErrorCode::Unsupported, Check::None,
                                "parallax: cannot allocate the SAT of direction %d", w.index[k]);
-        sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan) * steps_[w.index[k]];
+        sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan) *
+               steps_[plane(uint32_t(w.index[k]))];
       }
   }
   const double r = -sum / area;

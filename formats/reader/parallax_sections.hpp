@@ -30,6 +30,11 @@
 // at most 255 * 2^24 < 2^32 over any rectangle for N <= 4096: the SAT is exact there (larger N
 // is summed in bands like the raw form).
 //
+// Planned form (format 1.2, scene_plan_sections.hpp): ParallaxPlanned, the compressed layout for
+// the K view directions that bin map 1 covers (steps f64 {K}, codes {K, N, N}, in bin order). A
+// query whose bilinear bins (weight > 0) include a direction that was left out answers OutOfPlan,
+// never a number; covers() tells beforehand.
+//
 // Queries take the view direction as any finite non-zero vector; it is normalised and, below the
 // cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
 // direction is used both for the table lookup (bilinear between the 4 nearest bin centres) and in
@@ -111,7 +116,7 @@ static_assert(offsetof(CompressedParallaxInfoRecord, max_depth_error) == 56);
 enum class ParallaxSource {
   Auto,        // the raw table when the asset has one (exact), the compressed one otherwise
   Raw,         // the raw table only
-  Compressed,  // the compressed table only
+  Compressed,  // the compressed table only (the full or the planned form)
 };
 
 // The answer of a query.
@@ -134,6 +139,12 @@ class ParallaxView {
   bool is_open() const noexcept { return codes_ != nullptr || packed_ != nullptr; }
   bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
   bool is_compressed() const noexcept { return packed_ != nullptr; }
+  // The planned form (ParallaxPlanned): only the directions of its bin map are stored.
+  bool is_planned() const noexcept { return plane_ != nullptr; }
+  // Whether direction bin `bin` (< dirs^2) is stored (always, except in the planned form).
+  bool covers(uint32_t bin) const noexcept { return plane_ == nullptr || plane_[bin] >= 0; }
+  // Stored view directions (dirs^2, or the bin map's count in the planned form).
+  uint32_t stored_dirs() const noexcept;
   // Compressed form: its record (zero for the raw form).
   const CompressedParallaxInfoRecord& compressed_info() const noexcept { return packed_info_; }
   // Bytes of the SATs the compressed form has built so far (0 for raw).
@@ -145,7 +156,8 @@ class ParallaxView {
   uint32_t resolution() const noexcept { return info_.resolution; }
   uint32_t dirs() const noexcept { return info_.dirs; }
 
-  // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2.
+  // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2 and
+  // covers(bin) (an uncovered bin gives 0).
   double bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept;
   // sum over k < 4 with weight[k] > 0 of weight[k] * bin_depth(bin[k], x, y), wrapping (x, y)
   // once: the per-texel depth for bilinear weights computed once per view (the evaluator's hot
@@ -158,7 +170,8 @@ class ParallaxView {
   Status view_direction(const double view[3], double o[3]) const noexcept;
 
   // r at texel (x, y) for view direction `view` (bilinear between bins), with its Eq. 2 offset.
-  // InvalidArgument for a zero or non-finite view.
+  // InvalidArgument for a zero or non-finite view; OutOfPlan when a bin of the lookup (weight > 0)
+  // is not covered (planned form).
   Status depth(int64_t x, int64_t y, const double view[3], ParallaxSample* out) const noexcept;
 
   // The mean of r over a footprint rectangle (texel units, any size and position; the tile wraps;
@@ -181,13 +194,16 @@ class ParallaxView {
   double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
   double prefix_integral(uint32_t bin, double x, double y) const noexcept;
   const uint32_t* bin_sat(uint32_t bin) const noexcept;
+  // Stored plane of a covered bin (the bin itself unless planned).
+  uint64_t plane(uint32_t bin) const noexcept { return plane_ ? uint64_t(plane_[bin]) : bin; }
+  Status out_of_plan(int bin) const noexcept;
   uint32_t code(uint64_t index) const noexcept {
     return codes_ ? uint32_t(codes_[index]) : uint32_t(codes8_[index]);
   }
 
   struct Packed;  // the compressed form's steps and on-demand SATs
   Status open_raw(const Asset& asset) noexcept;
-  Status open_compressed(const Asset& asset) noexcept;
+  Status open_compressed(const Asset& asset, SectionType type) noexcept;
 
   ParallaxInfoRecord info_{};
   const uint16_t* codes_ = nullptr;
@@ -196,6 +212,7 @@ class ParallaxView {
   const double* steps_ = nullptr;    // compressed form, D values in the asset
   CompressedParallaxInfoRecord packed_info_{};
   std::shared_ptr<Packed> packed_;
+  const int32_t* plane_ = nullptr;  // planned form: stored plane of each bin, -1 = left out
 };
 
 }  // namespace clothbake::reader
