@@ -10,6 +10,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/error.hpp"
+#include "compress/compress_settings.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tables/half_vector_bins.hpp"
@@ -218,7 +219,11 @@ uint32_t count_kept(const std::vector<uint8_t>& mask) {
 
 ScenePlanSeeds seed_scene_plan(const std::string& scene_path, const std::string& fabric_path,
                                pipeline::BakeRequest* request) {
-  const inputs::LoadedScene loaded = inputs::load_scene(scene_path);
+  return seed_scene_plan(inputs::load_scene(scene_path), scene_path, fabric_path, request);
+}
+
+ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::string& scene_path,
+                               const std::string& fabric_path, pipeline::BakeRequest* request) {
   const ScenePlan plan = plan_scene(loaded);
   std::vector<const FabricPlan*> mine;
   std::string used;
@@ -312,6 +317,15 @@ ScenePlanSeeds seed_scene_plan(const std::string& scene_path, const std::string&
                   {"view_bins_total", out.view_bins_total},
                   {"transmission", back_lit},
                   {"objects", objects}};
+  // The planned tables are compressed to a quarter of the budget (unless the command line set a
+  // target): the full asset's own compression error may reach the budget, and the planned
+  // render must stay within it of the full one. Few kept bins make the tighter target cheap.
+  if (!request->seeds.contains(stages::kCompressSettingsArtifact)) {
+    compress::CompressRequest compression;
+    compression.max_error = plan.max_error / 4;
+    request->seeds.put(stages::kCompressSettingsArtifact, compression);
+    out.metadata["compression_target"] = plan.max_error / 4;
+  }
   request->seeds.put(stages::kScenePlanArtifact, std::move(bake));
   request->seeds.put("section/scene_plan", std::move(sections));
   request->seeds.put("metadata/scene_plan", out.metadata);

@@ -72,5 +72,8 @@ struct ScenePlanSeeds {
 // a plan that leaves out everything (no pixel sees the fabric, or no light reaches it).
 ScenePlanSeeds seed_scene_plan(const std::string& scene_path, const std::string& fabric_path,
                                pipeline::BakeRequest* request);
+// The same for a scene already loaded (and possibly changed, e.g. another image size).
+ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& scene, const std::string& scene_path,
+                               const std::string& fabric_path, pipeline::BakeRequest* request);
 
 }  // namespace clothbake::cli
