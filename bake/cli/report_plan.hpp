@@ -5,7 +5,8 @@
 // relMSE of planned against full and of both against the reference over that fabric's pixels,
 // the sizes and bake times, DIR/plan.json, DIR/side-by-side.png (full | planned | difference map)
 // and a summary on stdout. Exit 5 when a fabric's planned render is over the scene's budget:
-// sqrt(relMSE planned vs full) > [render] max_error. With --image-size the plan is made for that
+// relMSE planned vs full > [render] max_error (the criterion; the relative RMS is reported
+// beside it, docs/scene-plans.md says why it is not the criterion). With --image-size the plan is made for that
 // size (footprints and view directions change with it).
 #pragma once
 

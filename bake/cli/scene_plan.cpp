@@ -28,6 +28,39 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
   return buf;
 }
 
+// Estimates. Sizes: the sections' shapes (docs/format.md); the compressed Integral-Radiance tables
+// from a mean C-PCA rank of kMeanRank per texel (the 256^2 twill measured 15.1: 991149
+// coefficients over 65536 texels) capped at the kept bins, plus one basis image per rank and
+// cluster. Times: per-stage rates of the 256^2 twill (2 threads, `clothbake bake --report`, load
+// ~1.5; docs/scene-plans.md): a fixed part per texel plus a part per texel and direction.
+constexpr double kMeanRank = 15.1;
+constexpr double kParallaxPerTexel = 1.8e-5, kParallaxPerRay = 9.0e-8;
+constexpr double kVisibilityPerSample = 8.1e-8;  // per texel and visibility direction
+constexpr double kClusterPerTexel = 1.4e-5;
+constexpr double kCompressPerTexel = 2.7e-5, kCompressPerTexelBin = 2.9e-8;
+constexpr double kWritePerByte = 6.6e-9;
+
+PlanEstimate estimate_bake(const Fabric& fabric, double view_dirs, double bins, bool gap_kind) {
+  const double n2 = double(fabric.maps.resolution) * fabric.maps.resolution;
+  const double vis = double(fabric.bake.visibility_dirs) * fabric.bake.visibility_dirs;
+  const double clusters = fabric.bake.clusters;
+  const double rank = std::min(kMeanRank, bins);
+  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + n2 * 46  // records, maps
+                       + 64 + n2 * 12 + n2 * 4                             // visibility
+                       + n2 + clusters * vis * 4                           // clusters
+                       + 10000;                                            // metadata
+  const double parallax = 64 + 8 * view_dirs + n2 * view_dirs;
+  const double tables = 64 + 32 * clusters + n2 + n2 * rank * 2 +
+                        clusters * (1 + rank) * (bins * 2 + 4) + (gap_kind ? 64 + 16 + n2 + 8 : 0);
+  PlanEstimate e;
+  e.planned_bytes = uint64_t(fixed + parallax + tables);
+  e.planned_seconds = n2 * (kParallaxPerTexel + kParallaxPerRay * view_dirs) +
+                      n2 * vis * kVisibilityPerSample + n2 * kClusterPerTexel +
+                      n2 * (kCompressPerTexel + kCompressPerTexelBin * bins) +
+                      double(e.planned_bytes) * kWritePerByte;
+  return e;
+}
+
 }  // namespace
 
 FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, double max_error) {
@@ -132,6 +165,20 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
             "radiance_dirs = %.0f would",
             p.radiance_dirs, sigma, needed));
   }
+  // Estimates of the full bake and of this plan.
+  {
+    bool gaps = false;
+    for (float g : fabric.maps.gap)
+      gaps = gaps || g < 1.0f;
+    const double dirs = double(fabric.bake.parallax_dirs) * fabric.bake.parallax_dirs;
+    const double bins = double(p.half_vector_bins_total);
+    const PlanEstimate full = estimate_bake(fabric, dirs, bins, gaps);
+    const PlanEstimate planned = estimate_bake(
+        fabric, u.view_bins.empty() ? dirs : double(std::max<uint64_t>(u.view_bins_used(), 1)),
+        double(std::max<uint64_t>(u.half_vector_bins_used(), 1)), gaps && u.back_lit());
+    p.estimate = {full.planned_bytes, planned.planned_bytes, full.planned_seconds,
+                  planned.planned_seconds};
+  }
   p.decisions.push_back(
       {"compression target", "kept",
        fmt("the scene's error budget [render] max_error = %.3g %%: compressed tables at "
@@ -195,6 +242,15 @@ nlohmann::json plan_json(const ScenePlan& plan) {
                          {"max_half_vector_angle_deg", u.max_half_vector_angle * 180 / kPi},
                          {"max_parallax_offset_texels", p.max_parallax_offset}}},
                        {"decisions", decisions},
+                       {"estimate",
+                        {{"full_bytes", p.estimate.full_bytes},
+                         {"planned_bytes", p.estimate.planned_bytes},
+                         {"full_bake_seconds", p.estimate.full_seconds},
+                         {"planned_bake_seconds", p.estimate.planned_seconds},
+                         {"how",
+                          "sizes from the format's section shapes (compressed tables at a mean "
+                          "rank of 15.1 per texel, capped at the kept bins); times from per-stage "
+                          "rates measured on the 256^2 twill (docs/scene-plans.md)"}}},
                        {"warnings", p.warnings}});
   }
   return {{"scene", plan.scene}, {"max_error", plan.max_error}, {"fabrics", fabrics}};

@@ -22,6 +22,14 @@ struct PlanDecision {
   std::string reason;    // in words, with the figures
 };
 
+// Estimated asset size and bake time of the full bake and of the plan (scene_plan.cpp, "Estimates":
+// sizes from the format's section shapes, the compressed tables from the measured mean rank; times
+// from per-stage rates measured on the 256^2 twill, docs/scene-plans.md).
+struct PlanEstimate {
+  uint64_t full_bytes = 0, planned_bytes = 0;
+  double full_seconds = 0, planned_seconds = 0;
+};
+
 struct FabricPlan {
   int object = -1;
   std::string object_name, fabric_path;
@@ -30,6 +38,7 @@ struct FabricPlan {
   double max_parallax_offset = 0;  // texels, over the scene's views
   std::vector<PlanDecision> decisions;
   std::vector<std::string> warnings;
+  PlanEstimate estimate;
 };
 
 struct ScenePlan {
