@@ -236,10 +236,10 @@ int run_plan_report(const PlanReportOptions& o) {
                   row.full_bake_seconds, row.planned_bake_seconds,
                   row.full_bake_seconds / std::max(row.planned_bake_seconds, 1e-9));
       std::printf(
-          "  relMSE planned vs full %.3g (relative RMS %.3g %%, budget %.3g %%: %s); "
+          "  relMSE planned vs full %.3g (budget %.3g: %s; relative RMS %.3g %%); "
           "vs reference: full %.3g, planned %.3g\n",
-          row.planned_vs_full, 100 * std::sqrt(row.planned_vs_full), 100 * budget,
-          row.pass ? "within" : "OVER", row.full_vs_reference, row.planned_vs_reference);
+          row.planned_vs_full, budget, row.pass ? "within" : "OVER",
+          100 * std::sqrt(row.planned_vs_full), row.full_vs_reference, row.planned_vs_reference);
       for (const auto& what : row.seeds.left_out)
         std::printf("  left out: %s\n", what.c_str());
     }
