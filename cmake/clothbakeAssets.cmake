@@ -4,11 +4,14 @@
 # executable are dependencies (Ninja and Unix Makefiles; CMake >= 3.20), and a byte-identical
 # rebake keeps the file's mtime (restat).
 
-# clothbake_add_asset(NAME FABRIC f.toml OUTPUT x.cbk [OPTIONS bake options...] [DEPENDS files...])
+# clothbake_add_asset(NAME FABRIC f.toml OUTPUT x.cbk [SCENE s.toml] [OPTIONS bake options...]
+#                     [DEPENDS files...])
 # A target NAME (part of ALL) that bakes f.toml into x.cbk (relative OUTPUT: in the current binary
-# folder). The target's property CLOTHBAKE_ASSET holds the asset's absolute path.
+# folder). With SCENE the bake keeps only what that scene can query (`bake --scene`,
+# docs/scene-plans.md); the scene file is then a dependency too (the depfile names it). The
+# target's property CLOTHBAKE_ASSET holds the asset's absolute path.
 function(clothbake_add_asset name)
-  cmake_parse_arguments(ARG "" "FABRIC;OUTPUT" "OPTIONS;DEPENDS" ${ARGN})
+  cmake_parse_arguments(ARG "" "FABRIC;OUTPUT;SCENE" "OPTIONS;DEPENDS" ${ARGN})
   if(NOT ARG_FABRIC OR NOT ARG_OUTPUT)
     message(FATAL_ERROR "clothbake_add_asset(${name}): FABRIC and OUTPUT are required")
   endif()
@@ -19,6 +22,13 @@ function(clothbake_add_asset name)
   get_filename_component(output "${ARG_OUTPUT}" ABSOLUTE BASE_DIR "${CMAKE_CURRENT_BINARY_DIR}")
   get_filename_component(output_dir "${output}" DIRECTORY)
   file(MAKE_DIRECTORY "${output_dir}")
+  set(scene_args)
+  set(scene_dep)
+  if(ARG_SCENE)
+    get_filename_component(scene "${ARG_SCENE}" ABSOLUTE)
+    set(scene_args --scene "${scene}")
+    set(scene_dep "${scene}")
+  endif()
   if(CMAKE_GENERATOR MATCHES "Ninja")
     # Ninja restats the output: a byte-identical rebake (mtime kept) stops there.
     set(stamp "${output}")
@@ -34,9 +44,9 @@ function(clothbake_add_asset name)
   endif()
   add_custom_command(OUTPUT ${outputs}
     COMMAND clothbake::clothbake bake "${fabric}" -o "${output}" --depfile "${output}.d" --quiet
-      ${ARG_OPTIONS}
+      ${scene_args} ${ARG_OPTIONS}
     ${touch_stamp}
-    DEPENDS "${fabric}" clothbake::clothbake ${ARG_DEPENDS}
+    DEPENDS "${fabric}" ${scene_dep} clothbake::clothbake ${ARG_DEPENDS}
     DEPFILE "${output}.d"
     COMMENT "clothbake: baking ${name}"
     VERBATIM)

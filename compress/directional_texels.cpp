@@ -111,7 +111,8 @@ DirectionalTexels directional_texels(const tables::RadianceSectionView& view,
   return out;
 }
 
-DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill) {
+DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill,
+                                     std::span<const uint8_t> keep) {
   const auto& info = fill.header().info;
   DirectionalTexels out = empty_like(info);
   const std::size_t texels = out.texels(), bins = std::size_t(out.bins());
@@ -128,8 +129,13 @@ DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill) 
     std::vector<float> column(texels * kBlock);
     for (std::size_t block = range.begin(); block != range.end(); ++block) {
       const std::size_t b0 = block * kBlock, count = std::min(kBlock, bins - b0);
-      for (std::size_t i = 0; i < count; ++i)
+      for (std::size_t i = 0; i < count; ++i) {
+        if (!keep.empty() && (b0 + i >= keep.size() || keep[b0 + i] == 0)) {
+          std::fill_n(column.data() + i * texels, texels, 0.0f);  // left out by the plan
+          continue;
+        }
         fill.fill_bin(int(b0 + i), column.data() + i * texels);
+      }
       for (std::size_t t = 0; t < texels; ++t) {
         float* row = out.values.data() + t * bins + b0;
         for (std::size_t i = 0; i < count; ++i)

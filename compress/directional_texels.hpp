@@ -54,8 +54,10 @@ DirectionalTexels directional_texels(const tables::RadianceSectionView& view,
 // directional_texels(view of the raw sets build_radiance_tables makes, their labels), without
 // any SAT; peak memory is the returned vectors plus one 16-bin block per thread. Parallel over
 // blocks of 16 bins (disjoint outputs): the same bytes for any thread count. A fill with no stored
-// cluster gives every texel kNoStratum and zero values.
-DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill);
+// cluster gives every texel kNoStratum and zero values. `keep` (empty, or one entry per bin): the
+// bins with keep[b] == 0 are not filled and stay 0 (a scene-planned bake, docs/scene-plans.md).
+DirectionalTexels directional_texels(const tables::QuantisedRadianceFill& fill,
+                                     std::span<const uint8_t> keep = {});
 
 // Straight from the fill inputs (tables::radiance_bin_values with the default quadrature for
 // `bins_per_side`): what the raw tables would hold before fixed-point quantisation. For tests,

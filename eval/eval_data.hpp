@@ -14,6 +14,7 @@
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "model/cloth_bsdf.hpp"
 
@@ -54,6 +55,9 @@ struct EvalData {
   reader::VisibilityAsgView visibility;
   reader::VisibilityClusterView clusters;
   TableSource specular, gap;
+  // A scene-planned asset (format 1.2): what its bake left out (planned false: nothing).
+  reader::ScenePlanRecord plan{};
+  bool planned = false;
   FootprintSums sums;
   std::vector<Rgb> cluster_albedo;  // mean specular albedo k of each cluster's texels (tile)
   // A representative texel per cluster: the one whose fibre (tangent line and roughness) is

@@ -133,6 +133,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
 
   s = d->parallax.open(asset);
   if (!s.ok()) return s;
+  s = reader::read_scene_plan(asset, &d->plan, &d->planned);
+  if (!s.ok()) return s;
   if (!d->parallax.has_sat())
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
                          "this asset has no parallax_sat section (the evaluator needs the "
@@ -296,7 +298,16 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
 
   const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
   const double direct_side = data_->options.direct_max_side;
-  if (!(w > 0.0 && h > 0.0) || (multiscale && w < direct_side && h < direct_side)) {
+  const bool direct = !(w > 0.0 && h > 0.0) || (multiscale && w < direct_side && h < direct_side);
+  if (multiscale && !direct) {  // a scene-planned asset answers only the half vectors it kept
+    const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
+    if (!data_->specular.tables->covers_bins(hv))
+      return Status::error(ErrorCode::OutOfPlan, Check::None,
+                           "the half vector (%g, %g, %g) falls in a bin that this scene-planned "
+                           "asset left out (bin_map instance 0)",
+                           hv[0], hv[1], hv[2]);
+  }
+  if (direct) {
     out->counters.direct = true;
     s = exact_average(*data_, frame, footprint, 0, out);
   } else if (method == Method::Reference) {

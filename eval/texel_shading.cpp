@@ -52,6 +52,24 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   const model::DirectionGrid<double> parallax_grid{int(data.parallax.dirs()),
                                                    data.parallax.info().min_cos};
   f.parallax_bins = parallax_grid.bilinear(f.view);
+  // A scene-planned asset answers only what its scene can ask (never a number for the rest).
+  for (int k = 0; k < 4; ++k)
+    if (data.options.parallax && f.parallax_bins.weight[k] > 0.0 &&
+        !data.parallax.covers(uint32_t(f.parallax_bins.index[k]))) {
+      *status = Status::error(reader::ErrorCode::OutOfPlan, reader::Check::None,
+                              "the view direction (%g, %g, %g) needs parallax bin %d, which this "
+                              "scene-planned asset left out (bin_map instance 1)",
+                              f.wo.x, f.wo.y, f.wo.z, f.parallax_bins.index[k]);
+      return false;
+    }
+  if (data.planned && (data.plan.flags & reader::kPlanNoTransmission) != 0 &&
+      f.wi.z * f.wo.z < 0.0) {
+    *status = Status::error(reader::ErrorCode::OutOfPlan, reader::Check::None,
+                            "light and viewer on opposite sides of the cloth (transmission): this "
+                            "scene-planned asset left transmission out (its scene has no light "
+                            "behind the cloth)");
+    return false;
+  }
 
   // v_c(i) of every cluster, as reader::VisibilityClusterView::mean_visibility sums it.
   const model::DirectionGrid<double> visibility_grid{int(data.clusters.visibility_dirs()), 0.0};

@@ -78,6 +78,9 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
   table.reference_height = z_max;
   const std::size_t texels = table.texel_count();
   const int dir_count = settings.dirs * settings.dirs;
+  if (!settings.keep.empty() && settings.keep.size() != std::size_t(dir_count))
+    throw_internal_error("bake_parallax: keep has " + std::to_string(settings.keep.size()) +
+                         " entries for " + std::to_string(dir_count) + " directions");
   table.depth.assign(std::size_t(dir_count) * texels, 0);
   const double range = z_max - z_min;
   if (!(range > 0.0)) return table;  // flat: every ray hits the reference plane, r = 0
@@ -122,6 +125,7 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
         RayCounters local;
         for (int tile = r.begin(); tile != r.end(); ++tile) {
           for (int dir = 0; dir < dir_count; ++dir) {
+            if (!settings.keep.empty() && settings.keep[std::size_t(dir)] == 0) continue;
             const model::Vec3d o = view[std::size_t(dir)];
             const double t_max = (lift + range + lift) / o.z;
             for (int l = 0; l < RayPacket::kWidth; ++l) {

@@ -31,6 +31,9 @@ struct ParallaxSettings {
   int dirs = 32;         // n: n x n view directions on DirectionGrid{n, min_cos}, [1, 256]
   double min_cos = 0.6;  // the cap: view directions with cos(theta) >= min_cos, [0, 1)
   int rings = -1;        // neighbour tiles replicated each side; -1: chosen from the heights
+  // Empty, or one entry per direction bin: directions with keep[d] == 0 cast no rays and keep
+  // code 0 (a scene-planned bake, which stores only the kept ones).
+  std::vector<uint8_t> keep;
 };
 
 struct ParallaxStats {

@@ -44,6 +44,7 @@ uint64_t pixel_seed(uint64_t seed, uint32_t pass, uint64_t pixel) {
 
 struct Counters {
   std::atomic<uint64_t> estimates{0}, texel_evals{0}, samples{0}, direct{0}, cloth_pixels{0};
+  std::atomic<uint64_t> out_of_plan{0}, fallback_brute{0}, fallback_zero{0};
   std::mutex mutex;
   double min_texels = INFINITY, max_texels = 0;
 };
@@ -149,8 +150,20 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
       }
       const double wi_arr[3] = {wi.x, wi.y, wi.z};
       eval::Estimate e;
-      const reader::Status s =
+      reader::Status s =
           m.evaluator.estimate(fp, wi_arr, wo_arr, options_.method, samples, rng, mask, &e);
+      if (s.code() == reader::ErrorCode::OutOfPlan) {
+        // A scene-planned asset left out what this query needs (docs/scene-plans.md,
+        // "Queries outside the plan"): brute force over the same footprint needs no table; when
+        // it is refused too (a view bin or transmission left out), the light contributes 0.
+        counters.out_of_plan.fetch_add(1, std::memory_order_relaxed);
+        if (options_.method != eval::Method::Brute && options_.method != eval::Method::Reference)
+          s = m.evaluator.estimate(fp, wi_arr, wo_arr, eval::Method::Brute, samples, rng, mask, &e);
+        if (s.ok())
+          counters.fallback_brute.fetch_add(1, std::memory_order_relaxed);
+        else
+          counters.fallback_zero.fetch_add(1, std::memory_order_relaxed);
+      }
       counters.estimates.fetch_add(1, std::memory_order_relaxed);
       counters.texel_evals.fetch_add(e.counters.texel_evals, std::memory_order_relaxed);
       counters.samples.fetch_add(e.counters.samples, std::memory_order_relaxed);
@@ -264,6 +277,9 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
   st.texel_evals = counters.texel_evals;
   st.samples = counters.samples;
   st.direct = counters.direct;
+  st.out_of_plan = counters.out_of_plan;
+  st.fallback_brute = counters.fallback_brute;
+  st.fallback_zero = counters.fallback_zero;
   st.cloth_pixels = counters.cloth_pixels;
   st.footprint_texels_min = std::isfinite(counters.min_texels) ? counters.min_texels : 0;
   st.footprint_texels_max = counters.max_texels;

@@ -41,6 +41,9 @@ struct RenderStats {
   uint64_t estimates = 0;  // evaluator calls
   uint64_t texel_evals = 0, samples = 0, direct = 0;
   uint64_t cloth_pixels = 0;
+  // Scene-planned assets: estimates refused as OutOfPlan, of which answered by brute force (the
+  // fallback) and counted as 0 (refused again: a view bin or transmission left out).
+  uint64_t out_of_plan = 0, fallback_brute = 0, fallback_zero = 0;
   double footprint_texels_min = 0, footprint_texels_max = 0;  // over the cloth pixels
 };
 

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "formats/reader/radiance_query.hpp"
+#include "model/directions.hpp"
 #include "render/camera.hpp"
 #include "render/environment.hpp"
 #include "render/shading_frame.hpp"
@@ -35,13 +36,33 @@ struct Partial {
   double min_view_cos = 1, min_light_cos = 1, max_h_angle = 0;
   uint64_t grazing = 0, lit_same = 0, lit_opposite = 0;
   bool front = false, back = false;
-  std::vector<uint8_t> bins;
+  std::vector<uint8_t> bins, view_bins;
 };
+
+// The parallax look-up's view direction (reader::ParallaxView::view_direction on the mirrored
+// view): normalised, below the cap moved onto its rim at the same azimuth.
+model::Vec3d parallax_view(const Vec3& wo, double min_cos) {
+  const double len = std::sqrt(wo.x * wo.x + wo.y * wo.y + wo.z * wo.z);
+  double o[3] = {wo.x / len, wo.y / len, std::abs(wo.z) / len};
+  if (o[2] < min_cos) {
+    const double planar = std::sqrt(o[0] * o[0] + o[1] * o[1]);
+    const double ax = planar > 0.0 ? o[0] / planar : 1.0, ay = planar > 0.0 ? o[1] / planar : 0.0;
+    const double s = std::sqrt(1.0 - min_cos * min_cos);
+    o[0] = ax * s;
+    o[1] = ay * s;
+    o[2] = min_cos;
+  }
+  return model::Vec3d(o[0], o[1], o[2]);
+}
 
 }  // namespace
 
 uint64_t ObjectUsage::half_vector_bins_used() const {
   return uint64_t(std::count(half_vector_bins.begin(), half_vector_bins.end(), uint8_t(1)));
+}
+
+uint64_t ObjectUsage::view_bins_used() const {
+  return uint64_t(std::count(view_bins.begin(), view_bins.end(), uint8_t(1)));
 }
 
 SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& shapes) {
@@ -93,6 +114,16 @@ SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& sha
         const Vec3 wo = frame.local(-cr.ray.direction);
         p.min_view_cos = std::min(p.min_view_cos, std::abs(wo.z));
         p.grazing += std::abs(wo.z) < kGrazingCos;
+        if (shape.parallax_dirs > 0 && length(wo) > 0) {
+          if (p.view_bins.empty())
+            p.view_bins.assign(std::size_t(shape.parallax_dirs) * std::size_t(shape.parallax_dirs),
+                               0);
+          const model::DirectionGrid<double> grid{shape.parallax_dirs, shape.parallax_min_cos};
+          const model::BinBilinear<double> b =
+              grid.bilinear(parallax_view(wo, shape.parallax_min_cos));
+          for (int j = 0; j < 4; ++j)
+            if (b.weight[j] > 0.0) p.view_bins[std::size_t(b.index[j])] = 1;
+        }
         (wo.z >= 0 ? p.front : p.back) = true;
         // One unshadowed light direction (world): counts its side and marks its half vector.
         auto lit = [&](const Vec3& wi_world) {
@@ -162,6 +193,11 @@ SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& sha
         if (u.half_vector_bins.empty()) u.half_vector_bins.assign(p.bins.size(), 0);
         for (std::size_t b = 0; b < p.bins.size(); ++b)
           u.half_vector_bins[b] |= p.bins[b];
+      }
+      if (!p.view_bins.empty()) {
+        if (u.view_bins.empty()) u.view_bins.assign(p.view_bins.size(), 0);
+        for (std::size_t b = 0; b < p.view_bins.size(); ++b)
+          u.view_bins[b] |= p.view_bins[b];
       }
     }
     u.pixels = sides.size();

@@ -28,6 +28,8 @@ inline constexpr int kEnvironmentDirections = 256;
 struct FabricShape {
   int resolution = 0;     // N texels per tile side; 0: the object is not analysed (diffuse)
   int radiance_dirs = 0;  // half-vector bins per side of the Integral-Radiance tables
+  int parallax_dirs = 0;  // view directions per side of the parallax table (0: not analysed)
+  double parallax_min_cos = 0.6;  // its cap
 };
 
 // Grazing: a view or light direction within 20 degrees of the surface (|cos| < cos 70 degrees).
@@ -52,6 +54,11 @@ struct ObjectUsage {
   std::vector<uint8_t> half_vector_bins;
   double max_half_vector_angle = 0;
   uint64_t half_vector_bins_used() const;
+  // View directions as the parallax table looks them up (mirrored to o_z >= 0, moved onto the
+  // cap's rim below parallax_min_cos): the parallax_dirs^2 bins of DirectionGrid{parallax_dirs,
+  // parallax_min_cos} whose bilinear support (weight > 0) some pixel's view touches (1 = used).
+  std::vector<uint8_t> view_bins;
+  uint64_t view_bins_used() const;
   bool back_lit() const { return lit_opposite_side > 0; }
 };
 

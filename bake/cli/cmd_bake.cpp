@@ -1,6 +1,7 @@
 // clothbake bake FABRIC.toml -o OUT.cbk [--stages a,b] [--threads N] [--quiet] [--report R.json]
 // [--json] [--force] [--record-timings] [--list-stages]
-// [--compress K,R | --max-error E] [--keep-raw] [--no-compress]: runs the bake pipeline
+// [--compress K,R | --max-error E] [--keep-raw] [--no-compress] [--scene SCENE.toml]: runs the
+// bake pipeline
 // (docs/pipeline.md) and writes one asset atomically. By default the asset holds the C-PCA
 // compressed Integral-Radiance tables only (docs/compression.md, "Bake"). Exit 2 on bad input or
 // an unwritable output (nothing written), 1 on a bad command line (unknown stage, conflicting
@@ -8,12 +9,14 @@
 #include <algorithm>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "bake/cache/stage_cache.hpp"
 #include "bake/cli/command.hpp"
 #include "bake/cli/depfile.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/scene_plan.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
 #include "bake/stages/cache_support.hpp"
@@ -48,6 +51,7 @@ struct BakeOptions {
   CLI::Option* max_error_option = nullptr;
   bool keep_raw = false;
   bool no_compress = false;
+  std::string scene;  // --scene: bake the scene's plan
 };
 
 std::string default_max_error_text() {
@@ -172,6 +176,9 @@ Action setup_bake(CLI::App& app) {
       "also keep the raw Integral-Radiance tables in the asset (default: compressed only)");
   app.add_flag("--no-compress", o->no_compress,
                "write the raw Integral-Radiance tables only (no C-PCA compression)");
+  app.add_option("--scene", o->scene,
+                 "bake only what this scene can query (its plan: `clothbake plan`; "
+                 "docs/scene-plans.md)");
   return [o] {
     if (o->list_stages) {
       print_stage_list(o->json);
@@ -198,9 +205,21 @@ Action setup_bake(CLI::App& app) {
     request.run.record_timings = o->record_timings;
     if (!compression.given().empty())
       request.seeds.put(stages::kCompressSettingsArtifact, compression);
+    std::optional<ScenePlanSeeds> planned;
+    if (!o->scene.empty()) {
+      if (o->no_compress || o->keep_raw || !o->stages.empty())
+        throw Error(ExitCode::Usage,
+                    "--scene bakes the compressed form of every stage: it cannot be combined "
+                    "with --no-compress, --keep-raw or --stages");
+      planned = seed_scene_plan(o->scene, o->fabric, &request);
+      for (const auto& what : planned->left_out)
+        info("scene plan: left out " + what);
+    }
     std::unique_ptr<cache::DiskCache> stage_cache;
     const std::string cache_dir = o->no_cache ? "" : cache::cache_dir_from(o->cache);
-    if (!cache_dir.empty() && !o->record_timings) {  // timings would make entries differ
+    // Timings would make entries differ; a scene plan changes what the stages compute without
+    // being part of their cache key, so a planned bake does not use the stage cache.
+    if (!cache_dir.empty() && !o->record_timings && !planned) {
       cache::CacheOptions cache_options;
       cache_options.dir = cache_dir;
       if (!o->cache_max_size.empty())
@@ -224,6 +243,10 @@ Action setup_bake(CLI::App& app) {
     nlohmann::json inputs = nlohmann::json::array();  // every file read (batch up-to-date checks)
     for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
       inputs.push_back({{"role", input.role}, {"path", input.path}, {"xxh64", input.xxh64}});
+    if (planned) {
+      inputs.push_back({{"role", "scene"}, {"path", o->scene}, {"xxh64", planned->scene_hash}});
+      report["scene_plan"] = planned->metadata;
+    }
     report["inputs"] = inputs;
     report["warnings"] = take_warnings();
     if (!o->report.empty()) {
@@ -237,6 +260,7 @@ Action setup_bake(CLI::App& app) {
       std::vector<std::string> deps;
       for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
         deps.push_back(input.path);
+      if (planned) deps.push_back(o->scene);
       if (const std::string exe = current_executable(); !exe.empty()) deps.push_back(exe);
       write_depfile(o->depfile, o->depfile_target.empty() ? o->output : o->depfile_target, deps);
     }

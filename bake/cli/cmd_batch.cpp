@@ -1,5 +1,6 @@
 // clothbake batch (DIR | LIST.txt) -o OUTDIR [--jobs N] [--max-memory S] [--cache DIR]
-// [--cache-max-size S] [--force-rebake] [--json] [--emit slurm]: bakes a library of fabrics, one
+// [--cache-max-size S] [--force-rebake] [--scene S] [--json] [--emit slurm]: bakes a library of
+// fabrics (with --scene each one's plan for that scene, `bake --scene`), one
 // `clothbake bake` child process per fabric (docs/batch.md). Up-to-date fabrics are skipped (a
 // stamp per fabric: tool version, options, every input file's size, mtime and content hash, the
 // output's size and mtime); a failure is reported and the rest go on; at most N bakes run at once
@@ -51,6 +52,7 @@ struct BatchOptions {
   bool json = false;
   bool force = false;
   std::string emit;
+  std::string scene;  // --scene: every bake bakes its plan for this scene
 };
 
 struct Job {
@@ -75,8 +77,9 @@ std::string state_dir(const BatchOptions& o) {
 }
 
 // Options that change the bytes of an asset (part of the up-to-date key).
-std::string options_key(const BatchOptions&) {
-  return "bake defaults";
+std::string options_key(const BatchOptions& o) {
+  // The scene's content is an input of the stamp (the bake report lists it); its path is here.
+  return o.scene.empty() ? "bake defaults" : "bake --scene " + fs::absolute(o.scene).string();
 }
 
 uint64_t default_max_memory() {
@@ -233,6 +236,7 @@ std::vector<std::string> bake_arguments(const BatchOptions& o, const Job& j, int
   const std::string cache = cache::cache_dir_from(o.cache);
   if (!cache.empty()) args.insert(args.end(), {"--cache", cache});
   if (!o.cache_max_size.empty()) args.insert(args.end(), {"--cache-max-size", o.cache_max_size});
+  if (!o.scene.empty()) args.insert(args.end(), {"--scene", fs::absolute(o.scene).string()});
   return args;
 }
 
@@ -319,6 +323,7 @@ int emit_slurm(const BatchOptions& o, const std::vector<Job>& jobs, uint64_t pea
     << "  --threads \"${SLURM_CPUS_PER_TASK:-1}\" --report "
        "\"$OUTDIR/.clothbake-batch/$NAME.report.json\"";
   if (!cache.empty()) s << " \\\n  --cache " << sh_quote(fs::absolute(cache).string());
+  if (!o.scene.empty()) s << " \\\n  --scene " << sh_quote(fs::absolute(o.scene).string());
   s << "\n";
   formats::OutputOptions out;
   out.require_asset_to_replace = false;
@@ -360,6 +365,9 @@ Action setup_batch(CLI::App& app) {
   app.add_option("--cache", o->cache, "stage cache shared by the bakes (default $CLOTHBAKE_CACHE)");
   app.add_option("--cache-max-size", o->cache_max_size, "bound of the cache (default 10G)");
   app.add_flag("--force-rebake", o->force, "bake every fabric, up to date or not");
+  app.add_option("--scene", o->scene,
+                 "bake each fabric's plan for this scene (`bake --scene`; a fabric the scene "
+                 "does not use fails)");
   app.add_option("--emit", o->emit, "write a farm script instead of baking: slurm")
       ->check(CLI::IsMember({"slurm"}));
   add_json_flag(app, o->json, "print the summary as JSON on stdout");
@@ -368,6 +376,7 @@ Action setup_batch(CLI::App& app) {
                                     ? default_max_memory()
                                     : cache::parse_size(o->max_memory, "--max-memory");
     if (!o->cache_max_size.empty()) (void)cache::parse_size(o->cache_max_size, "--cache-max-size");
+    if (!o->scene.empty()) inputs::require_regular_file(o->scene, "--scene");
     std::error_code ec;
     fs::create_directories(state_dir(*o), ec);
     if (ec)

@@ -11,7 +11,9 @@
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/cli/terminal_text.hpp"
+#include "bake/pipeline/bake.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 #include "formats/writer/metadata_json.hpp"
 #include "formats/writer/open_asset.hpp"
 
@@ -107,6 +109,28 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
   } catch (const nlohmann::json::exception&) {
     raw_total = int64_t(asset.file_size());
   }
+  // A scene-planned asset (format 1.2): what its bake left out, from the binary record (the
+  // metadata's words when present).
+  ScenePlanRecord plan{};
+  bool planned = false;
+  if (read_scene_plan(asset, &plan, &planned).ok() && planned) {
+    nlohmann::json p = {{"transmission_left_out", (plan.flags & kPlanNoTransmission) != 0},
+                        {"half_vector_bins_kept", plan.half_vector_bins_kept},
+                        {"view_bins_kept", plan.view_bins_kept},
+                        {"scene_xxh64", pipeline::hex64(plan.scene_hash)},
+                        {"max_error", plan.max_error},
+                        {"left_out", nlohmann::json::array()}};
+    try {
+      const auto& m = doc["metadata"];
+      if (m.is_object() && m.contains("parameters") && m["parameters"].contains("scene_plan")) {
+        const auto& sp = m["parameters"]["scene_plan"];
+        p["scene"] = sp.value("scene", "");
+        if (sp.contains("left_out") && sp["left_out"].is_array()) p["left_out"] = sp["left_out"];
+      }
+    } catch (const nlohmann::json::exception&) {
+    }
+    doc["scene_plan"] = p;
+  }
   doc["sizes"] = {{"by_name", by_name},
                   {"total_bytes", asset.file_size()},
                   {"raw_forms_total_bytes", raw_total}};
@@ -154,6 +178,15 @@ void print_text(const nlohmann::json& doc) {
     for (const auto& y : doc["yarns"])
       out << "  yarn " << std::left << std::setw(12) << text(y["name"]) << " roughness "
           << y["roughness"] << ", optical thickness " << y["optical_thickness"] << '\n';
+  if (doc.contains("scene_plan")) {
+    const auto& p = doc["scene_plan"];
+    out << "plan:     scene " << terminal_safe(p.value("scene", std::string("?"))) << " (xxh64 "
+        << p["scene_xxh64"].get<std::string>() << "), error budget " << p["max_error"] << '\n';
+    if (p["left_out"].empty()) out << "  nothing left out\n";
+    for (const auto& what : p["left_out"])
+      out << "  left out: " << (what.is_string() ? terminal_safe(what.get<std::string>()) : "?")
+          << '\n';
+  }
   out << "sections: " << doc["sections"].size() << '\n';
   out << "  " << std::left << std::setw(4) << "#" << std::setw(26) << "name" << std::setw(6)
       << "inst" << std::setw(5) << "ver" << std::setw(6) << "type" << std::setw(18) << "shape"

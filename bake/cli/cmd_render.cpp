@@ -102,6 +102,9 @@ int run_render(const RenderCliOptions& o) {
                 {"texel_evals", s.texel_evals},
                 {"samples", s.samples},
                 {"direct_footprints", s.direct},
+                {"out_of_plan", s.out_of_plan},
+                {"out_of_plan_brute_fallback", s.fallback_brute},
+                {"out_of_plan_zero", s.fallback_zero},
                 {"cloth_pixels", s.cloth_pixels},
                 {"footprint_texels", {s.footprint_texels_min, s.footprint_texels_max}}});
     return 0;

@@ -29,6 +29,7 @@
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/cli/report_error_time.hpp"
+#include "bake/cli/report_plan.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
@@ -108,11 +109,12 @@ std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<
 Action setup_report(CLI::App& app) {
   auto o = std::make_shared<ReportCliOptions>();
   app.add_option("WHAT", o->what,
-                 "report to produce: compression (FABRIC) or error-time (SCENE, "
-                 "docs/rendering.md)")
+                 "report to produce: compression (FABRIC), error-time (SCENE, "
+                 "docs/rendering.md) or plan (SCENE, docs/scene-plans.md)")
       ->required()
-      ->check(CLI::IsMember({"compression", "error-time"}));
-  app.add_option("FABRIC", o->fabric, "fabric description (compression) or scene (error-time)")
+      ->check(CLI::IsMember({"compression", "error-time", "plan"}));
+  app.add_option("FABRIC", o->fabric,
+                 "fabric description (compression) or scene (error-time, plan)")
       ->required();
   auto et = std::make_shared<ErrorTimeOptions>();
   std::string methods = "multiscale,multiscale-paper,brute", spp = "1,2,4,8,16,32,64";
@@ -151,6 +153,29 @@ Action setup_report(CLI::App& app) {
   app.add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
   add_json_flag(app, o->json, "print the rows as JSON on stdout");
   return [o, et, m, s, resolution] {
+    if (o->what == "plan") {
+      PlanReportOptions po;
+      po.scene = o->fabric;
+      po.output = o->output;
+      po.json = o->json;
+      po.seed = et->seed;
+      if (*s != "1,2,4,8,16,32,64" && s->find(',') != std::string::npos)
+        throw Error(ExitCode::Usage, "report plan: --spp takes one number (the renders' spp)");
+      po.spp = *s == "1,2,4,8,16,32,64" ? 2u : uint32_t(positive_list<int>(*s, "--spp").front());
+      po.reference_spp = et->reference_spp == 256 ? 64 : et->reference_spp;
+      if (!resolution->empty()) {
+        NumberListRule rule;
+        rule.expected = "W,H (integers in [1, 16384])";
+        rule.count = 2;
+        rule.integers = true;
+        rule.min = 1;
+        rule.max = 16384;
+        const std::vector<double> wh = parse_number_list(*resolution, "--image-size", rule);
+        po.width = int(wh[0]);
+        po.height = int(wh[1]);
+      }
+      return run_plan_report(po);
+    }
     if (o->what == "error-time") {
       if (!resolution->empty()) {
         NumberListRule rule;

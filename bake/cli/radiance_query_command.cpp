@@ -75,6 +75,8 @@ nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArg
     throw Error(ExitCode::Usage, std::string("--h: ") + s.message());
 
   std::vector<double> f(tables.cluster_count(), 0.0);
+  if (!tables.covers_bins(args.h.data()))  // a scene-planned asset: OutOfPlan, exit 2
+    formats::throw_if_failed(tables.query_all(rect, args.h.data(), f.data()), "--h");
   if (args.cluster) {
     if (!tables.query(rect, args.h.data(), *args.cluster, &f[*args.cluster]).ok())
       throw_internal_error("radiance query rejected validated arguments");

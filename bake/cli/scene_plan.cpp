@@ -4,8 +4,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
+#include "bake/inputs/fabric_files.hpp"
 #include "bake/inputs/fabric_load.hpp"
+#include "bake/stages/stages.hpp"
+#include "common/error.hpp"
+#include "compress/compress_settings.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
+#include "formats/writer/asset_writer.hpp"
 #include "tables/half_vector_bins.hpp"
 
 namespace clothbake::cli {
@@ -19,6 +26,39 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
   char buf[256];
   std::snprintf(buf, sizeof buf, format, a, b, c, d);
   return buf;
+}
+
+// Estimates. Sizes: the sections' shapes (docs/format.md); the compressed Integral-Radiance tables
+// from a mean C-PCA rank of kMeanRank per texel (the 256^2 twill measured 15.1: 991149
+// coefficients over 65536 texels) capped at the kept bins, plus one basis image per rank and
+// cluster. Times: per-stage rates of the 256^2 twill (2 threads, `clothbake bake --report`, load
+// ~1.5; docs/scene-plans.md): a fixed part per texel plus a part per texel and direction.
+constexpr double kMeanRank = 15.1;
+constexpr double kParallaxPerTexel = 1.8e-5, kParallaxPerRay = 9.0e-8;
+constexpr double kVisibilityPerSample = 8.1e-8;  // per texel and visibility direction
+constexpr double kClusterPerTexel = 1.4e-5;
+constexpr double kCompressPerTexel = 2.7e-5, kCompressPerTexelBin = 2.9e-8;
+constexpr double kWritePerByte = 6.6e-9;
+
+PlanEstimate estimate_bake(const Fabric& fabric, double view_dirs, double bins, bool gap_kind) {
+  const double n2 = double(fabric.maps.resolution) * fabric.maps.resolution;
+  const double vis = double(fabric.bake.visibility_dirs) * fabric.bake.visibility_dirs;
+  const double clusters = fabric.bake.clusters;
+  const double rank = std::min(kMeanRank, bins);
+  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + n2 * 46  // records, maps
+                       + 64 + n2 * 12 + n2 * 4                             // visibility
+                       + n2 + clusters * vis * 4                           // clusters
+                       + 10000;                                            // metadata
+  const double parallax = 64 + 8 * view_dirs + n2 * view_dirs;
+  const double tables = 64 + 32 * clusters + n2 + n2 * rank * 2 +
+                        clusters * (1 + rank) * (bins * 2 + 4) + (gap_kind ? 64 + 16 + n2 + 8 : 0);
+  PlanEstimate e;
+  e.planned_bytes = uint64_t(fixed + parallax + tables);
+  e.planned_seconds = n2 * (kParallaxPerTexel + kParallaxPerRay * view_dirs) +
+                      n2 * vis * kVisibilityPerSample + n2 * kClusterPerTexel +
+                      n2 * (kCompressPerTexel + kCompressPerTexelBin * bins) +
+                      double(e.planned_bytes) * kWritePerByte;
+  return e;
 }
 
 }  // namespace
@@ -67,6 +107,17 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
         {"transmission and gap tables", "kept",
          fmt("light reaches the side opposite to the viewer (%.0f of %.0f lit pixel-light pairs)",
              double(u.lit_opposite_side), double(u.lit_opposite_side + u.lit_same_side))});
+  // Parallax view directions: those whose bilinear support some pixel's view touches.
+  p.parallax_dirs = fabric.bake.parallax_dirs;
+  const double views = double(u.view_bins_used()), view_total = double(u.view_bins.size());
+  if (!u.view_bins.empty() && views < view_total)
+    p.decisions.push_back({"parallax view directions", "reduced",
+                           fmt("views from cos %.3g up: %.0f of %.0f parallax directions kept "
+                               "(rays cast for those only)",
+                               u.min_view_cos, views, view_total)});
+  else
+    p.decisions.push_back({"parallax view directions", "kept",
+                           fmt("the views reach all %.0f parallax directions", view_total)});
   // Half-vector bins: those whose bilinear support some lit (wi, wo) pair touches.
   const double used = double(u.half_vector_bins_used());
   const double angle = u.max_half_vector_angle * 180 / kPi;
@@ -114,6 +165,20 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
             "radiance_dirs = %.0f would",
             p.radiance_dirs, sigma, needed));
   }
+  // Estimates of the full bake and of this plan.
+  {
+    bool gaps = false;
+    for (float g : fabric.maps.gap)
+      gaps = gaps || g < 1.0f;
+    const double dirs = double(fabric.bake.parallax_dirs) * fabric.bake.parallax_dirs;
+    const double bins = double(p.half_vector_bins_total);
+    const PlanEstimate full = estimate_bake(fabric, dirs, bins, gaps);
+    const PlanEstimate planned = estimate_bake(
+        fabric, u.view_bins.empty() ? dirs : double(std::max<uint64_t>(u.view_bins_used(), 1)),
+        double(std::max<uint64_t>(u.half_vector_bins_used(), 1)), gaps && u.back_lit());
+    p.estimate = {full.planned_bytes, planned.planned_bytes, full.planned_seconds,
+                  planned.planned_seconds};
+  }
   p.decisions.push_back(
       {"compression target", "kept",
        fmt("the scene's error budget [render] max_error = %.3g %%: compressed tables at "
@@ -131,7 +196,8 @@ ScenePlan plan_scene(const inputs::LoadedScene& loaded) {
   for (std::size_t k = 0; k < loaded.scene.objects.size(); ++k) {
     if (loaded.fabrics[k].empty()) continue;
     fabrics[k] = load_fabric(loaded.fabrics[k]);
-    shapes[k] = {fabrics[k].maps.resolution, fabrics[k].bake.radiance_dirs};
+    shapes[k] = {fabrics[k].maps.resolution, fabrics[k].bake.radiance_dirs,
+                 fabrics[k].bake.parallax_dirs, fabrics[k].bake.parallax_min_cos};
   }
   const render::SceneUsage usage = render::analyse_usage(loaded.scene, shapes);
   for (std::size_t k = 0; k < loaded.scene.objects.size(); ++k) {
@@ -171,12 +237,155 @@ nlohmann::json plan_json(const ScenePlan& plan) {
                          {"min_light_cos", u.min_light_cos},
                          {"half_vector_bins_used", u.half_vector_bins_used()},
                          {"half_vector_bins_total", p.half_vector_bins_total},
+                         {"view_bins_used", u.view_bins_used()},
+                         {"view_bins_total", u.view_bins.size()},
                          {"max_half_vector_angle_deg", u.max_half_vector_angle * 180 / kPi},
                          {"max_parallax_offset_texels", p.max_parallax_offset}}},
                        {"decisions", decisions},
+                       {"estimate",
+                        {{"full_bytes", p.estimate.full_bytes},
+                         {"planned_bytes", p.estimate.planned_bytes},
+                         {"full_bake_seconds", p.estimate.full_seconds},
+                         {"planned_bake_seconds", p.estimate.planned_seconds},
+                         {"how",
+                          "sizes from the format's section shapes (compressed tables at a mean "
+                          "rank of 15.1 per texel, capped at the kept bins); times from per-stage "
+                          "rates measured on the 256^2 twill (docs/scene-plans.md)"}}},
                        {"warnings", p.warnings}});
   }
   return {{"scene", plan.scene}, {"max_error", plan.max_error}, {"fabrics", fabrics}};
+}
+
+}  // namespace clothbake::cli
+
+namespace clothbake::cli {
+namespace {
+
+bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (std::filesystem::equivalent(a, b, ec)) return true;
+  return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
+}
+
+uint32_t count_kept(const std::vector<uint8_t>& mask) {
+  return uint32_t(std::count(mask.begin(), mask.end(), uint8_t(1)));
+}
+
+}  // namespace
+
+ScenePlanSeeds seed_scene_plan(const std::string& scene_path, const std::string& fabric_path,
+                               pipeline::BakeRequest* request) {
+  return seed_scene_plan(inputs::load_scene(scene_path), scene_path, fabric_path, request);
+}
+
+ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::string& scene_path,
+                               const std::string& fabric_path, pipeline::BakeRequest* request) {
+  const ScenePlan plan = plan_scene(loaded);
+  std::vector<const FabricPlan*> mine;
+  std::string used;
+  for (const FabricPlan& p : plan.fabrics) {
+    if (same_file(p.fabric_path, fabric_path))
+      mine.push_back(&p);
+    else if (used.find(p.fabric_path) == std::string::npos)
+      used += (used.empty() ? "" : ", ") + p.fabric_path;
+  }
+  if (mine.empty())
+    throw_input_error(scene_path + ": no object of the scene uses the fabric " + fabric_path +
+                      (used.empty() ? std::string(" (no object names a fabric)")
+                                    : " (the scene's fabrics: " + used + ")") +
+                      "; nothing to plan, nothing written");
+  // Merge the usages of every object with this fabric.
+  stages::PlannedBake bake;
+  ScenePlanSeeds out;
+  uint64_t pixels = 0;
+  bool back_lit = false;
+  nlohmann::json objects = nlohmann::json::array();
+  const nlohmann::json all = plan_json(plan);
+  for (const FabricPlan* p : mine) {
+    pixels += p->usage.pixels;
+    back_lit = back_lit || p->usage.back_lit();
+    auto merge = [](std::vector<uint8_t>& into, const std::vector<uint8_t>& from) {
+      if (into.empty()) into.assign(from.size(), 0);
+      for (std::size_t b = 0; b < from.size() && b < into.size(); ++b)
+        into[b] |= from[b];
+    };
+    merge(bake.half_vector_bins, p->usage.half_vector_bins);
+    merge(bake.view_bins, p->usage.view_bins);
+    for (const auto& f : all["fabrics"])
+      if (f["object"] == p->object_name && f["fabric"] == p->fabric_path) objects.push_back(f);
+  }
+  const std::string names = mine.front()->object_name.empty()
+                                ? "object " + std::to_string(mine.front()->object)
+                                : "'" + mine.front()->object_name + "'";
+  if (pixels == 0)
+    throw_input_error(scene_path + ": the plan for " + fabric_path +
+                      " leaves out everything: no pixel sees " + names +
+                      " (nothing to bake, nothing written)");
+  out.half_vector_bins_total = uint32_t(bake.half_vector_bins.size());
+  out.view_bins_total = uint32_t(bake.view_bins.size());
+  out.half_vector_bins_kept = count_kept(bake.half_vector_bins);
+  out.view_bins_kept = count_kept(bake.view_bins);
+  if (out.half_vector_bins_kept == 0)
+    throw_input_error(scene_path + ": the plan for " + fabric_path +
+                      " leaves out everything: no light reaches " + names +
+                      " (every half-vector bin would be left out; nothing written)");
+  // Every bin kept: no map (the sections stay in their full form).
+  if (out.half_vector_bins_kept == out.half_vector_bins_total) bake.half_vector_bins.clear();
+  if (out.view_bins_kept == out.view_bins_total) bake.view_bins.clear();
+  bake.transmission = back_lit;
+  out.transmission = back_lit;
+  if (!back_lit) out.left_out.push_back("transmission and gap tables (no light behind the cloth)");
+  if (!bake.half_vector_bins.empty())
+    out.left_out.push_back(std::to_string(out.half_vector_bins_total - out.half_vector_bins_kept) +
+                           " of " + std::to_string(out.half_vector_bins_total) +
+                           " half-vector bins");
+  if (!bake.view_bins.empty())
+    out.left_out.push_back(std::to_string(out.view_bins_total - out.view_bins_kept) + " of " +
+                           std::to_string(out.view_bins_total) + " parallax view directions");
+
+  // The sections that record the plan.
+  std::vector<formats::Section> sections;
+  auto map_section = [&](uint32_t instance, const std::vector<uint8_t>& mask) {
+    const uint32_t n = uint32_t(std::lround(std::sqrt(double(mask.size()))));
+    sections.push_back(
+        formats::make_array_section<uint8_t>(reader::SectionType::BinMap, instance, mask, {n, n}));
+  };
+  if (!bake.half_vector_bins.empty()) map_section(reader::kHalfVectorBinMap, bake.half_vector_bins);
+  if (!bake.view_bins.empty()) map_section(reader::kViewBinMap, bake.view_bins);
+  const std::string scene_bytes = inputs::read_file_bytes(scene_path, "scene");
+  out.scene_hash = inputs::xxh64_hex(scene_bytes);
+  reader::ScenePlanRecord record{};
+  record.flags = back_lit ? 0u : reader::kPlanNoTransmission;
+  record.half_vector_bins_kept = out.half_vector_bins_kept;
+  record.view_bins_kept = out.view_bins_kept;
+  record.scene_hash = std::stoull(out.scene_hash, nullptr, 16);
+  record.max_error = plan.max_error;
+  sections.push_back(formats::make_record_section<reader::ScenePlanRecord>(
+      reader::SectionType::ScenePlan, 0, std::span<const reader::ScenePlanRecord>(&record, 1)));
+
+  out.metadata = {{"scene", scene_path},
+                  {"scene_xxh64", out.scene_hash},
+                  {"max_error", plan.max_error},
+                  {"left_out", out.left_out},
+                  {"half_vector_bins_kept", out.half_vector_bins_kept},
+                  {"half_vector_bins_total", out.half_vector_bins_total},
+                  {"view_bins_kept", out.view_bins_kept},
+                  {"view_bins_total", out.view_bins_total},
+                  {"transmission", back_lit},
+                  {"objects", objects}};
+  // The planned tables are compressed to a quarter of the budget (unless the command line set a
+  // target): the full asset's own compression error may reach the budget, and the planned
+  // render must stay within it of the full one. Few kept bins make the tighter target cheap.
+  if (!request->seeds.contains(stages::kCompressSettingsArtifact)) {
+    compress::CompressRequest compression;
+    compression.max_error = plan.max_error / 4;
+    request->seeds.put(stages::kCompressSettingsArtifact, compression);
+    out.metadata["compression_target"] = plan.max_error / 4;
+  }
+  request->seeds.put(stages::kScenePlanArtifact, std::move(bake));
+  request->seeds.put("section/scene_plan", std::move(sections));
+  request->seeds.put("metadata/scene_plan", out.metadata);
+  return out;
 }
 
 }  // namespace clothbake::cli

@@ -2,8 +2,8 @@
 // (render/usage_analysis.hpp) turned, per fabric, into what an asset needs: per-texel parallax,
 // the transmission and gap tables, the half-vector bins, the sheen, the directional resolution
 // (2-sigma rule) and the compression target from the scene's error budget, each with the reason
-// in words. `clothbake plan` prints it; baking a plan is not implemented yet (the format has no
-// bin map), so every decision is a proposal.
+// in words. `clothbake plan` prints it; `clothbake bake --scene` bakes it (bin maps, format 1.2:
+// docs/scene-plans.md).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -22,14 +22,23 @@ struct PlanDecision {
   std::string reason;    // in words, with the figures
 };
 
+// Estimated asset size and bake time of the full bake and of the plan (scene_plan.cpp, "Estimates":
+// sizes from the format's section shapes, the compressed tables from the measured mean rank; times
+// from per-stage rates measured on the 256^2 twill, docs/scene-plans.md).
+struct PlanEstimate {
+  uint64_t full_bytes = 0, planned_bytes = 0;
+  double full_seconds = 0, planned_seconds = 0;
+};
+
 struct FabricPlan {
   int object = -1;
   std::string object_name, fabric_path;
   render::ObjectUsage usage;
-  int resolution = 0, radiance_dirs = 0, half_vector_bins_total = 0;
+  int resolution = 0, radiance_dirs = 0, half_vector_bins_total = 0, parallax_dirs = 0;
   double max_parallax_offset = 0;  // texels, over the scene's views
   std::vector<PlanDecision> decisions;
   std::vector<std::string> warnings;
+  PlanEstimate estimate;
 };
 
 struct ScenePlan {
@@ -47,5 +56,33 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& usage, d
 ScenePlan plan_scene(const inputs::LoadedScene& scene);
 
 nlohmann::json plan_json(const ScenePlan& plan);
+
+}  // namespace clothbake::cli
+
+#include "bake/pipeline/bake.hpp"
+
+namespace clothbake::cli {
+
+// What `bake --scene` needs to bake one fabric's plan: the stages' seed, the sections that record
+// the plan (bin maps, ScenePlanRecord) and the metadata (the plan's decisions, the scene's path
+// and content hash, what was left out).
+struct ScenePlanSeeds {
+  std::string scene_hash;             // XXH64 of the scene file, 16 hex digits
+  std::vector<std::string> left_out;  // in words, for messages and `info`
+  uint32_t half_vector_bins_kept = 0, half_vector_bins_total = 0;
+  uint32_t view_bins_kept = 0, view_bins_total = 0;
+  bool transmission = true;
+  nlohmann::json metadata;
+};
+
+// Plans `fabric_path` for the scene at `scene_path` (every object that names this fabric file,
+// their usages merged) and puts the seeds into `request`. Throws clothbake::Error(Input), exit 2,
+// before anything is baked: a scene that does not use the fabric (naming the fabrics it does use),
+// a plan that leaves out everything (no pixel sees the fabric, or no light reaches it).
+ScenePlanSeeds seed_scene_plan(const std::string& scene_path, const std::string& fabric_path,
+                               pipeline::BakeRequest* request);
+// The same for a scene already loaded (and possibly changed, e.g. another image size).
+ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& scene, const std::string& scene_path,
+                               const std::string& fabric_path, pipeline::BakeRequest* request);
 
 }  // namespace clothbake::cli

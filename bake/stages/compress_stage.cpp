@@ -53,6 +53,9 @@ void run_compress(pipeline::StageContext& ctx) {
       if (fill.header().kind() == kind) return &fill;
     return nullptr;
   };
+  // A scene-driven bake: only the kept half-vector bins, no gap kind without transmission.
+  const PlannedBake* plan =
+      ctx.has_input(kScenePlanArtifact) ? &ctx.input<PlannedBake>(kScenePlanArtifact) : nullptr;
   nlohmann::json kinds = nlohmann::json::array();
   const reader::RadianceTableKind order[] = {reader::RadianceTableKind::Specular,
                                              reader::RadianceTableKind::Gap};
@@ -60,15 +63,24 @@ void run_compress(pipeline::StageContext& ctx) {
     const tables::QuantisedRadianceFill* fill = fill_of(order[i]);
     const auto view = tables::find_radiance_sections(raw, order[i]);
     if (fill == nullptr && !view.present()) continue;
+    const bool specular = order[i] == reader::RadianceTableKind::Specular;
+    if (plan && !specular && !plan->transmission) continue;  // the gap kind: transmission only
+    const bool reduce = plan && specular && !plan->half_vector_bins.empty();
+    if (reduce && !fill)
+      throw_internal_error("compress: a scene-planned bake needs the streamed tables");
     const auto start = std::chrono::steady_clock::now();
     // Bit-identical either way (compress/directional_texels.hpp).
     const DirectionalTexels data =
-        fill ? directional_texels(*fill) : directional_texels(view, labels);
+        fill ? directional_texels(*fill, reduce ? std::span<const uint8_t>(plan->half_vector_bins)
+                                                : std::span<const uint8_t>())
+             : directional_texels(view, labels);
     ctx.progress(0.5 * i + 0.1);
     CompressionStats stats;
     const CompressedTableSet set = compress_tables(data, settings.cpca(), &stats);
-    for (auto& s : compressed_sections(set))
+    for (auto& s : compressed_sections(set)) {
+      if (reduce) s.version = 2;  // radiance_compressed v2: the bins of bin_map instance 0 only
       out.push_back(std::move(s));
+    }
     ctx.progress(0.5 * (i + 1));
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -112,7 +124,7 @@ pipeline::Stage compress_stage() {
   s.description = "C-PCA compression of the Integral-Radiance tables (paper Sec. 4.4)";
   s.inputs = {"fabric", "section/tables", "clusters", kStreamedTablesArtifact};
   s.outputs = {"section/compress", "metadata/compress", kCompressSupersedesArtifact};
-  s.collects = {kCompressSettingsArtifact};
+  s.collects = {kCompressSettingsArtifact, kScenePlanArtifact};
   s.run = run_compress;
   s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;

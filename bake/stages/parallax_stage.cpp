@@ -9,12 +9,17 @@
 // section parallax_entropy, format 1.2); otherwise a warning and 16-bit codes (parallax_compressed,
 // format 1.1), still without SATs. The raw codes and their SATs are written only with --keep-raw.
 // `--no-compress` (or compress = false) writes the raw codes and SATs alone, exactly as format 1.0
-// did.
+// did. A scene-planned bake (--scene) writes the kept directions' 8/16-bit codes instead
+// (parallax_planned, format 1.2; docs/scene-plans.md).
+#include <cmath>
+#include <cstring>
+
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
+#include "common/error.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/parallax_codes.hpp"
 #include "compress/parallax_entropy.hpp"
@@ -28,11 +33,47 @@ namespace {
 
 using namespace raycast;  // the algorithm library this stage drives
 
+// The planned form (format 1.2): the compressed sections restricted to the kept directions, as
+// ParallaxPlanned. The steps (instance 1) and codes (instance 2) keep the slices of the kept bins
+// in bin order; the info record's RMS offset error, measured over every bin, is rescaled to the
+// kept ones (the left-out bins cast no rays: code 0, error exactly 0).
+std::vector<formats::Section> planned_parallax_sections(std::vector<formats::Section> packed,
+                                                        const std::vector<uint8_t>& keep) {
+  std::size_t kept = 0;
+  for (uint8_t k : keep)
+    kept += k != 0;
+  for (formats::Section& s : packed) {
+    s.type = reader::SectionType::ParallaxPlanned;
+    if (s.instance == reader::kCompressedParallaxInfoInstance) {
+      reader::CompressedParallaxInfoRecord info;
+      std::memcpy(&info, s.payload.data(), sizeof info);
+      info.rms_offset_error *= std::sqrt(double(keep.size()) / double(kept));
+      std::memcpy(s.payload.data(), &info, sizeof info);
+      continue;
+    }
+    if (s.dims.empty() || s.dims[0] != keep.size())
+      throw_internal_error("planned parallax: a section without one slice per direction");
+    const std::size_t slice = s.payload.size() / keep.size();
+    std::vector<std::byte> out;
+    out.reserve(slice * kept);
+    for (std::size_t d = 0; d < keep.size(); ++d)
+      if (keep[d])
+        out.insert(out.end(), s.payload.begin() + std::ptrdiff_t(d * slice),
+                   s.payload.begin() + std::ptrdiff_t((d + 1) * slice));
+    s.payload = std::move(out);
+    s.dims[0] = uint32_t(kept);
+  }
+  return packed;
+}
+
 void run_parallax(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
   ParallaxSettings settings;
   settings.dirs = fabric.bake.parallax_dirs;
   settings.min_cos = fabric.bake.parallax_min_cos;
+  const PlannedBake* plan =
+      ctx.has_input(kScenePlanArtifact) ? &ctx.input<PlannedBake>(kScenePlanArtifact) : nullptr;
+  if (plan) settings.keep = plan->view_bins;
   ParallaxTable table =
       bake_parallax(fabric.maps, settings, [&](double f) { ctx.progress(0.95 * f); });
   const ParallaxStats stats = table.stats;
@@ -83,7 +124,13 @@ void run_parallax(pipeline::StageContext& ctx) {
                           {"raw_bytes", uint64_t(table.depth.size()) * 6},
                           {"seconds", ctx.options().record_timings ? packed.seconds : 0.0}};
     meta["keep_raw"] = form.keep_raw;
-    if (packed.bits == 8) {  // format 1.2: the 8-bit codes entropy-coded per direction
+    if (!settings.keep.empty()) {  // scene-planned (format 1.2): the kept directions only
+      sections =
+          planned_parallax_sections(compress::compressed_parallax_sections(packed), settings.keep);
+      meta["compressed"]["section"] = "parallax_planned";
+      meta["planned"] = {{"view_bins_kept", sections.back().dims[0]},
+                         {"view_bins_total", settings.keep.size()}};
+    } else if (packed.bits == 8) {  // format 1.2: the 8-bit codes entropy-coded per direction
       const compress::EntropyParallax coded = compress::entropy_code_parallax(packed);
       sections = compress::entropy_parallax_sections(packed, coded);
       nlohmann::json shifts = nlohmann::json::array();
@@ -99,6 +146,8 @@ void run_parallax(pipeline::StageContext& ctx) {
       sections = compress::compressed_parallax_sections(packed);
     }
   }
+  if (!settings.keep.empty() && (!compressed || form.keep_raw))
+    throw_internal_error("parallax: a scene-planned bake writes the compressed form only");
   if (!compressed || form.keep_raw)
     for (auto& s : parallax_sections(std::move(table)))
       sections.push_back(std::move(s));
@@ -117,7 +166,7 @@ pipeline::Stage parallax_stage() {
       "5.2)";
   s.inputs = {"fabric"};
   s.outputs = {"section/parallax", "metadata/parallax"};
-  s.collects = {kCompressSettingsArtifact};
+  s.collects = {kCompressSettingsArtifact, kScenePlanArtifact};
   s.run = run_parallax;
   s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;

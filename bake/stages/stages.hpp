@@ -10,6 +10,7 @@
 // never lies about when a stage runs.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "bake/pipeline/stage.hpp"
@@ -42,5 +43,18 @@ inline constexpr const char* kCompressSettingsArtifact = "compress_options";
 // What the compress stage supersedes (a std::vector<std::string> of section artifacts, read by
 // the write stage): {"section/tables"} unless the raw tables are kept.
 inline constexpr const char* kCompressSupersedesArtifact = "supersedes/compress";
+
+// Optional seed of a scene-driven bake (`clothbake bake --scene`, docs/scene-plans.md): a
+// PlannedBake. The parallax stage casts rays only for the kept view directions and writes the
+// planned parallax section (ParallaxPlanned); the tables and compress stages fill and compress only
+// the kept half-vector bins (radiance_compressed payload version 2) and leave the gap kind out
+// without transmission. The command seeds the bin_map / scene_plan sections and the plan's
+// metadata itself ("section/scene_plan", "metadata/scene_plan").
+inline constexpr const char* kScenePlanArtifact = "scene_plan";
+struct PlannedBake {
+  std::vector<uint8_t> half_vector_bins;  // radiance_dirs^2 entries, 1 = kept; empty: all bins
+  std::vector<uint8_t> view_bins;         // parallax_dirs^2 entries, 1 = kept; empty: all
+  bool transmission = true;               // false: the gap tables are left out
+};
 
 }  // namespace clothbake::stages

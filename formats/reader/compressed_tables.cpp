@@ -2,6 +2,8 @@
 // queries (compressed_tables.hpp).
 #include "formats/reader/compressed_tables.hpp"
 
+#include "formats/reader/scene_plan_sections.hpp"
+
 #include <cinttypes>
 #include <cmath>
 #include <cstring>
@@ -30,10 +32,10 @@ Status find_part(const Asset& asset, RadianceTableKind kind, CompressedPart part
                          "compressed_tables: the %s tables are not in this asset (part %u missing)",
                          kind_name(kind), unsigned(part));
   if (!s.ok()) return s;
-  if (out->version != 1)
+  if (out->version != 1 && out->version != 2)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "compressed_tables part %u: payload version %u is not 1", unsigned(part),
-                         unsigned(out->version));
+                         "compressed_tables part %u: payload version %u is not 1 or 2",
+                         unsigned(part), unsigned(out->version));
   return {};
 }
 
@@ -89,6 +91,21 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   for (uint32_t p = 0; p < kCompressedPartCount; ++p) {
     Status s = find_part(asset, kind, CompressedPart(p), &parts[p]);
     if (!s.ok()) return s;
+    if (parts[p].version != parts[0].version)
+      return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                           "compressed_tables %s: parts of payload versions %u and %u",
+                           kind_name(kind), unsigned(parts[0].version), unsigned(parts[p].version));
+  }
+  // Version 2 (format 1.2): the bins of bin_map instance 0 only.
+  BinMapView bin_map;
+  if (parts[0].version == 2) {
+    Status s = read_bin_map(asset, kHalfVectorBinMap, 0, &bin_map);
+    if (!s.ok()) return s;
+    if (!bin_map.present())
+      return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                           "compressed_tables %s: payload version 2 needs bin_map instance 0 (the "
+                           "half-vector bins it covers)",
+                           kind_name(kind));
   }
 
   // Info.
@@ -116,6 +133,9 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     return layout_error(kind, "info", "bins_per_side out of range");
   if (kind == RadianceTableKind::Gap && info.bins_per_side != 1)
     return layout_error(kind, "info", "the gap table has exactly one bin");
+  if (bin_map.present() && kind != RadianceTableKind::Gap &&
+      bin_map.bins_per_side != info.bins_per_side)
+    return layout_error(kind, "info", "bins_per_side differs from bin_map instance 0");
   if (info.cluster_count == 0 || info.cluster_count > kMaxRadianceClusters)
     return layout_error(kind, "info", "cluster_count out of range");
   if (info.cell_count > kMaxCompressedCells)
@@ -248,8 +268,14 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   auto cell_images = allocate<uint32_t>(2 * (cells_n ? cells_n : 1));
   auto coefficient_copy = allocate<int16_t>(coefficients.size ? coefficients.size : 1);
   auto first_coefficient = allocate<uint32_t>(uint64_t(n) * n);
+  std::unique_ptr<uint8_t[]> covered;
+  if (bin_map.present() && kind != RadianceTableKind::Gap) {
+    covered = allocate<uint8_t>(bins);
+    if (covered) std::memcpy(covered.get(), bin_map.mask, bins);
+  }
   if ((wide ? !sat64 : !sat32) || !row || !scaled || !map_copy || !cell_cluster || !cell_images ||
-      !coefficient_copy || !first_coefficient)
+      !coefficient_copy || !first_coefficient ||
+      (bin_map.present() && kind != RadianceTableKind::Gap && !covered))
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "compressed_tables %s: cannot allocate %" PRIu64
                          " bytes for the decoded tables",
@@ -296,6 +322,7 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   cell_images_ = std::move(cell_images);
   coefficients_ = std::move(coefficient_copy);
   first_coefficient_ = std::move(first_coefficient);
+  covered_ = std::move(covered);
   // Cells are sorted by cluster: each cluster's images are one contiguous range.
   uint32_t g = 0;
   for (uint32_t c = 0; c <= cluster_count_; ++c) {
@@ -525,9 +552,19 @@ bool CompressedRadianceTables::query_impl(const Footprint& rect, const double h[
   return true;
 }
 
+bool CompressedRadianceTables::covers_bins(const double h[3]) const noexcept {
+  if (!covered_) return true;
+  BinWeights bw;
+  if (!make_bin_weights(bins_per_side_, h, &bw)) return true;  // a bad h is InvalidArgument
+  for (uint32_t k = 0; k < bw.count; ++k)
+    if (bw.weight[k] > 0.0 && covered_[bw.bin[k]] == 0) return false;
+  return true;
+}
+
 bool CompressedRadianceTables::try_query(const Footprint& rect, const double h[3], uint32_t cluster,
                                          double* out) const noexcept {
   if (out == nullptr || !is_open() || cluster >= cluster_count_) return false;
+  if (covered_ && !covers_bins(h)) return false;
   return wide_ ? query_impl<int64_t>(rect, h, int(cluster), out)
                : query_impl<int32_t>(rect, h, int(cluster), out);
 }
@@ -535,6 +572,7 @@ bool CompressedRadianceTables::try_query(const Footprint& rect, const double h[3
 bool CompressedRadianceTables::try_query_all(const Footprint& rect, const double h[3],
                                              double* out) const noexcept {
   if (out == nullptr || !is_open()) return false;
+  if (covered_ && !covers_bins(h)) return false;
   return wide_ ? query_impl<int64_t>(rect, h, -1, out) : query_impl<int32_t>(rect, h, -1, out);
 }
 

@@ -19,11 +19,13 @@ namespace clothbake::reader {
 // minor number grows when section types, codecs or element types are added in a way that an
 // older reader can skip; an older reader reads a newer minor and ignores what it does not know.
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 2;  // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy
+inline constexpr uint16_t kFormatMinor =
+    2;  // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans
 
 // The minor version that introduced a section type: writers stamp an asset with the largest minor
 // its sections need (so that an asset without 1.1 sections stays a byte-identical 1.0 file).
 constexpr uint16_t format_minor_of(uint32_t section_type) {
+  if (section_type >= 0x0600 && section_type <= 0x0602) return 2;  // scene plans: 1.2
   return section_type == 0x0203   ? 2  // SectionType::ParallaxEntropy: 1.2
          : section_type == 0x0202 ? 1  // SectionType::ParallaxCompressed: 1.1
                                   : 0;
@@ -65,6 +67,10 @@ enum class SectionType : uint32_t {
   RadianceRawTables = 0x0500,         // Integral-Radiance SATs (lobe, cluster, half-vector bin)
   RadianceCompressedTables = 0x0501,  // C-PCA compressed Integral-Radiance tables
   // 0x0502..0x05FF: reserved for parts of the compressed tables (basis, means, quantisation).
+  // Scene-planned assets (format 1.2; scene_plan_sections.hpp).
+  BinMap = 0x0600,           // u8 {n, n} per direction grid: 1 = bin covered by the asset
+  ScenePlan = 0x0601,        // one ScenePlanRecord: what a scene-driven bake left out
+  ParallaxPlanned = 0x0602,  // the compressed parallax table of the bin map's directions only
   // 0x8000..0xFFFF: never assigned by clothbake; free for experiments and private extensions.
 };
 

@@ -31,6 +31,9 @@ constexpr SectionName kSectionNames[] = {
     {SectionType::ClusterMeanVisibility, "cluster_mean_visibility"},
     {SectionType::RadianceRawTables, "radiance_tables"},
     {SectionType::RadianceCompressedTables, "radiance_compressed"},
+    {SectionType::BinMap, "bin_map"},
+    {SectionType::ScenePlan, "scene_plan"},
+    {SectionType::ParallaxPlanned, "parallax_planned"},
 };
 
 }  // namespace

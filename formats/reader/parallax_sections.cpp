@@ -6,6 +6,7 @@
 
 #include "formats/reader/detail/open_sections.hpp"
 #include "formats/reader/parallax_entropy.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 #include "model/directions.hpp"
 
 namespace clothbake::reader {
@@ -28,8 +29,9 @@ struct ParallaxView::Packed {
       : flags(new (std::nothrow) std::once_flag[dirs]),
         sats(new (std::nothrow) std::atomic<uint32_t*>[dirs]),
         plane_flags(new (std::nothrow) std::once_flag[dirs]),
-        planes(new (std::nothrow) std::atomic<uint8_t*>[dirs]) {
-    if (!flags || !sats || !plane_flags || !planes) return;
+        planes(new (std::nothrow) std::atomic<uint8_t*>[dirs]),
+        plane(new (std::nothrow) int32_t[dirs]) {
+    if (!flags || !sats || !plane_flags || !planes || !plane) return;
     for (uint64_t d = 0; d < dirs; ++d) {
       sats[d].store(nullptr, std::memory_order_relaxed);
       planes[d].store(nullptr, std::memory_order_relaxed);
@@ -49,6 +51,7 @@ struct ParallaxView::Packed {
   std::unique_ptr<std::atomic<uint32_t*>[]> sats;
   std::unique_ptr<std::once_flag[]> plane_flags;
   std::unique_ptr<std::atomic<uint8_t*>[]> planes;
+  std::unique_ptr<int32_t[]> plane;  // planned form: bin -> stored plane, -1 = left out
   std::atomic<uint64_t> bytes{0};
 };
 
@@ -67,16 +70,23 @@ Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
   *this = ParallaxView();
   Status s;
   const bool entropy = any_instance(asset, SectionType::ParallaxEntropy, 5);
+  // The compressed form: entropy-coded (1.2), else 8/16-bit codes (1.1), else the scene-planned
+  // directions (1.2).
+  const bool compressed = any_instance(asset, SectionType::ParallaxCompressed, 3);
+  const bool planned =
+      !entropy && !compressed && any_instance(asset, SectionType::ParallaxPlanned, 3);
+  auto open_packed = [&] {
+    return entropy ? open_entropy(asset)
+                   : open_compressed(asset, planned ? SectionType::ParallaxPlanned
+                                                    : SectionType::ParallaxCompressed);
+  };
   if (source == ParallaxSource::Compressed) {
-    s = entropy ? open_entropy(asset) : open_compressed(asset);
+    s = open_packed();
   } else {
     s = open_raw(asset);
-    if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound) {
-      if (entropy)
-        s = open_entropy(asset);
-      else if (any_instance(asset, SectionType::ParallaxCompressed, 3))
-        s = open_compressed(asset);
-    }
+    if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound &&
+        (entropy || compressed || planned))
+      s = open_packed();
   }
   if (!s.ok()) *this = ParallaxView();
   return s;
@@ -87,7 +97,8 @@ uint64_t ParallaxView::decoded_bytes() const noexcept {
 }
 
 double ParallaxView::depth_step(uint32_t bin) const noexcept {
-  return steps_ ? steps_[bin] : info_.depth_scale;
+  if (!covers(bin)) return 0.0;
+  return steps_ ? steps_[plane(bin)] : info_.depth_scale;
 }
 
 namespace {
@@ -273,13 +284,30 @@ Status ParallaxView::decode_all() const noexcept {
   return {};
 }
 
-Status ParallaxView::open_compressed(const Asset& asset) noexcept {
+uint32_t ParallaxView::stored_dirs() const noexcept {
+  if (!plane_) return info_.dirs * info_.dirs;
+  uint32_t k = 0;
+  for (uint32_t b = 0; b < info_.dirs * info_.dirs; ++b)
+    k += plane_[b] >= 0 ? 1u : 0u;
+  return k;
+}
+
+Status ParallaxView::out_of_plan(int bin) const noexcept {
+  return Status::error(ErrorCode::OutOfPlan, Check::None,
+                       "parallax: view direction bin %d was left out of this scene-planned asset "
+                       "(bin_map instance 1)",
+                       bin);
+}
+
+Status ParallaxView::open_compressed(const Asset& asset, SectionType type) noexcept {
+  const bool planned = type == SectionType::ParallaxPlanned;
   ArrayView<uint8_t> info_bytes;
   ArrayView<double> steps;
   Status s = detail::view_required_pair(
-      asset, {SectionType::ParallaxCompressed, kCompressedParallaxInfoInstance},
-      {SectionType::ParallaxCompressed, kCompressedParallaxStepsInstance},
-      "this asset has no compressed parallax table (parallax_compressed instances 0, 1 and 2)",
+      asset, {type, kCompressedParallaxInfoInstance}, {type, kCompressedParallaxStepsInstance},
+      planned ? "this asset has no planned parallax table (parallax_planned instances 0, 1 and 2)"
+              : "this asset has no compressed parallax table (parallax_compressed instances 0, 1 "
+                "and 2)",
       "parallax_compressed: payload version must be 1 (this reader knows version 1)", &info_bytes,
       &steps);
   if (!s.ok()) return s;
@@ -299,8 +327,7 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
   ArrayView<uint8_t> codes;
   ArrayView<uint16_t> codes16;
   bool have_codes = false;
-  const detail::SectionKey codes_key{SectionType::ParallaxCompressed,
-                                     kCompressedParallaxCodesInstance};
+  const detail::SectionKey codes_key{type, kCompressedParallaxCodesInstance};
   s = info.bits == 8 ? detail::view_optional(asset, codes_key,
                                              "parallax_compressed: payload version must be 1",
                                              &codes, &have_codes)
@@ -332,7 +359,17 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
     return Status::error(ErrorCode::Malformed, Check::ValueRange,
                          "parallax_compressed: min_cos, reference height, max offset or an error "
                          "out of range");
-  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
+  const uint64_t n = info.resolution, bins = uint64_t(info.dirs) * info.dirs;
+  uint64_t d = bins;  // stored planes
+  BinMapView map;
+  if (planned) {
+    s = read_bin_map(asset, kViewBinMap, info.dirs, &map);
+    if (!s.ok()) return s;
+    if (!map.present())
+      return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                           "parallax_planned needs bin_map instance 1 (its view directions)");
+    d = map.kept;
+  }
   if (steps.rank != 1 || steps.dims[0] != d)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
                          "parallax_compressed instance 1 must be f64 {%llu} (one step per "
@@ -350,8 +387,8 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
                            "parallax_compressed: step of direction %llu is not in [0, 1] "
                            "tile-side units",
                            static_cast<unsigned long long>(i));
-  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
-  if (!packed || packed->count != d)
+  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(bins));
+  if (!packed || packed->count != bins)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_compressed: cannot allocate the SAT directory");
   info_ = ParallaxInfoRecord{};
@@ -368,12 +405,19 @@ Status ParallaxView::open_compressed(const Asset& asset) noexcept {
   else
     codes_ = codes16.data;
   steps_ = steps.data;
+  if (planned) {
+    int32_t next = 0;
+    for (uint64_t b = 0; b < bins; ++b)
+      packed->plane[b] = map.covers(uint32_t(b)) ? next++ : -1;
+    plane_ = packed->plane.get();
+  }
   packed_ = std::move(packed);
   return {};
 }
 
 bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
   if (!packed_) return true;
+  if (!covers(bin)) return false;  // planned form: the direction was left out
   const uint8_t* decoded = nullptr;
   if (stream_ && (decoded = plane8(bin)) == nullptr) return false;
   Packed& p = *packed_;
@@ -465,9 +509,9 @@ uint32_t ParallaxView::bin_code(uint32_t bin, int64_t x, int64_t y) const noexce
 
 double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
-  const uint64_t index =
-      (uint64_t(bin) * uint64_t(n) + uint64_t(wrap(y, n))) * uint64_t(n) + uint64_t(wrap(x, n));
-  return -double(code(bin, index - uint64_t(bin) * uint64_t(n) * uint64_t(n))) * depth_step(bin);
+  if (!covers(bin)) return 0.0;
+  const uint64_t index = uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n));
+  return -double(code(bin, index)) * depth_step(bin);
 }
 
 Status ParallaxView::view_direction(const double view[3], double o[3]) const noexcept {
@@ -506,6 +550,14 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
       }
     return r;
   }
+  if (plane_) {  // planned: through the plane map (uncovered bins count 0; callers check)
+    for (int k = 0; k < 4; ++k)
+      if (weight[k] > 0.0 && plane_[bin[k]] >= 0) {
+        const uint64_t p = uint64_t(plane_[bin[k]]);
+        r += weight[k] * (-double(code(uint32_t(bin[k]), texel)) * steps_[p]);
+      }
+    return r;
+  }
   if (codes8_) {
     for (int k = 0; k < 4; ++k)
       if (weight[k] > 0.0)
@@ -528,6 +580,8 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  for (int k = 0; k < 4; ++k)
+    if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
   double r = 0.0;
   for (int k = 0; k < 4; ++k)
     if (w.weight[k] > 0.0) r += w.weight[k] * bin_depth(uint32_t(w.index[k]), x, y);
@@ -608,6 +662,8 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  for (int k = 0; k < 4; ++k)
+    if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
   double sum = 0.0;
   if (steps_ == nullptr) {  // raw: one depth scale
     for (int k = 0; k < 4; ++k)
@@ -619,7 +675,8 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
         if (!ensure_sat(uint32_t(w.index[k])))
           return Status::error(ErrorCode::Unsupported, Check::None,
                                "parallax: cannot allocate the SAT of direction %d", w.index[k]);
-        sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan) * steps_[w.index[k]];
+        sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan) *
+               steps_[plane(uint32_t(w.index[k]))];
       }
   }
   const double r = -sum / area;

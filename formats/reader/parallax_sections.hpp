@@ -39,6 +39,10 @@
 //   ParallaxEntropy instance 4: u16 {G, 5, 256} frequency tables of G block groups
 // The view decodes a direction's block the first time a query needs that direction (thread-safe,
 // once per direction, N^2 bytes owned), so that opening costs a check of the offsets only.
+// Planned form (format 1.2, scene_plan_sections.hpp): ParallaxPlanned, the compressed layout for
+// the K view directions that bin map 1 covers (steps f64 {K}, codes {K, N, N}, in bin order). A
+// query whose bilinear bins (weight > 0) include a direction that was left out answers OutOfPlan,
+// never a number; covers() tells beforehand.
 //
 // Queries take the view direction as any finite non-zero vector; it is normalised and, below the
 // cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
@@ -121,7 +125,7 @@ static_assert(offsetof(CompressedParallaxInfoRecord, max_depth_error) == 56);
 enum class ParallaxSource {
   Auto,        // the raw table when the asset has one (exact), the compressed one otherwise
   Raw,         // the raw table only
-  Compressed,  // the compressed table only (entropy-coded when present, else 8/16-bit codes)
+  Compressed,  // the compressed table only (entropy-coded, 8/16-bit codes, or the planned form)
 };
 
 // The answer of a query.
@@ -146,6 +150,12 @@ class ParallaxView {
   bool is_compressed() const noexcept { return packed_ != nullptr; }
   // True for the entropy-coded form (format 1.2).
   bool is_entropy_coded() const noexcept { return stream_ != nullptr; }
+  // The planned form (ParallaxPlanned): only the directions of its bin map are stored.
+  bool is_planned() const noexcept { return plane_ != nullptr; }
+  // Whether direction bin `bin` (< dirs^2) is stored (always, except in the planned form).
+  bool covers(uint32_t bin) const noexcept { return plane_ == nullptr || plane_[bin] >= 0; }
+  // Stored view directions (dirs^2, or the bin map's count in the planned form).
+  uint32_t stored_dirs() const noexcept;
   // Compressed form: its record (zero for the raw form).
   const CompressedParallaxInfoRecord& compressed_info() const noexcept { return packed_info_; }
   // Bytes of the SATs and decoded planes the compressed form has built so far (0 for raw).
@@ -165,9 +175,10 @@ class ParallaxView {
   uint32_t dirs() const noexcept { return info_.dirs; }
 
   // The stored code of one bin at texel (x, y) (any integers: the tile wraps); the entropy form
-  // decodes the bin's block first. Precondition: bin < dirs^2.
+  // decodes the bin's block first. Precondition: bin < dirs^2 and covers(bin).
   uint32_t bin_code(uint32_t bin, int64_t x, int64_t y) const noexcept;
-  // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2.
+  // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2 and
+  // covers(bin) (an uncovered bin gives 0).
   double bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept;
   // sum over k < 4 with weight[k] > 0 of weight[k] * bin_depth(bin[k], x, y), wrapping (x, y)
   // once: the per-texel depth for bilinear weights computed once per view (the evaluator's hot
@@ -180,7 +191,8 @@ class ParallaxView {
   Status view_direction(const double view[3], double o[3]) const noexcept;
 
   // r at texel (x, y) for view direction `view` (bilinear between bins), with its Eq. 2 offset.
-  // InvalidArgument for a zero or non-finite view.
+  // InvalidArgument for a zero or non-finite view; OutOfPlan when a bin of the lookup (weight > 0)
+  // is not covered (planned form).
   Status depth(int64_t x, int64_t y, const double view[3], ParallaxSample* out) const noexcept;
 
   // The mean of r over a footprint rectangle (texel units, any size and position; the tile wraps;
@@ -203,11 +215,15 @@ class ParallaxView {
   double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
   double prefix_integral(uint32_t bin, double x, double y) const noexcept;
   const uint32_t* bin_sat(uint32_t bin) const noexcept;
-  // Code of texel index t (y * N + x) in direction bin; 0 when an entropy block is unavailable.
+  // Stored plane of a covered bin (the bin itself unless planned).
+  uint64_t plane(uint32_t bin) const noexcept { return plane_ ? uint64_t(plane_[bin]) : bin; }
+  Status out_of_plan(int bin) const noexcept;
+  // Code of texel index t (y * N + x) in direction bin (covered); 0 when an entropy block is
+  // unavailable.
   uint32_t code(uint32_t bin, uint64_t t) const noexcept {
-    const uint64_t plane = uint64_t(info_.resolution) * info_.resolution;
-    if (codes_) return uint32_t(codes_[bin * plane + t]);
-    if (codes8_) return uint32_t(codes8_[bin * plane + t]);
+    const uint64_t plane_size = uint64_t(info_.resolution) * info_.resolution;
+    if (codes_) return uint32_t(codes_[plane(bin) * plane_size + t]);
+    if (codes8_) return uint32_t(codes8_[plane(bin) * plane_size + t]);
     const uint8_t* p = plane8(bin);
     return p ? uint32_t(p[t]) : 0u;
   }
@@ -215,7 +231,7 @@ class ParallaxView {
 
   struct Packed;  // the compressed form's steps and on-demand SATs
   Status open_raw(const Asset& asset) noexcept;
-  Status open_compressed(const Asset& asset) noexcept;
+  Status open_compressed(const Asset& asset, SectionType type) noexcept;
   Status open_entropy(const Asset& asset) noexcept;
 
   ParallaxInfoRecord info_{};
@@ -229,6 +245,7 @@ class ParallaxView {
   uint32_t groups_ = 0;
   CompressedParallaxInfoRecord packed_info_{};
   std::shared_ptr<Packed> packed_;
+  const int32_t* plane_ = nullptr;  // planned form: stored plane of each bin, -1 = left out
 };
 
 }  // namespace clothbake::reader

@@ -150,6 +150,10 @@ Status RadianceTables::diagnose(const Footprint& rect, const double h[3], const 
   BinWeights w;
   s = radiance_bin_weights(bins_per_side(), h, &w);
   if (!s.ok()) return s;
+  if (!covers_bins(h))
+    return Status::error(ErrorCode::OutOfPlan, Check::None,
+                         "query: a half-vector bin of h was left out of this scene-planned asset "
+                         "(bin_map instance 0)");
   return Status::error(ErrorCode::InvalidArgument, Check::None, "query: invalid arguments");
 }
 

@@ -89,6 +89,12 @@ class RadianceTables {
                          double* out) const noexcept = 0;
   virtual bool try_query_all(const Footprint& rect, const double h[3],
                              double* out) const noexcept = 0;
+  // Whether every bin of h's bilinear lookup is stored: false only for the tables of a
+  // scene-planned asset (format 1.2) at a bin that was left out; query() then says OutOfPlan.
+  virtual bool covers_bins(const double h[3]) const noexcept {
+    (void)h;
+    return true;
+  }
 
   // The same answers with a Status that says what was wrong: InvalidArgument naming the bad
   // argument (rect, h, cluster, null output) or "not open". One implementation for every

@@ -22,6 +22,8 @@ enum class ErrorCode : uint8_t {
   NotFound,            // a requested section is absent
   WrongType,           // a section's element type or shape does not match the request
   InvalidArgument,     // a caller's argument is unusable (null pointer, misaligned buffer)
+  OutOfPlan,           // a scene-planned asset (format 1.2) left out what the query needs: a
+                       // half-vector or view bin outside its bin map, or transmission
 };
 
 // Stable check IDs. The number is the ID ("CBK-E012" is Check::SectionChecksum); never renumber.

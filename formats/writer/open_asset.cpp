@@ -10,6 +10,8 @@ ExitCode exit_code_of(const reader::Status& status) {
       return ExitCode::Input;
     case reader::ErrorCode::InvalidArgument:
       return ExitCode::Internal;
+    case reader::ErrorCode::OutOfPlan:  // a scene-planned asset left out what was asked
+      return ExitCode::Input;
     default:
       return ExitCode::InvalidAsset;
   }

@@ -2,9 +2,10 @@
 # The installed package and the build-system examples (docs/batch.md, "CMake", "Make"):
 # `cmake --install` into a prefix; examples/cmake-project configured and built against it with
 # Ninja and with Unix Makefiles, examples/make/Makefile with GNU Make; for each: the first build
-# bakes the three fabrics and the reader program opens them, a second build does nothing,
-# touching one fabric rebakes exactly that asset, an albedo edit rebakes it through the cache
-# (only the two colour stages are stored anew). Usage: build_systems.sh BUILD_DIR SOURCE_DIR
+# bakes the three fabrics and the plain weave's scene plan (SCENE) and the reader program opens
+# them, a second build does nothing, touching one fabric rebakes exactly that asset, touching the
+# scene rebakes exactly the planned asset, an albedo edit rebakes it through the cache (only the two
+# colour stages are stored anew). Usage: build_systems.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 build="$1"; source="$2"
 work=$(mktemp -d /tmp/clothbake-buildsys-XXXXXX)
@@ -20,14 +21,20 @@ for gen in Ninja "Unix Makefiles"; do
   cmake -S "$work/project" -B "$work/b" -G "$gen" -DCMAKE_PREFIX_PATH="$work/prefix" \
     "-DCLOTHBAKE_OPTIONS=--cache;$work/cache" >/dev/null
   n=$(cmake --build "$work/b" 2>&1 | tee "$work/log1" | grep -c "clothbake: baking" || true)
-  [[ "$n" == 3 ]] || { cat "$work/log1"; fail "$gen: first build baked $n assets, not 3"; }
-  "$work/b/open_assets" "$work/b/fabrics/"*.cbk >/dev/null || fail "$gen: the reader cannot open the assets"
+  [[ "$n" == 4 ]] || { cat "$work/log1"; fail "$gen: first build baked $n assets, not 4"; }
+  "$work/b/open_assets" "$work/b/fabrics/"*.cbk "$work/b/planned/plain-swatch.cbk" >/dev/null ||
+    fail "$gen: the reader cannot open the assets"
+  grep -q "swatch.toml" "$work/b/planned/plain-swatch.cbk.d" || fail "$gen: the depfile does not name the scene"
   n=$(cmake --build "$work/b" 2>&1 | grep -c "clothbake: baking" || true)
   [[ "$n" == 0 ]] || fail "$gen: a second build baked $n assets"
   sleep 1; touch "$work/project/fabrics/twill.toml"
   out=$(cmake --build "$work/b" 2>&1)
   n=$(grep -c "clothbake: baking" <<<"$out" || true)
   [[ "$n" == 1 && "$out" == *fabrics_twill* ]] || { echo "$out"; fail "$gen: touching twill.toml baked $n assets"; }
+  sleep 1; touch "$work/project/scenes/swatch.toml"
+  out=$(cmake --build "$work/b" 2>&1)
+  n=$(grep -c "clothbake: baking" <<<"$out" || true)
+  [[ "$n" == 1 && "$out" == *plain_swatch* ]] || { echo "$out"; fail "$gen: touching the scene baked $n assets"; }
   before=$(entries)
   sed -i 's/color = \[0.05, 0.09, 0.26\]/color = [0.50, 0.10, 0.02]/' "$work/project/fabrics/satin.toml"
   start=$(date +%s.%N)
@@ -37,7 +44,7 @@ for gen in Ninja "Unix Makefiles"; do
   [[ "$n" == 1 && "$out" == *fabrics_satin* ]] || { echo "$out"; fail "$gen: the albedo edit baked $n assets"; }
   after=$(entries)
   [[ $((after - before)) == 2 ]] || fail "$gen: the albedo edit stored $((after - before)) entries, not 2 (fabric_records, feature_maps)"
-  echo "$gen: 3 baked, no-op rebuild, one touched fabric rebaked, albedo edit through the cache in $seconds s"
+  echo "$gen: 3 baked and 1 planned, no-op rebuild, one touched fabric and the touched scene rebaked, albedo edit through the cache in $seconds s"
 done
 
 rm -rf "$work/mk" "$work/make"

@@ -18,6 +18,7 @@
 #include "formats/reader/layout.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/radiance_layout.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "model/asg.hpp"
 
@@ -87,6 +88,12 @@ std::map<std::string, Record> code_records() {
        CBK_FIELD(CompressedParallaxInfoRecord, rms_offset_error),
        CBK_FIELD(CompressedParallaxInfoRecord, max_offset_error),
        CBK_FIELD(CompressedParallaxInfoRecord, max_depth_error)}};
+  r["ScenePlanRecord"] = {
+      sizeof(ScenePlanRecord),
+      {CBK_FIELD(ScenePlanRecord, flags), CBK_FIELD(ScenePlanRecord, half_vector_bins_kept),
+       CBK_FIELD(ScenePlanRecord, view_bins_kept), CBK_FIELD(ScenePlanRecord, reserved0),
+       CBK_FIELD(ScenePlanRecord, scene_hash), CBK_FIELD(ScenePlanRecord, max_error),
+       CBK_FIELD(ScenePlanRecord, reserved)}};
   r["VisibilityInfoRecord"] = {
       sizeof(VisibilityInfoRecord),
       {CBK_FIELD(VisibilityInfoRecord, resolution), CBK_FIELD(VisibilityInfoRecord, dirs),

@@ -96,6 +96,33 @@ TEST_F(Batch, BakesSkipsUpToDateAndRebakesOnlyWhatChanged) {
   EXPECT_EQ(statuses(batch({})).at("plain"), "baked");
 }
 
+// --scene: each bake is that fabric's plan for the scene (byte-identical to `bake --scene`); a
+// fabric the scene does not use fails alone; a changed scene rebakes the fabrics it plans.
+TEST_F(Batch, SceneBakesEachFabricsPlan) {
+  const std::string scene_text =
+      "[camera]\nposition = [0, 0, 3]\nresolution = [8, 8]\n[[light]]\ntype = "
+      "\"directional\"\ndirection = [0.2, 0.1, -1]\n[[object]]\nshape = \"plane\"\nfabric = "
+      "\"lib/plain.toml\"\n[[object]]\nshape = \"plane\"\ncenter = [0.6, 0, 0.1]\nsize = "
+      "[0.3, 0.3]\nfabric = \"lib/satin.toml\"\n";
+  std::ofstream(dir_ / "scene.toml") << scene_text;
+  auto s = statuses(batch({"--scene", (dir_ / "scene.toml").string()}, 2));
+  EXPECT_EQ(s.at("plain"), "baked");
+  EXPECT_EQ(s.at("satin"), "baked");
+  EXPECT_EQ(s.at("twill"), "failed");  // not in the scene
+  const fs::path single = dir_ / "single-plain-planned.cbk";
+  ASSERT_EQ(run_clothbake({"bake", (dir_ / "lib" / "plain.toml").string(), "--scene",
+                           (dir_ / "scene.toml").string(), "-o", single.string(), "--quiet"})
+                .code,
+            0);
+  EXPECT_EQ(slurp(dir_ / "out" / "plain.cbk"), slurp(single));
+  EXPECT_EQ(statuses(batch({"--scene", (dir_ / "scene.toml").string()}, 2)).at("plain"),
+            "up-to-date");
+  std::ofstream(dir_ / "scene.toml") << scene_text << "[render]\nmax_error = 0.01\n";
+  EXPECT_EQ(statuses(batch({"--scene", (dir_ / "scene.toml").string()}, 2)).at("plain"), "baked");
+  // A missing scene is a bad command line for the whole batch, before any bake.
+  batch({"--scene", (dir_ / "nope.toml").string()}, 2);
+}
+
 TEST_F(Batch, BadEntriesFailAloneWithAMessage) {
   fs::create_directories(dir_ / "other");
   std::ofstream(dir_ / "other" / "plain.toml") << fabric("plain");

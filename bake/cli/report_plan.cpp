@@ -1,0 +1,260 @@
+// `clothbake report plan` (report_plan.hpp).
+#include "bake/cli/report_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "bake/cli/command.hpp"
+#include "bake/cli/scene_plan.hpp"
+#include "bake/inputs/scene_load.hpp"
+#include "bake/pipeline/bake.hpp"
+#include "bake/stages/stages.hpp"
+#include "common/error.hpp"
+#include "common/image_io/image_io.hpp"
+#include "formats/writer/atomic_file.hpp"
+#include "render/image_output.hpp"
+#include "render/renderer.hpp"
+
+namespace clothbake::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// relMSE as `report error-time` defines it (docs/rendering.md): the mean over the masked pixels
+// and channels of (x - r)^2 / (r^2 + eps^2), eps = 1 % of the reference's mean over the mask.
+double relmse(const render::RenderResult& a, const render::RenderResult& ref,
+              const std::vector<uint8_t>& mask) {
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t k = 0; k < ref.rgb.size(); ++k)
+    if (mask[k / 3]) sum += ref.rgb[k], ++count;
+  if (count == 0) return 0;
+  const double eps = 0.01 * sum / double(count), floor2 = eps > 0 ? eps * eps : 1e-12;
+  double rel = 0;
+  for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
+    if (!mask[k / 3]) continue;
+    const double d = double(a.rgb[k]) - ref.rgb[k];
+    rel += d * d / (double(ref.rgb[k]) * ref.rgb[k] + floor2);
+  }
+  return rel / double(count);
+}
+
+struct FabricRow {
+  std::string fabric, stem;
+  std::vector<int> objects;
+  std::string full_asset, planned_asset;
+  uint64_t full_bytes = 0, planned_bytes = 0;
+  double full_bake_seconds = 0, planned_bake_seconds = 0;
+  double planned_vs_full = 0, full_vs_reference = 0, planned_vs_reference = 0;
+  uint64_t pixels = 0;
+  ScenePlanSeeds seeds;
+  bool pass = true;
+};
+
+pipeline::BakeResult bake_one(const std::string& fabric, const std::string& output,
+                              const inputs::LoadedScene& scene, const std::string& scene_path,
+                              ScenePlanSeeds* seeds) {
+  pipeline::BakeRequest request;
+  request.fabric_path = fabric;
+  request.output_path = output;
+  if (seeds) *seeds = seed_scene_plan(scene, scene_path, fabric, &request);
+  return pipeline::bake(request, stages::bake_stages());
+}
+
+}  // namespace
+
+int run_plan_report(const PlanReportOptions& o) {
+  if (o.spp == 0) throw Error(ExitCode::Usage, "--spp must be at least 1");
+  inputs::LoadedScene loaded = inputs::load_scene(o.scene);
+  if (o.width > 0) {
+    loaded.scene.camera.width = o.width;
+    loaded.scene.camera.height = o.height;
+  }
+  const fs::path out(o.output);
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw_input_error(o.output + ": exists and is not a directory");
+  fs::create_directories(out / "assets", ec);
+  if (ec) throw_input_error(o.output + ": cannot create the folder (" + ec.message() + ")");
+
+  // One row per fabric file (objects sharing a fabric share its assets).
+  std::vector<FabricRow> rows;
+  for (std::size_t k = 0; k < loaded.fabrics.size(); ++k) {
+    if (loaded.fabrics[k].empty()) continue;
+    auto it = std::find_if(rows.begin(), rows.end(), [&](const FabricRow& r) {
+      return fs::weakly_canonical(r.fabric, ec) == fs::weakly_canonical(loaded.fabrics[k], ec);
+    });
+    if (it == rows.end()) {
+      FabricRow row;
+      row.fabric = loaded.fabrics[k];
+      row.stem = fs::path(row.fabric).stem().string() +
+                 (rows.empty() ? "" : "-" + std::to_string(rows.size()));
+      rows.push_back(row);
+      it = rows.end() - 1;
+    }
+    it->objects.push_back(int(k));
+  }
+  if (rows.empty())
+    throw_input_error(o.scene + ": no object names a fabric (`fabric = ...`): nothing to plan");
+
+  for (FabricRow& row : rows) {
+    row.full_asset = (out / "assets" / (row.stem + "-full.cbk")).string();
+    row.planned_asset = (out / "assets" / (row.stem + "-planned.cbk")).string();
+    const pipeline::BakeResult full =
+        bake_one(row.fabric, row.full_asset, loaded, o.scene, nullptr);
+    const pipeline::BakeResult planned =
+        bake_one(row.fabric, row.planned_asset, loaded, o.scene, &row.seeds);
+    row.full_bytes = full.asset.size_bytes;
+    row.planned_bytes = planned.asset.size_bytes;
+    row.full_bake_seconds = full.run.wall_seconds;
+    row.planned_bake_seconds = planned.run.wall_seconds;
+  }
+
+  // The renders: full assets, planned assets (same method, spp, seed), and the reference.
+  auto scene_with = [&](bool planned) {
+    render::Scene scene = loaded.scene;
+    for (const FabricRow& row : rows)
+      for (int k : row.objects)
+        scene.objects[std::size_t(k)].asset = planned ? row.planned_asset : row.full_asset;
+    return scene;
+  };
+  const render::Scene full_scene = scene_with(false), planned_scene = scene_with(true);
+  bool environment = false;
+  for (const render::Light& l : loaded.scene.lights)
+    environment |= l.type == render::LightType::Environment;
+  render::RenderOptions ro;
+  ro.spp = o.spp;
+  ro.seed = o.seed;
+  const render::Renderer full_renderer(full_scene, ro);
+  const render::RenderResult full_image = full_renderer.render();
+  const render::RenderResult planned_image = render::Renderer(planned_scene, ro).render();
+  render::RenderOptions ref_options;
+  ref_options.method = eval::Method::Reference;
+  ref_options.spp = environment ? o.reference_spp : 1;
+  ref_options.seed = o.seed + 1000003;
+  const render::RenderResult reference = render::Renderer(full_scene, ref_options).render();
+
+  // Per fabric: the pixels whose primary hit is one of its objects.
+  const int w = full_scene.camera.width, h = full_scene.camera.height;
+  std::vector<int> hit(std::size_t(w) * h, -1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      hit[std::size_t(y) * w + x] = full_renderer.pixel_footprint(x, y).object;
+  const double budget = loaded.scene.max_error;
+  bool all_pass = true;
+  nlohmann::json fabrics = nlohmann::json::array();
+  for (FabricRow& row : rows) {
+    std::vector<uint8_t> mask(hit.size(), 0);
+    for (std::size_t p = 0; p < hit.size(); ++p)
+      if (std::find(row.objects.begin(), row.objects.end(), hit[p]) != row.objects.end())
+        mask[p] = 1, ++row.pixels;
+    row.planned_vs_full = relmse(planned_image, full_image, mask);
+    row.full_vs_reference = relmse(full_image, reference, mask);
+    row.planned_vs_reference = relmse(planned_image, reference, mask);
+    row.pass = row.planned_vs_full <= budget;
+    all_pass = all_pass && row.pass;
+    fabrics.push_back(
+        {{"fabric", row.fabric},
+         {"objects", row.objects},
+         {"pixels", row.pixels},
+         {"full_asset", row.full_asset},
+         {"planned_asset", row.planned_asset},
+         {"full_bytes", row.full_bytes},
+         {"planned_bytes", row.planned_bytes},
+         {"size_ratio", row.planned_bytes ? double(row.full_bytes) / double(row.planned_bytes) : 0},
+         {"full_bake_seconds", row.full_bake_seconds},
+         {"planned_bake_seconds", row.planned_bake_seconds},
+         {"bake_speedup",
+          row.planned_bake_seconds > 0 ? row.full_bake_seconds / row.planned_bake_seconds : 0},
+         {"relmse",
+          {{"planned_vs_full", row.planned_vs_full},
+           {"full_vs_reference", row.full_vs_reference},
+           {"planned_vs_reference", row.planned_vs_reference}}},
+         {"relative_rms_planned_vs_full", std::sqrt(row.planned_vs_full)},
+         {"budget", budget},
+         {"pass", row.pass},
+         {"left_out", row.seeds.left_out}});
+  }
+
+  // Side by side: full | planned | relative difference (x 1/budget, white = at the budget).
+  Image side(3 * w, h, 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t p = std::size_t(y) * w + x;
+      double a = 0, b = 0;
+      for (int c = 0; c < 3; ++c) {
+        side.pixels[(std::size_t(y) * 3 * w + x) * 3 + c] =
+            float(render::srgb_encode(full_image.rgb[3 * p + c]));
+        side.pixels[(std::size_t(y) * 3 * w + w + x) * 3 + c] =
+            float(render::srgb_encode(planned_image.rgb[3 * p + c]));
+        a += full_image.rgb[3 * p + c];
+        b += planned_image.rgb[3 * p + c];
+      }
+      const double e = a > 1e-6 ? std::min(1.0, std::abs(b - a) / a / budget) : 0.0;
+      // False colour: black (equal) through red to yellow (at or over the budget).
+      const float r = float(std::min(1.0, 2 * e)), g = float(std::max(0.0, 2 * e - 1));
+      const std::size_t q = (std::size_t(y) * 3 * w + 2 * w + x) * 3;
+      side.pixels[q] = r, side.pixels[q + 1] = g, side.pixels[q + 2] = 0;
+    }
+  write_image((out / "side-by-side.png").string(), side, PixelType::UInt8);
+  render::write_render_images((out / "full.exr").string(), full_image);
+  render::write_render_images((out / "planned.exr").string(), planned_image);
+  render::write_render_images((out / "reference.exr").string(), reference);
+
+  const nlohmann::json doc = {{"scene", o.scene},
+                              {"budget", budget},
+                              {"spp", o.spp},
+                              {"seed", o.seed},
+                              {"resolution", {w, h}},
+                              {"pass", all_pass},
+                              {"criterion", "relmse planned_vs_full <= budget"},
+                              {"out_of_plan",
+                               {{"estimates", planned_image.stats.out_of_plan},
+                                {"brute_fallback", planned_image.stats.fallback_brute},
+                                {"zero", planned_image.stats.fallback_zero}}},
+                              {"fabrics", fabrics}};
+  const std::string text = doc.dump(2) + "\n";
+  formats::OutputOptions json_output;
+  json_output.require_asset_to_replace = false;
+  formats::write_file_atomically((out / "plan.json").string(),
+                                 [&](formats::Sink& sink) { sink.write(text.data(), text.size()); },
+                                 json_output);
+  if (o.json) {
+    print_json(doc);
+  } else {
+    std::printf("plan report for %s (budget %.3g %%, %dx%d, %u spp)\n", o.scene.c_str(),
+                100 * budget, w, h, unsigned(o.spp));
+    for (const FabricRow& row : rows) {
+      std::printf("%s: %llu -> %llu bytes (%.1fx smaller), bake %.2f -> %.2f s (%.2fx)\n",
+                  row.fabric.c_str(), static_cast<unsigned long long>(row.full_bytes),
+                  static_cast<unsigned long long>(row.planned_bytes),
+                  double(row.full_bytes) / double(std::max<uint64_t>(row.planned_bytes, 1)),
+                  row.full_bake_seconds, row.planned_bake_seconds,
+                  row.full_bake_seconds / std::max(row.planned_bake_seconds, 1e-9));
+      std::printf(
+          "  relMSE planned vs full %.3g (budget %.3g: %s; relative RMS %.3g %%); "
+          "vs reference: full %.3g, planned %.3g\n",
+          row.planned_vs_full, budget, row.pass ? "within" : "OVER",
+          100 * std::sqrt(row.planned_vs_full), row.full_vs_reference, row.planned_vs_reference);
+      for (const auto& what : row.seeds.left_out)
+        std::printf("  left out: %s\n", what.c_str());
+    }
+    std::printf("out-of-plan estimates %llu (brute-force fallback %llu, zero %llu)\n",
+                static_cast<unsigned long long>(planned_image.stats.out_of_plan),
+                static_cast<unsigned long long>(planned_image.stats.fallback_brute),
+                static_cast<unsigned long long>(planned_image.stats.fallback_zero));
+    std::printf("  %s/{plan.json,side-by-side.png,full.exr,planned.exr,reference.exr,assets/}\n",
+                o.output.c_str());
+  }
+  if (!all_pass)
+    throw Error(ExitCode::VerificationFailed,
+                "report plan: a planned render is over the scene's budget (see " +
+                    (out / "plan.json").string() + ")");
+  return 0;
+}
+
+}  // namespace clothbake::cli

@@ -1,0 +1,31 @@
+// `clothbake report plan SCENE.toml -o DIR`: the proof that a scene-planned bake does not change
+// the picture (docs/scene-plans.md, "Proof"). For every fabric the scene's objects name, bakes the
+// full asset and the planned one (timed, this machine, this run), renders the scene with each
+// (same method, spp and seed) and with the Reference method on the full assets, and writes the
+// relMSE of planned against full and of both against the reference over that fabric's pixels,
+// the sizes and bake times, DIR/plan.json, DIR/side-by-side.png (full | planned | difference map)
+// and a summary on stdout. Exit 5 when a fabric's planned render is over the scene's budget:
+// relMSE planned vs full > [render] max_error (the criterion; the relative RMS is reported
+// beside it, docs/scene-plans.md says why it is not the criterion). With --image-size the plan is made for that
+// size (footprints and view directions change with it).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace clothbake::cli {
+
+struct PlanReportOptions {
+  std::string scene, output;
+  uint32_t spp = 2;
+  uint64_t seed = 1;
+  int width = 0, height = 0;    // > 0: render at this size instead of the scene camera's
+  uint32_t reference_spp = 64;  // light samples of the reference with environment lights
+  bool json = false;
+};
+
+// Throws clothbake::Error: Input for a bad scene, fabric or output, VerificationFailed (exit 5)
+// after writing everything when a planned render is over the budget.
+int run_plan_report(const PlanReportOptions& options);
+
+}  // namespace clothbake::cli

@@ -1,0 +1,271 @@
+// Scene-driven bakes end to end (docs/scene-plans.md): the rules on synthetic scenes, what
+// `bake --scene` writes and leaves out, the OutOfPlan status of queries outside the plan and the
+// renderer's counted fallback, the proof (`report plan`) on every example scene at a small image
+// size with the 64^2 twill, and the bad cases (a scene without the fabric, a plan that leaves out
+// everything: exit 2, nothing written).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+
+#include "tests/eval/eval_fixtures.hpp"
+
+namespace clothbake::render {
+namespace {
+
+using eval_test::assets;
+using test_support::run_clothbake;
+namespace fs = std::filesystem;
+
+std::string twill_toml() {
+  return (assets().dir / "twill.toml").string();
+}
+
+// A plane of the 64^2 twill at the origin facing +z, seen from `camera` (looking at the origin),
+// lit by `light` (TOML of one [[light]]).
+std::string plane_scene(const std::string& camera, const std::string& light, double tiles,
+                        double fov = 30, int pixels = 16) {
+  std::ostringstream s;
+  s << "[camera]\nposition = " << camera
+    << "\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov_deg = " << fov << "\nresolution = [" << pixels
+    << ", " << pixels << "]\n"
+    << light << "[[object]]\nname = \"swatch\"\nshape = \"plane\"\nnormal = [0, 0, 1]\n"
+    << "size = [1, 1]\nfabric = \"" << twill_toml() << "\"\ntiles_per_unit = " << tiles << "\n";
+  return s.str();
+}
+const char* kFrontLight = "[[light]]\ntype = \"directional\"\ndirection = [0.2, 0.1, -1]\n";
+const char* kBackLight = "[[light]]\ntype = \"directional\"\ndirection = [0.1, 0.1, 1]\n";
+
+fs::path write_scene(const std::string& name, const std::string& text) {
+  const fs::path p = assets().dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+std::map<std::string, std::string> decisions(const nlohmann::json& fabric) {
+  std::map<std::string, std::string> out;
+  for (const auto& d : fabric["decisions"])
+    out[d["item"]] = d["decision"];
+  return out;
+}
+
+nlohmann::json plan_of(const fs::path& scene) {
+  const auto run = run_clothbake({"plan", scene.string(), "--json"});
+  EXPECT_EQ(run.code, 0) << run.err;
+  return nlohmann::json::parse(run.out)["fabrics"][0];
+}
+
+nlohmann::json info_of(const std::string& asset) {
+  const auto run = run_clothbake({"info", asset, "--json"});
+  EXPECT_EQ(run.code, 0) << run.err;
+  return nlohmann::json::parse(run.out);
+}
+
+// Far camera, many tiles per unit: footprints of hundreds of texels against offsets of a fraction
+// of a texel, so the footprint means alone are within the budget; near and oblique, they are not.
+TEST(ScenePlanRules, AFarCameraNeedsNoPerTexelParallaxANearOneDoes) {
+  const auto far =
+      plan_of(write_scene("far.toml", plane_scene("[0, 0, 50]", kFrontLight, 100, 1.2)));
+  EXPECT_GT(far["usage"]["footprint_texels"]["min"].get<double>(), 200.0);
+  EXPECT_EQ(decisions(far)["per-texel parallax"], "left out");
+  const auto near =
+      plan_of(write_scene("near.toml", plane_scene("[0.6, 0, 1.2]", kFrontLight, 1, 40)));
+  EXPECT_EQ(decisions(near)["per-texel parallax"], "kept");
+}
+
+TEST(ScenePlanRules, ALightOnlyInFrontLeavesOutTransmission) {
+  const auto front = plan_of(write_scene("front.toml", plane_scene("[0, 0, 3]", kFrontLight, 2)));
+  EXPECT_EQ(decisions(front)["transmission and gap tables"], "left out");
+  const auto back = plan_of(write_scene("back.toml", plane_scene("[0, 0, 3]", kBackLight, 2)));
+  EXPECT_EQ(decisions(back)["transmission and gap tables"], "kept");
+}
+
+TEST(ScenePlanRules, AGrazingCameraKeepsSheenAndParallax) {
+  const auto grazing =
+      plan_of(write_scene("grazing.toml", plane_scene("[0, -3, 0.25]", kFrontLight, 4, 20)));
+  const auto d = decisions(grazing);
+  EXPECT_EQ(d.at("per-texel parallax"), "kept");
+  EXPECT_EQ(d.at("sheen"), "kept");
+  EXPECT_GT(grazing["usage"]["grazing_view_fraction"].get<double>(), 0.5);
+  // The reason names the grazing views.
+  for (const auto& x : grazing["decisions"])
+    if (x["item"] == "sheen")
+      EXPECT_NE(x["reason"].get<std::string>().find("grazing views on"), std::string::npos);
+}
+
+// A fixed camera and one distant light: the asset holds exactly the bins the analysis found, the
+// planned parallax only the view directions the pixels use; the rest answers OutOfPlan.
+TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
+  const fs::path scene = write_scene("fixed.toml", plane_scene("[0, 0, 3]", kFrontLight, 2));
+  const auto plan = plan_of(scene);
+  const int used = plan["usage"]["half_vector_bins_used"].get<int>();
+  ASSERT_GT(used, 0);
+  ASSERT_LT(used, 64);
+  const std::string out = (assets().dir / "fixed.cbk").string();
+  const auto run = run_clothbake(
+      {"bake", twill_toml(), "--scene", scene.string(), "-o", out, "--quiet", "--json"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(run.out);
+  EXPECT_EQ(report["scene_plan"]["half_vector_bins_kept"], used);
+  const nlohmann::json info = info_of(out);
+  EXPECT_EQ(info["format"]["minor"], 2);
+  EXPECT_TRUE(info["scene_plan"]["transmission_left_out"].get<bool>());
+  EXPECT_EQ(info["scene_plan"]["half_vector_bins_kept"], used);
+  std::map<std::string, int> count;
+  for (const auto& s : info["sections"]) {
+    count[s["name"]]++;
+    if (s["name"] == "radiance_compressed") {
+      EXPECT_EQ(s["version"], 2);
+      EXPECT_LT(s["instance"].get<int>(), 16) << "no gap kind without transmission";
+    }
+    if (s["name"] == "parallax_planned" && s["instance"] == 2) {
+      EXPECT_EQ(s["dims"][0], plan["usage"]["view_bins_used"]);
+    }
+  }
+  EXPECT_EQ(count["bin_map"], 2);
+  EXPECT_EQ(count["scene_plan"], 1);
+  EXPECT_EQ(count["parallax_compressed"], 0);
+  // `info` in words says what was left out.
+  const auto text = run_clothbake({"info", out});
+  EXPECT_NE(text.out.find("left out: transmission and gap tables"), std::string::npos) << text.out;
+  EXPECT_EQ(run_clothbake({"validate", out}).code, 0);
+
+  // In the plan: the head-on view and the mirror direction of the light answer a number.
+  const std::string wi = "-0.2,-0.1,1", rect = "0,0,32,32";
+  const auto in_plan =
+      run_clothbake({"eval", out, "--rect", rect, "--wi", wi, "--wo", "0,0,1", "--json"});
+  EXPECT_EQ(in_plan.code, 0) << in_plan.err;
+  // Outside: a grazing half vector, an unseen view, transmission: exit 2 and the reason, no value.
+  for (const auto& [wi_out, wo_out, words] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"0.9,0,0.3", "-0.9,0.1,0.3", "left out"},
+           {wi, "0.6,0.6,0.5", "left out"},
+           {"0.1,0.1,-1", "0,0,1", "transmission"}}) {
+    const auto r =
+        run_clothbake({"eval", out, "--rect", rect, "--wi", wi_out, "--wo", wo_out, "--json"});
+    EXPECT_EQ(r.code, 2) << wi_out << " " << wo_out << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("\"value\""), std::string::npos) << r.out;
+  }
+  // The reader's radiance query: OutOfPlan for a left-out bin, a value for a kept one.
+  const auto q_out = run_clothbake({"query", out, "radiance", "--lobe", "specular_reflection",
+                                    "--h", "0.9,0.1,0.3", "--rect", rect});
+  EXPECT_EQ(q_out.code, 2) << q_out.out << q_out.err;
+  EXPECT_NE(q_out.err.find("left out"), std::string::npos) << q_out.err;
+}
+
+// The renderer: a planned asset rendered with another light than its plan's falls back to brute
+// force for the estimates outside the plan and counts them; the scene of the plan needs none.
+TEST(ScenePlanBake, TheRendererCountsItsOutOfPlanFallbacks) {
+  const fs::path scene = write_scene("fallback.toml", plane_scene("[0, 0, 3]", kFrontLight, 2));
+  const std::string asset = (assets().dir / "fallback.cbk").string();
+  ASSERT_EQ(
+      run_clothbake({"bake", twill_toml(), "--scene", scene.string(), "-o", asset, "--quiet"}).code,
+      0);
+  auto render = [&](const char* light) {
+    std::string text = plane_scene("[0, 0, 3]", light, 2);
+    text = std::regex_replace(text, std::regex("fabric = \"[^\"]*\""), "asset = \"" + asset + "\"");
+    const fs::path s = write_scene("fallback-render.toml", text);
+    const auto r = run_clothbake(
+        {"render", s.string(), "-o", (assets().dir / "fallback.exr").string(), "--json"});
+    EXPECT_EQ(r.code, 0) << r.err;
+    return nlohmann::json::parse(r.out);
+  };
+  const auto same = render(kFrontLight);
+  EXPECT_EQ(same["out_of_plan"], 0);
+  const auto other = render("[[light]]\ntype = \"directional\"\ndirection = [-0.8, 0.3, -0.5]\n");
+  EXPECT_GT(other["out_of_plan"].get<int>(), 0);
+  EXPECT_EQ(other["out_of_plan"].get<int>(),
+            other["out_of_plan_brute_fallback"].get<int>() + other["out_of_plan_zero"].get<int>());
+  EXPECT_EQ(other["out_of_plan_brute_fallback"], other["out_of_plan"]);
+}
+
+TEST(ScenePlanBake, BadScenesAndPlansAreExitTwoWithNothingWritten) {
+  const std::string out = (assets().dir / "bad.cbk").string();
+  // A scene whose objects use another fabric (or none).
+  std::string other = plane_scene("[0, 0, 3]", kFrontLight, 2);
+  other = std::regex_replace(other, std::regex("fabric = \"[^\"]*\""),
+                             "fabric = \"" + (assets().dir / "flat.toml").string() + "\"");
+  const fs::path other_scene = write_scene("other.toml", other);
+  auto r = run_clothbake({"bake", twill_toml(), "--scene", other_scene.string(), "-o", out});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no object of the scene uses the fabric"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("flat.toml"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // A camera that never sees the fabric: the plan would leave out everything.
+  const fs::path away =
+      write_scene("away.toml",
+                  std::regex_replace(plane_scene("[0, 0, 3]", kFrontLight, 2),
+                                     std::regex("look_at = \\[0, 0, 0\\]"), "look_at = [0, 0, 6]"));
+  r = run_clothbake({"bake", twill_toml(), "--scene", away.string(), "-o", out});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("leaves out everything"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // Lit from behind only and seen from the front is still a plan (transmission); lit by nothing
+  // that reaches it (a blocker between the light and the cloth) leaves out every bin.
+  std::string blocked = plane_scene("[0, 0, 3]", kFrontLight, 2);
+  blocked +=
+      "[[object]]\nshape = \"plane\"\ncenter = [0, 0, -0.5]\nnormal = [0, 0, 1]\n"
+      "size = [50, 50]\ncolor = 0.5\n";
+  blocked = std::regex_replace(blocked, std::regex("direction = \\[0.2, 0.1, -1\\]"),
+                               "direction = [0, 0, 1]");
+  const fs::path dark = write_scene("dark.toml", blocked);
+  r = run_clothbake({"bake", twill_toml(), "--scene", dark.string(), "-o", out});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no light reaches"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // --scene with options that write other forms is a usage error.
+  EXPECT_EQ(
+      run_clothbake({"bake", twill_toml(), "--scene", dark.string(), "-o", out, "--no-compress"})
+          .code,
+      1);
+}
+
+// The proof on every example scene, with the 64^2 twill and tiny images: the planned render is
+// within the scene's budget of the full one, and the JSON has the fields of the issue.
+TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
+  const fs::path examples = fs::path(CLOTHBAKE_SOURCE_DIR) / "examples" / "scenes";
+  int scenes = 0;
+  for (const auto& entry : fs::directory_iterator(examples)) {
+    if (entry.path().extension() != ".toml") continue;
+    std::ifstream in(entry.path());
+    std::string text((std::istreambuf_iterator<char>(in)), {});
+    text = std::regex_replace(text, std::regex("fabric = \"[^\"]*\""),
+                              "fabric = \"" + twill_toml() + "\"");
+    text = std::regex_replace(text, std::regex("map = \"([^\"]*)\""),
+                              "map = \"" + examples.string() + "/$1\"");
+    const std::string name = entry.path().stem().string();
+    const fs::path scene = write_scene("example-" + name + ".toml", text);
+    const fs::path dir = assets().dir / ("report-" + name);
+    const auto r = run_clothbake(
+        {"report", "plan", scene.string(), "-o", dir.string(), "--image-size", "12,12", "--json"});
+    ASSERT_TRUE(r.code == 0 || r.code == 5) << name << ": " << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    for (const auto& f : j["fabrics"]) {
+      for (const char* key :
+           {"full_bytes", "planned_bytes", "full_bake_seconds", "planned_bake_seconds", "budget"})
+        EXPECT_TRUE(f.contains(key)) << name << ": " << key;
+      EXPECT_LE(f["planned_bytes"].get<double>(), f["full_bytes"].get<double>()) << name;
+      EXPECT_LE(f["relmse"]["planned_vs_full"].get<double>(), f["budget"].get<double>())
+          << name << ": " << f.dump();
+      // The plan does not make the picture worse: the planned render is as far from the reference
+      // as the full one, within the budget (relative).
+      EXPECT_LE(f["relmse"]["planned_vs_reference"].get<double>(),
+                f["relmse"]["full_vs_reference"].get<double>() * (1 + f["budget"].get<double>()))
+          << name << ": " << f.dump();
+      EXPECT_TRUE(f["relmse"].contains("full_vs_reference"));
+      EXPECT_TRUE(f["relmse"].contains("planned_vs_reference"));
+    }
+    EXPECT_EQ(r.code, 0) << name;
+    EXPECT_TRUE(fs::is_regular_file(dir / "side-by-side.png")) << name;
+    ++scenes;
+  }
+  EXPECT_GE(scenes, 6);
+}
+
+}  // namespace
+}  // namespace clothbake::render
