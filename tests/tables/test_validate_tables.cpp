@@ -144,7 +144,7 @@ TEST_F(ValidateTables, BakedAssetsAreValid) {
   }
   // The fixtures hold what the corruptions below need.
   EXPECT_NE(find(*packed_, SectionType::RadianceCompressedTables, 2), nullptr);
-  EXPECT_NE(find(*packed_, SectionType::ParallaxCompressed, 2), nullptr);
+  EXPECT_NE(find(*packed_, SectionType::ParallaxEntropy, 3), nullptr);  // the 1.2 default
   EXPECT_NE(find(*raw_, SectionType::ParallaxSat, 0), nullptr);
   EXPECT_NE(find(*packed_, SectionType::VisibilityAsg, 0), nullptr);
   EXPECT_NE(find(*raw_, SectionType::RadianceRawTables, 3), nullptr);

@@ -283,7 +283,7 @@ TEST_F(Hardening, ReservedBytesOfTheInfoRecordsAreChecked) {
   const Case cases[] = {
       {"parallax", raw_parallax(), SectionType::ParallaxTable, 0, 48, "CBK-E013",
        " parallax --dir 0,0,1 --texel 1,1"},
-      {"parallax_compressed", good(), SectionType::ParallaxCompressed, 0, 12, "CBK-E015",
+      {"parallax_entropy", good(), SectionType::ParallaxEntropy, 0, 12, "CBK-E015",
        " parallax --dir 0,0,1 --texel 1,1"},
       {"visibility", good(), SectionType::VisibilityAsg, 0, 48, "CBK-E013",
        " visibility --dir 0,0,1 --texel 1,1"},
