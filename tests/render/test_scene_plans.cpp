@@ -92,9 +92,11 @@ TEST(ScenePlanRules, AGrazingCameraKeepsSheenAndParallax) {
   EXPECT_EQ(d.at("sheen"), "kept");
   EXPECT_GT(grazing["usage"]["grazing_view_fraction"].get<double>(), 0.5);
   // The reason names the grazing views.
-  for (const auto& x : grazing["decisions"])
-    if (x["item"] == "sheen")
+  for (const auto& x : grazing["decisions"]) {
+    if (x["item"] == "sheen") {
       EXPECT_NE(x["reason"].get<std::string>().find("grazing views on"), std::string::npos);
+    }
+  }
 }
 
 // A fixed camera and one distant light: the asset holds exactly the bins the analysis found, the
