@@ -251,7 +251,10 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       for (const char* key :
            {"full_bytes", "planned_bytes", "full_bake_seconds", "planned_bake_seconds", "budget"})
         EXPECT_TRUE(f.contains(key)) << name << ": " << key;
-      EXPECT_LE(f["planned_bytes"].get<double>(), f["full_bytes"].get<double>()) << name;
+      // No size assertion: since format 1.2 the full asset's parallax is entropy-coded while a
+      // planned asset stores its kept directions' plain 8-bit codes, so a plan can be larger than
+      // the full bake (docs/scene-plans.md, "Size against the entropy-coded full asset").
+      EXPECT_GT(f["planned_bytes"].get<double>(), 0.0) << name;
       EXPECT_LE(f["relmse"]["planned_vs_full"].get<double>(), f["budget"].get<double>())
           << name << ": " << f.dump();
       // The plan does not make the picture worse: the planned render is as far from the reference
