@@ -344,21 +344,8 @@ Status ParallaxView::open_compressed(const Asset& asset, SectionType type) noexc
     for (int i = 0; i < 4; ++i)
       codes.dims[i] = codes16.dims[i];
   }
-  if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
-      info.dirs > kMaxParallaxDirs)
-    return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                         "parallax_compressed: resolution %u or directions %u out of range "
-                         "(1..%u, 1..%u)",
-                         unsigned(info.resolution), unsigned(info.dirs),
-                         unsigned(kMaxParallaxResolution), unsigned(kMaxParallaxDirs));
-  if (!(info.min_cos >= 0.0 && info.min_cos < 1.0) || !std::isfinite(info.reference_height) ||
-      !(info.max_offset >= 0.0 && std::isfinite(info.max_offset)) ||
-      !(info.rms_offset_error >= 0.0 && std::isfinite(info.rms_offset_error)) ||
-      !(info.max_offset_error >= 0.0 && std::isfinite(info.max_offset_error)) ||
-      !(info.max_depth_error >= 0.0 && std::isfinite(info.max_depth_error)))
-    return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                         "parallax_compressed: min_cos, reference height, max offset or an error "
-                         "out of range");
+  s = check_compressed_record(info, "parallax_compressed");
+  if (!s.ok()) return s;
   const uint64_t n = info.resolution, bins = uint64_t(info.dirs) * info.dirs;
   uint64_t d = bins;  // stored planes
   BinMapView map;
