@@ -21,6 +21,7 @@
 #include "tables/radiance_fill.hpp"
 #include "tables/radiance_sections.hpp"
 #include "verify/footprint_sampling.hpp"
+#include "verify/report_text.hpp"
 
 namespace clothbake::verify {
 namespace {
@@ -37,23 +38,8 @@ double thread_seconds() {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-// Thresholds as given (1e-07, 0.01), not rounded to a fixed number of digits.
-std::string general(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
-
 std::string psnr_text(double db) {
-  return db >= kExactPsnrDb ? "exact" : fixed(db, 1) + " dB";
+  return db >= kExactPsnrDb ? "exact" : fixed_text(db, 1) + " dB";
 }
 
 // Per (cluster, bin) table: RMSE, max error, PSNR from the full decompression.
@@ -428,16 +414,16 @@ CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabri
     for (const auto& c : r.classes)
       if (c.min_side >= options.threshold_side && c.footprints > 0 &&
           c.rms_relative > options.max_footprint_error)
-        report.failures.push_back(r.kind + ": footprints of class " + c.size_class +
-                                  " have an RMS relative error of " + fixed(c.rms_relative, 5) +
-                                  " > " + general(options.max_footprint_error));
+        report.failures.push_back(
+            r.kind + ": footprints of class " + c.size_class + " have an RMS relative error of " +
+            fixed_text(c.rms_relative, 5) + " > " + general_text(options.max_footprint_error));
     if (options.min_ratio && r.ratio < *options.min_ratio)
-      report.failures.push_back(r.kind + ": compression ratio " + fixed(r.ratio, 1) + " < " +
-                                fixed(*options.min_ratio, 1));
+      report.failures.push_back(r.kind + ": compression ratio " + fixed_text(r.ratio, 1) + " < " +
+                                fixed_text(*options.min_ratio, 1));
     if (options.max_texel_error && r.tables.texel_rms_relative > *options.max_texel_error)
       report.failures.push_back(r.kind + ": relative RMS texel error " +
-                                fixed(r.tables.texel_rms_relative, 5) + " > " +
-                                general(*options.max_texel_error));
+                                fixed_text(r.tables.texel_rms_relative, 5) + " > " +
+                                general_text(*options.max_texel_error));
     report.kinds.push_back(std::move(r));
   }
   if (report.kinds.empty())
@@ -513,31 +499,31 @@ std::string compressed_report_text(const CompressedVerifyReport& report) {
       << r.min_rank << ".." << r.max_rank << ", " << r.images << " images; against raw tables "
       << (r.raw_reference_from_asset ? "kept in the asset" : "recomputed from the fabric") << "\n";
     o << "  size: " << r.compressed_bytes << " bytes against " << r.raw_float_bytes
-      << " of raw float tables (" << fixed(r.ratio, 1) << ":1); decoded in memory "
-      << fixed(double(r.decoded_bytes) / 1048576.0, 1) << " MiB\n";
-    o << "  texels: relative RMS error " << fixed(100 * r.tables.texel_rms_relative, 3)
-      << " % (bake claimed " << fixed(100 * r.bake_error, 3) << " %), " << r.tables.tables
+      << " of raw float tables (" << fixed_text(r.ratio, 1) << ":1); decoded in memory "
+      << fixed_text(double(r.decoded_bytes) / 1048576.0, 1) << " MiB\n";
+    o << "  texels: relative RMS error " << fixed_text(100 * r.tables.texel_rms_relative, 3)
+      << " % (bake claimed " << fixed_text(100 * r.bake_error, 3) << " %), " << r.tables.tables
       << " tables, PSNR min " << psnr_text(r.tables.min_psnr_db) << " / median "
       << psnr_text(r.tables.median_psnr_db) << ", worst RMSE/peak "
-      << fixed(r.tables.worst_relative_rmse, 5) << " (" << r.tables.worst_table
-      << "), max abs error " << general(r.tables.max_abs_error) << "\n";
+      << fixed_text(r.tables.worst_relative_rmse, 5) << " (" << r.tables.worst_table
+      << "), max abs error " << general_text(r.tables.max_abs_error) << "\n";
     o << "  footprints (RMS relative per cluster / of the cluster sum / max guarded):\n";
     for (const auto& c : r.classes)
       o << "    " << c.size_class
         << (c.size_class.size() < 5 ? std::string(5 - c.size_class.size(), ' ') : "") << " "
-        << fixed(100 * c.rms_relative, 3) << " % / " << fixed(100 * c.rms_relative_sum, 3)
-        << " % / " << fixed(100 * c.max_relative, 2) << " %  (" << c.footprints << ")\n";
+        << fixed_text(100 * c.rms_relative, 3) << " % / " << fixed_text(100 * c.rms_relative_sum, 3)
+        << " % / " << fixed_text(100 * c.max_relative, 2) << " %  (" << c.footprints << ")\n";
     if (std::isfinite(r.min_reliable_side))
-      o << "  use the compressed tables for footprints of side >= " << fixed(r.min_reliable_side, 0)
-        << " texels; below, evaluate the texels directly\n";
+      o << "  use the compressed tables for footprints of side >= "
+        << fixed_text(r.min_reliable_side, 0) << " texels; below, evaluate the texels directly\n";
     else
       o << "  no footprint size meets the threshold: do not use these compressed tables\n";
     if (r.throughput_measured)
       o << "  queries (one thread, CPU time): compressed "
-        << fixed(r.compressed_queries_per_second / 1e6, 2) << " M/s, raw "
-        << fixed(r.raw_queries_per_second / 1e6, 2) << " M/s"
+        << fixed_text(r.compressed_queries_per_second / 1e6, 2) << " M/s, raw "
+        << fixed_text(r.raw_queries_per_second / 1e6, 2) << " M/s"
         << (r.raw_from_asset ? "" : " (raw built in memory)") << ": compressed costs "
-        << fixed(r.cost_ratio, 2) << "x raw\n";
+        << fixed_text(r.cost_ratio, 2) << "x raw\n";
   }
   o << (report.passed ? "compressed tables: passed\n" : "compressed tables: FAILED\n");
   for (const auto& f : report.failures)

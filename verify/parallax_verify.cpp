@@ -14,25 +14,12 @@
 #include "raycast/parallax.hpp"
 #include "raycast/raycast_sections.hpp"
 #include "verify/footprint_sampling.hpp"
+#include "verify/report_text.hpp"
 
 namespace clothbake::verify {
 namespace {
 
 constexpr double kQuarterTexel = 0.25;
-
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
-
-std::string general(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 // Stored bytes of every section of the given type.
 uint64_t stored_bytes(const reader::Asset& asset, reader::SectionType type) {
@@ -187,21 +174,21 @@ ParallaxVerifyReport verify_parallax(const reader::Asset& asset, const Fabric& f
     report.failures.push_back("parallax: " + f);
   };
   if (report.rms_error > options.max_rms_error)
-    fail("per-texel RMS offset error " + general(report.rms_error) + " texel above " +
-         general(options.max_rms_error));
+    fail("per-texel RMS offset error " + general_text(report.rms_error) + " texel above " +
+         general_text(options.max_rms_error));
   if (options.max_error && report.max_error > *options.max_error)
-    fail("per-texel maximum offset error " + general(report.max_error) + " texel above " +
-         general(*options.max_error));
+    fail("per-texel maximum offset error " + general_text(report.max_error) + " texel above " +
+         general_text(*options.max_error));
   if (options.max_share_above && report.share_above_quarter > *options.max_share_above)
-    fail("share of entries above 0.25 texel " + general(report.share_above_quarter) + " above " +
-         general(*options.max_share_above));
+    fail("share of entries above 0.25 texel " + general_text(report.share_above_quarter) +
+         " above " + general_text(*options.max_share_above));
   for (const ParallaxClassError& c : report.classes)
     if (c.footprints > 0 && c.min_side >= options.footprint_min_side &&
         c.rms_error > options.max_footprint_error)
-      fail("footprint class " + c.size_class + ": RMS offset error " + general(c.rms_error) +
-           " texel above " + general(options.max_footprint_error));
+      fail("footprint class " + c.size_class + ": RMS offset error " + general_text(c.rms_error) +
+           " texel above " + general_text(options.max_footprint_error));
   if (options.min_ratio && report.ratio < *options.min_ratio)
-    fail("size ratio " + general(report.ratio) + " below " + general(*options.min_ratio));
+    fail("size ratio " + general_text(report.ratio) + " below " + general_text(*options.min_ratio));
   return report;
 }
 
@@ -248,19 +235,19 @@ std::string parallax_report_text(const ParallaxVerifyReport& r) {
   s << "parallax (compressed, " << r.section << ", " << r.bits << "-bit codes, " << r.resolution
     << "^2 x " << r.dirs << "^2 directions) against the raw table "
     << (r.raw_reference_from_asset ? "in the asset" : "recomputed from the fabric") << ":\n";
-  s << "  per texel (" << r.entries << " entries): RMS offset error " << fixed(r.rms_error, 4)
-    << " texel, max " << fixed(r.max_error, 4) << ", above 0.25 texel "
-    << fixed(100.0 * r.share_above_quarter, 3) << " %\n";
+  s << "  per texel (" << r.entries << " entries): RMS offset error " << fixed_text(r.rms_error, 4)
+    << " texel, max " << fixed_text(r.max_error, 4) << ", above 0.25 texel "
+    << fixed_text(100.0 * r.share_above_quarter, 3) << " %\n";
   s << "  footprint class   footprints   RMS (texel)   max (texel)\n";
   for (const ParallaxClassError& c : r.classes)
     if (c.footprints > 0) {
       std::string name = c.size_class;
       name.resize(std::max<std::size_t>(name.size(), 16), ' ');
-      s << "  " << name << "  " << c.footprints << "   " << fixed(c.rms_error, 4) << "   "
-        << fixed(c.max_error, 4) << "\n";
+      s << "  " << name << "  " << c.footprints << "   " << fixed_text(c.rms_error, 4) << "   "
+        << fixed_text(c.max_error, 4) << "\n";
     }
   s << "  size: " << r.compressed_bytes << " bytes against " << r.raw_bytes << " raw ("
-    << fixed(r.ratio, 1) << ":1)\n";
+    << fixed_text(r.ratio, 1) << ":1)\n";
   s << "  parallax " << (r.passed ? "passed" : "FAILED") << "\n";
   return s.str();
 }
