@@ -154,16 +154,22 @@ std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8
   return out;
 }
 
-EntropyParallax entropy_code_parallax(const QuantisedParallax& packed) {
+EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
+                                      const std::vector<uint8_t>& keep) {
   const auto begin = std::chrono::steady_clock::now();
   if (packed.bits != 8) throw_internal_error("entropy_code_parallax: needs 8-bit codes");
   const uint32_t n = uint32_t(packed.resolution);
   const std::size_t d_count = std::size_t(packed.dirs) * packed.dirs;
   const uint64_t plane = uint64_t(n) * n;
+  if (!keep.empty() && keep.size() != d_count)
+    throw_internal_error("entropy_code_parallax: keep needs one entry per direction");
+  auto kept = [&](std::size_t d) { return keep.empty() || keep[d] != 0; };
   EntropyParallax out;
   {
     const int mid = packed.dirs / 2;
-    const std::size_t d = std::size_t(mid) * packed.dirs + mid;
+    std::size_t d = std::size_t(mid) * packed.dirs + mid;
+    for (std::size_t i = 0; !kept(d) && i < d_count; ++i)
+      d = i;
     out.candidates = parallax_shift_candidates(packed.codes.data() + d * plane, n);
   }
   // Shift per block by the entropy of its own residuals (an estimate of its coded size).
@@ -185,6 +191,10 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed) {
     return bits;
   };
   tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
+    if (!kept(d)) {  // an empty block: no counts
+      choice[d].counts.assign(std::size_t(kEntropyContexts) * 256, 0);
+      return;
+    }
     const uint8_t* codes = packed.codes.data() + d * plane;
     Choice best{0, 0, parallax_residual_counts(codes, n, 0, 0)};
     double best_bits = entropy_bits(best.counts);
@@ -215,6 +225,7 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed) {
   std::vector<std::vector<uint8_t>> blocks(d_count);
   std::vector<uint8_t> shifted(d_count, 0);
   tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
+    if (!kept(d)) return;  // empty block
     const uint32_t g = uint32_t(d / dirs);
     blocks[d] =
         encode_parallax_block(packed.codes.data() + d * plane, n, choice[d].sx, choice[d].sy, g,
@@ -251,6 +262,26 @@ std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax&
   out.push_back(formats::make_array_section<uint16_t>(
       reader::SectionType::ParallaxEntropy, reader::kEntropyParallaxTablesInstance, coded.tables,
       {coded.groups, uint32_t(reader::kEntropyContexts), 256u}));
+  return out;
+}
+
+std::vector<formats::Section> planned_entropy_parallax_sections(const QuantisedParallax& packed,
+                                                                const EntropyParallax& coded,
+                                                                const std::vector<uint8_t>& keep) {
+  std::size_t kept = 0;
+  for (uint8_t k : keep)
+    kept += k != 0;
+  if (kept == 0 || keep.size() + 1 != coded.offsets.size())
+    throw_internal_error("planned entropy parallax: keep does not match the coded table");
+  std::vector<formats::Section> out = entropy_parallax_sections(packed, coded);
+  for (formats::Section& s : out)
+    if (s.instance == reader::kEntropyParallaxInfoInstance) {
+      reader::CompressedParallaxInfoRecord info;
+      std::memcpy(&info, s.payload.data(), sizeof info);
+      info.rms_offset_error *= std::sqrt(double(keep.size()) / double(kept));
+      info.flags |= reader::kEntropyPlannedFlag;
+      std::memcpy(s.payload.data(), &info, sizeof info);
+    }
   return out;
 }
 

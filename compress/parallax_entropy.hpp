@@ -49,11 +49,23 @@ std::vector<uint8_t> encode_parallax_block(const uint8_t* plane, uint32_t n, uin
 std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8_t* plane,
                                                                      uint32_t n, int count = 3);
 
-// Codes every direction of an 8-bit table. Precondition: packed.bits == 8.
-EntropyParallax entropy_code_parallax(const QuantisedParallax& packed);
+// Codes every direction of an 8-bit table. Precondition: packed.bits == 8. With `keep` (one entry
+// per direction, a scene plan's view bins; empty: all), a direction whose entry is 0 gets an
+// empty block and adds nothing to its group's tables (format 1.3, kEntropyPlannedFlag); the
+// shift candidates come from the middle direction, or the first kept one if that is left out.
+EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
+                                      const std::vector<uint8_t>& keep = {});
 
 // ParallaxEntropy instances 0 (info, bits 8), 1 (steps), 2 (offsets), 3 (stream), 4 (tables).
 std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& packed,
                                                         const EntropyParallax& coded);
+
+// The planned form (format 1.3) of a table coded with `keep` (entropy_code_parallax): the same
+// instances, the info record flagged reader::kEntropyPlannedFlag (coverage: bin_map instance 1,
+// written by the scene plan) and its RMS offset error rescaled from all directions to the kept
+// ones (the left-out ones cast no rays: error exactly 0). Precondition: keep has a non-zero entry.
+std::vector<formats::Section> planned_entropy_parallax_sections(const QuantisedParallax& packed,
+                                                                const EntropyParallax& coded,
+                                                                const std::vector<uint8_t>& keep);
 
 }  // namespace clothbake::compress

@@ -9,8 +9,9 @@
 // section parallax_entropy, format 1.2); otherwise a warning and 16-bit codes (parallax_compressed,
 // format 1.1), still without SATs. The raw codes and their SATs are written only with --keep-raw.
 // `--no-compress` (or compress = false) writes the raw codes and SATs alone, exactly as format 1.0
-// did. A scene-planned bake (--scene) writes the kept directions' 8/16-bit codes instead
-// (parallax_planned, format 1.2; docs/scene-plans.md).
+// did. A scene-planned bake (--scene) entropy-codes the kept directions' 8-bit codes, the left-out
+// ones as empty blocks (parallax_entropy flagged planned, format 1.3), or with 16-bit codes writes
+// the kept directions' codes plainly (parallax_planned, format 1.2; docs/scene-plans.md).
 #include <cmath>
 #include <cstring>
 
@@ -24,6 +25,7 @@
 #include "compress/parallax_codes.hpp"
 #include "compress/parallax_entropy.hpp"
 #include "fabric/fabric.hpp"
+#include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "raycast/parallax.hpp"
 #include "raycast/raycast_sections.hpp"
@@ -124,7 +126,21 @@ void run_parallax(pipeline::StageContext& ctx) {
                           {"raw_bytes", uint64_t(table.depth.size()) * 6},
                           {"seconds", ctx.options().record_timings ? packed.seconds : 0.0}};
     meta["keep_raw"] = form.keep_raw;
-    if (!settings.keep.empty()) {  // scene-planned (format 1.2): the kept directions only
+    if (!settings.keep.empty() && packed.bits == 8) {
+      // Scene-planned, 8-bit (format 1.3): entropy-coded like the full asset, the left-out
+      // directions as empty blocks, flagged planned (coverage: bin_map instance 1).
+      const compress::EntropyParallax coded =
+          compress::entropy_code_parallax(packed, settings.keep);
+      sections = compress::planned_entropy_parallax_sections(packed, coded, settings.keep);
+      std::size_t kept = 0;
+      for (uint8_t k : settings.keep)
+        kept += k != 0;
+      meta["compressed"]["section"] = "parallax_entropy";
+      meta["compressed"]["entropy_coded_bytes"] = coded.stream.size();
+      meta["compressed"]["shifted_blocks"] = coded.shifted_blocks;
+      meta["compressed"]["entropy_seconds"] = ctx.options().record_timings ? coded.seconds : 0.0;
+      meta["planned"] = {{"view_bins_kept", kept}, {"view_bins_total", settings.keep.size()}};
+    } else if (!settings.keep.empty()) {  // scene-planned, 16-bit: the kept directions' codes
       sections =
           planned_parallax_sections(compress::compressed_parallax_sections(packed), settings.keep);
       meta["compressed"]["section"] = "parallax_planned";

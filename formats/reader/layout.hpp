@@ -20,7 +20,7 @@ namespace clothbake::reader {
 // older reader can skip; an older reader reads a newer minor and ignores what it does not know.
 inline constexpr uint16_t kFormatMajor = 1;
 inline constexpr uint16_t kFormatMinor =
-    2;  // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans
+    3;  // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans; 1.3: planned ParallaxEntropy
 
 // The minor version that introduced a section type: writers stamp an asset with the largest minor
 // its sections need (so that an asset without 1.1 sections stays a byte-identical 1.0 file).
@@ -29,6 +29,18 @@ constexpr uint16_t format_minor_of(uint32_t section_type) {
   return section_type == 0x0203   ? 2  // SectionType::ParallaxEntropy: 1.2
          : section_type == 0x0202 ? 1  // SectionType::ParallaxCompressed: 1.1
                                   : 0;
+}
+
+// The same for one section's payload: a ParallaxEntropy info record (instance 0) with the planned
+// flag (bit 0 of its u32 flags at byte 12; parallax_entropy.hpp, kEntropyPlannedFlag) needs 1.3,
+// since a 1.2 reader would not know that its empty blocks are left-out directions.
+inline uint16_t format_minor_of_payload(uint32_t section_type, uint32_t instance,
+                                        const void* payload, uint64_t size) {
+  if (section_type == 0x0203 && instance == 0 && size >= 16) {
+    const unsigned char* p = static_cast<const unsigned char*>(payload);
+    if (p[12] & 1u) return 3;
+  }
+  return format_minor_of(section_type);
 }
 
 // "\x89CBK\r\n\x1a\n": the high byte catches 7-bit transfers, CR LF / LF catch newline conversion,

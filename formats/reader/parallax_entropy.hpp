@@ -23,6 +23,9 @@
 // state with every byte consumed is reported (CBK-E021). C++17, standard library only, no
 // allocation (the caller gives the output plane and a ParallaxEntropyScratch).
 //
+// A planned table (info flags kEntropyPlannedFlag, format 1.3) stores the left-out directions as
+// empty blocks: not decoded, their queries answer OutOfPlan (parallax_sections.hpp).
+//
 // Block (little-endian): u16 sx, u16 sy (the shift; both < N), u16 group (< G), u16 flags (0),
 // u32 the coder's final state x (in [2^23, 2^31)), then the renormalisation bytes in reading order.
 // Decoding texel i: slot = x mod 4096, the symbol s whose cumulative range [start_s, start_s + f_s)
@@ -51,6 +54,10 @@ inline constexpr uint32_t kRansScale = 1u << kRansScaleBits;
 inline constexpr uint32_t kRansLow = 1u << 23;      // state interval [2^23, 2^31)
 inline constexpr uint32_t kEntropyBlockHeader = 8;  // u16 sx, u16 sy, u16 group, u16 flags (0)
 inline constexpr uint32_t kMaxEntropyGroups = 65536;
+// CompressedParallaxInfoRecord::flags bit of a scene-planned table (format 1.3): the view
+// directions that bin_map instance 1 leaves out have empty blocks (offsets[d] == offsets[d + 1])
+// and answer OutOfPlan; readers of 1.2 refuse the flag (Unsupported), never give numbers.
+inline constexpr uint32_t kEntropyPlannedFlag = 1;
 
 // The causal prediction of texel (x, y) of a plane (row-major, n wide) from already decoded
 // texels, and its context (see the file comment).

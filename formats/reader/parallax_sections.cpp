@@ -157,11 +157,13 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
                          "CompressedParallaxInfoRecord)");
   CompressedParallaxInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
-  if (info.flags != 0 || info.bits != 8)
+  // flags: 0, or kEntropyPlannedFlag (format 1.3: a scene-planned asset, coverage in bin map 1).
+  if ((info.flags & ~kEntropyPlannedFlag) != 0 || info.bits != 8)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
                          "parallax_entropy: bits %u / flags %u unknown to this reader (version "
-                         "1 has 8 / 0)",
+                         "1 has 8 / 0 or 1)",
                          unsigned(info.bits), unsigned(info.flags));
+  const bool planned = (info.flags & kEntropyPlannedFlag) != 0;
   s = check_compressed_record(info, name);
   if (!s.ok()) return s;
   const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
@@ -217,10 +219,35 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
                          "parallax_entropy: %llu directions of %llu^2 codes would decode to more "
                          "than 4 GiB",
                          static_cast<unsigned long long>(d), static_cast<unsigned long long>(n));
+  // Planned (1.3): the directions bin map 1 leaves out have empty blocks and answer OutOfPlan;
+  // every kept one has a block (an empty kept block or a non-empty left-out one is malformed).
+  BinMapView map;
+  if (planned) {
+    s = read_bin_map(asset, kViewBinMap, info.dirs, &map);
+    if (!s.ok()) return s;
+    if (!map.present())
+      return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                           "parallax_entropy: a planned table needs bin_map instance 1 (its "
+                           "view directions)");
+    for (uint64_t i = 0; i < d; ++i) {
+      const bool empty = offsets.data[i + 1] == offsets.data[i];
+      if (empty == map.covers(uint32_t(i)))
+        return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                             "parallax_entropy: direction %llu is %s bin_map instance 1 but its "
+                             "block is %s",
+                             static_cast<unsigned long long>(i),
+                             empty ? "covered by" : "left out of", empty ? "empty" : "not empty");
+    }
+  }
   auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
   if (!packed || packed->count != d)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_entropy: cannot allocate the block directory");
+  if (planned) {  // bin b is block b; a left-out bin has no plane
+    for (uint64_t b = 0; b < d; ++b)
+      packed->plane[b] = map.covers(uint32_t(b)) ? int32_t(b) : -1;
+    plane_ = packed->plane.get();
+  }
   info_ = ParallaxInfoRecord{};
   info_.resolution = info.resolution;
   info_.dirs = info.dirs;
@@ -240,6 +267,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
 
 bool ParallaxView::ensure_plane(uint32_t bin) const noexcept {
   if (stream_ == nullptr) return true;
+  if (!covers(bin)) return false;  // planned: the direction was left out
   return plane8(bin) != nullptr;
 }
 
@@ -274,6 +302,7 @@ Status ParallaxView::decode_all() const noexcept {
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_entropy: cannot allocate a plane to decode");
   for (uint64_t i = 0; i < d; ++i) {
+    if (!covers(uint32_t(i))) continue;  // planned: an empty block (open checked it)
     const Status s =
         decode_parallax_block(stream_ + offsets_[i], offsets_[i + 1] - offsets_[i], tables_,
                               groups_, uint32_t(n), plane.get(), scratch.get());
@@ -531,7 +560,7 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
   double r = 0.0;
   if (stream_) {
     for (int k = 0; k < 4; ++k)
-      if (weight[k] > 0.0) {
+      if (weight[k] > 0.0 && covers(uint32_t(bin[k]))) {  // uncovered bins count 0
         const uint8_t* p = plane8(uint32_t(bin[k]));
         if (p) r += weight[k] * (-double(p[texel]) * steps_[bin[k]]);
       }

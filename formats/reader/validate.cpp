@@ -434,7 +434,7 @@ void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, R
   }
   const uint64_t n = packed.resolution(), dirs = uint64_t(packed.dirs()) * packed.dirs();
   for (uint64_t d = 0; d < dirs; ++d)
-    if (packed.depth_step(uint32_t(d)) == 0.0)
+    if (packed.covers(uint32_t(d)) && packed.depth_step(uint32_t(d)) == 0.0)
       for (uint64_t t = 0; t < n * n; ++t) {
         const unsigned c = packed.bin_code(uint32_t(d), int64_t(t % n), int64_t(t / n));
         if (c != 0) {

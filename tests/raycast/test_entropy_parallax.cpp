@@ -16,8 +16,10 @@
 #include "compress/parallax_entropy.hpp"
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
+#include "model/directions.hpp"
 #include "raycast/parallax.hpp"
 #include "raycast/raycast_sections.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
@@ -278,4 +280,126 @@ TEST(EntropyParallax, HostileSectionsFailWithStableIds) {
     stream.payload[9] ^= std::byte{0x10};  // the rANS state of block 0
     check(s, "", "CBK-E021");
   }
+}
+
+// The planned form (format 1.3): a table coded with a keep mask stores the left-out directions as
+// empty blocks; bin_map instance 1 gives the coverage. Kept directions decode to exactly the full
+// table's codes; every query whose bilinear bins include a left-out one answers OutOfPlan (never
+// a number); the asset is smaller than the full one; a 1.2 reader's check (flags) refuses it.
+TEST(EntropyParallax, APlannedTableCoversExactlyItsBinMap) {
+  const ParallaxTable table = baked(rctest::plain_weave_maps(16), 8);
+  const compress::QuantisedParallax p = eight_bits(table);
+  const uint32_t dirs = 8, bins = dirs * dirs, n = 16;
+  std::vector<uint8_t> keep(bins, 0);
+  for (uint32_t j = 2; j < 6; ++j)
+    for (uint32_t i = 2; i < 6; ++i)
+      keep[j * dirs + i] = 1;
+  const compress::EntropyParallax full = compress::entropy_code_parallax(p);
+  const compress::EntropyParallax coded = compress::entropy_code_parallax(p, keep);
+  for (uint32_t b = 0; b < bins; ++b)
+    EXPECT_EQ(coded.offsets[b + 1] == coded.offsets[b], keep[b] == 0) << "bin " << b;
+  EXPECT_LT(coded.stream.size(), full.stream.size() / 2);
+  auto sections = compress::planned_entropy_parallax_sections(p, coded, keep);
+  sections.push_back(formats::make_array_section<uint8_t>(SectionType::BinMap, reader::kViewBinMap,
+                                                          keep, {dirs, dirs}));
+  MemoryAsset m(with_metadata(sections));
+  ASSERT_TRUE(m.status.ok()) << m.status.message();
+  EXPECT_EQ(m.asset.version_minor(), 3);
+  reader::ParallaxView view;
+  ASSERT_TRUE(view.open(m.asset).ok());
+  EXPECT_TRUE(view.is_entropy_coded());
+  EXPECT_TRUE(view.is_planned());
+  EXPECT_EQ(view.stored_dirs(), 16u);
+  EXPECT_TRUE(view.decode_all().ok());
+  EXPECT_EQ(validate_ids(m.asset), "");
+  for (uint32_t b = 0; b < bins; ++b) {
+    ASSERT_EQ(view.covers(b), keep[b] != 0) << "bin " << b;
+    if (!keep[b]) {
+      EXPECT_FALSE(view.ensure_plane(b));
+      EXPECT_EQ(view.depth_step(b), 0.0);
+      continue;
+    }
+    EXPECT_EQ(view.depth_step(b), p.steps[b]);
+    for (uint32_t t = 0; t < n * n; ++t)
+      ASSERT_EQ(view.bin_code(b, t % n, t / n), p.codes[uint64_t(b) * n * n + t]) << b << " " << t;
+  }
+  EXPECT_EQ(view.decoded_bytes(), 16u * n * n) << "left-out blocks are never decoded";
+  // Views over the whole cap: OutOfPlan exactly when a bin of the bilinear lookup is left out.
+  const model::DirectionGrid<double> grid{int(dirs), table.min_cos};
+  int out_of_plan = 0, answered = 0;
+  for (int a = 0; a < 24; ++a)
+    for (int e = 0; e < 8; ++e) {
+      const double phi = a * 0.2618, sin_t = e / 8.0;
+      const double v[3] = {sin_t * std::cos(phi), sin_t * std::sin(phi),
+                           std::sqrt(1 - sin_t * sin_t)};
+      reader::ParallaxSample s, s_full;
+      double o[3];
+      ASSERT_TRUE(view.view_direction(v, o).ok());
+      const auto w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+      bool covered = true;
+      for (int k = 0; k < 4; ++k)
+        covered = covered && (w.weight[k] <= 0.0 || keep[uint32_t(w.index[k])]);
+      const reader::Status st = view.depth(3, -2, v, &s);
+      const reader::Status fp = view.footprint_depth({1.5, 2, 9, 7.25}, v, &s_full);
+      if (covered) {
+        ++answered;
+        EXPECT_TRUE(st.ok()) << st.message();
+        EXPECT_TRUE(fp.ok()) << fp.message();
+      } else {
+        ++out_of_plan;
+        EXPECT_EQ(st.code(), ErrorCode::OutOfPlan);
+        EXPECT_EQ(fp.code(), ErrorCode::OutOfPlan);
+      }
+    }
+  EXPECT_GT(out_of_plan, 0);
+  EXPECT_GT(answered, 0);
+  // Kept directions answer exactly as the full entropy-coded table.
+  MemoryAsset whole(with_metadata(compress::entropy_parallax_sections(p, full)));
+  reader::ParallaxView all;
+  ASSERT_TRUE(all.open(whole.asset).ok());
+  const double straight[3] = {0, 0, 1};
+  reader::ParallaxSample a, b;
+  ASSERT_TRUE(view.depth(5, 7, straight, &a).ok());
+  ASSERT_TRUE(all.depth(5, 7, straight, &b).ok());
+  EXPECT_EQ(a.r, b.r);
+  EXPECT_LT(
+      formats::serialize_asset(with_metadata(sections)).size(),
+      formats::serialize_asset(with_metadata(compress::entropy_parallax_sections(p, full))).size());
+
+  auto find_info = [](std::vector<formats::Section>& s) -> reader::CompressedParallaxInfoRecord* {
+    for (auto& x : s)
+      if (x.type == SectionType::ParallaxEntropy && x.instance == 0)
+        return reinterpret_cast<reader::CompressedParallaxInfoRecord*>(x.payload.data());
+    return nullptr;
+  };
+  {  // without its bin map a planned table does not open (never numbers for left-out bins)
+    auto s = sections;
+    s.pop_back();
+    MemoryAsset bad(with_metadata(s));
+    reader::ParallaxView v;
+    EXPECT_EQ(v.open(bad.asset).code(), ErrorCode::NotFound);
+  }
+  {  // a bin map that disagrees with the empty blocks
+    auto s = sections;
+    std::vector<uint8_t> other = keep;
+    other[0] = 1;
+    s.back() = formats::make_array_section<uint8_t>(SectionType::BinMap, reader::kViewBinMap, other,
+                                                    {dirs, dirs});
+    MemoryAsset bad(with_metadata(s));
+    reader::ParallaxView v;
+    const reader::Status st = v.open(bad.asset);
+    EXPECT_EQ(std::string(reader::check_id(st.check())), "CBK-E021") << st.message();
+  }
+  {  // an unknown flag bit is refused, as a 1.2 reader refuses the planned flag
+    auto s = sections;
+    find_info(s)->flags |= 2;
+    MemoryAsset bad(with_metadata(s));
+    reader::ParallaxView v;
+    EXPECT_EQ(v.open(bad.asset).code(), ErrorCode::Unsupported);
+  }
+  // Deterministic for any thread count.
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  const compress::EntropyParallax again = compress::entropy_code_parallax(p, keep);
+  EXPECT_EQ(again.stream, coded.stream);
+  EXPECT_EQ(again.tables, coded.tables);
 }

@@ -114,7 +114,7 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   const nlohmann::json report = nlohmann::json::parse(run.out);
   EXPECT_EQ(report["scene_plan"]["half_vector_bins_kept"], used);
   const nlohmann::json info = info_of(out);
-  EXPECT_EQ(info["format"]["minor"], 2);
+  EXPECT_EQ(info["format"]["minor"], 3);  // the planned entropy-coded parallax (format 1.3)
   EXPECT_TRUE(info["scene_plan"]["transmission_left_out"].get<bool>());
   EXPECT_EQ(info["scene_plan"]["half_vector_bins_kept"], used);
   std::map<std::string, int> count;
@@ -124,13 +124,15 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
       EXPECT_EQ(s["version"], 2);
       EXPECT_LT(s["instance"].get<int>(), 16) << "no gap kind without transmission";
     }
-    if (s["name"] == "parallax_planned" && s["instance"] == 2) {
-      EXPECT_EQ(s["dims"][0], plan["usage"]["view_bins_used"]);
+    if (s["name"] == "parallax_entropy" && s["instance"] == 2) {  // block offsets: D + 1
+      EXPECT_EQ(s["dims"][0], plan["usage"]["view_bins_total"].get<int>() + 1);
     }
   }
   EXPECT_EQ(count["bin_map"], 2);
   EXPECT_EQ(count["scene_plan"], 1);
   EXPECT_EQ(count["parallax_compressed"], 0);
+  EXPECT_EQ(count["parallax_planned"], 0);
+  EXPECT_EQ(count["parallax_entropy"], 5);
   // `info` in words says what was left out.
   const auto text = run_clothbake({"info", out});
   EXPECT_NE(text.out.find("left out: transmission and gap tables"), std::string::npos) << text.out;
@@ -251,10 +253,10 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       for (const char* key :
            {"full_bytes", "planned_bytes", "full_bake_seconds", "planned_bake_seconds", "budget"})
         EXPECT_TRUE(f.contains(key)) << name << ": " << key;
-      // No size assertion: since format 1.2 the full asset's parallax is entropy-coded while a
-      // planned asset stores its kept directions' plain 8-bit codes, so a plan can be larger than
-      // the full bake (docs/scene-plans.md, "Size against the entropy-coded full asset").
+      // Both assets entropy-code their parallax (the planned one leaves out directions as empty
+      // blocks, format 1.3), so a plan is never larger than the full bake.
       EXPECT_GT(f["planned_bytes"].get<double>(), 0.0) << name;
+      EXPECT_LE(f["planned_bytes"].get<double>(), f["full_bytes"].get<double>()) << name;
       EXPECT_LE(f["relmse"]["planned_vs_full"].get<double>(), f["budget"].get<double>())
           << name << ": " << f.dump();
       // The plan does not make the picture worse: the planned render is as far from the reference
