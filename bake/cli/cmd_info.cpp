@@ -5,6 +5,7 @@
 // open, 2 if the file cannot be read.
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -33,31 +34,42 @@ std::string section_name(const SectionInfo& s) {
   return name ? name : "0x" + hex(uint32_t(s.type), 4);
 }
 
+// One section table entry as JSON (the elements of info --json's "sections" array).
+nlohmann::json section_json(const Asset& asset, uint32_t index) {
+  SectionInfo s;
+  (void)asset.section(index, &s);
+  const char* element = element_type_name(s.element_type);
+  const char* codec = codec_name(s.codec);
+  return {{"index", index},
+          {"name", section_name(s)},
+          {"type", uint32_t(s.type)},
+          {"instance", s.instance},
+          {"version", s.version},
+          {"codec", codec ? codec : "unknown"},
+          {"element", element ? element : "unknown"},
+          {"dims", std::vector<uint32_t>(s.dims, s.dims + s.rank)},
+          {"offset", s.offset},
+          {"bytes", s.stored_size},
+          {"xxh64", hex(s.checksum, 16)}};
+}
+
+// Everything info reports except the per-section list, which callers stream from the asset's
+// table (an asset may hold the format's maximum of 2^20 sections: as one JSON tree they took
+// 3.2 GB and 14 s). "sections" is an empty placeholder array.
 nlohmann::json info_json(const std::string& path, const Asset& asset) {
   nlohmann::json doc;
   doc["path"] = path;
   doc["format"] = {{"major", asset.version_major()}, {"minor", asset.version_minor()}};
   doc["size_bytes"] = asset.file_size();
   doc["content_hash"] = hex(asset.content_hash(), 16);
-  nlohmann::json sections = nlohmann::json::array();
+  doc["sections"] = nlohmann::json::array();
+  // Bytes per section name (a handful of names, whatever the section count).
+  std::map<std::string, uint64_t> bytes_by_name;
   for (uint32_t i = 0; i < asset.section_count(); ++i) {
     SectionInfo s;
     (void)asset.section(i, &s);
-    const char* element = element_type_name(s.element_type);
-    const char* codec = codec_name(s.codec);
-    sections.push_back({{"index", i},
-                        {"name", section_name(s)},
-                        {"type", uint32_t(s.type)},
-                        {"instance", s.instance},
-                        {"version", s.version},
-                        {"codec", codec ? codec : "unknown"},
-                        {"element", element ? element : "unknown"},
-                        {"dims", std::vector<uint32_t>(s.dims, s.dims + s.rank)},
-                        {"offset", s.offset},
-                        {"bytes", s.stored_size},
-                        {"xxh64", hex(s.checksum, 16)}});
+    bytes_by_name[section_name(s)] += s.stored_size;
   }
-  doc["sections"] = sections;
   const FabricInfoRecord* fabric = nullptr;
   if (read_fabric_info(asset, &fabric).ok())
     doc["fabric_info"] = {{"resolution", fabric->resolution},
@@ -83,11 +95,7 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
   doc["metadata"] = formats::read_metadata(asset);
   // Bytes per section name, and what the asset would weigh with the raw forms of the compressed
   // sections instead (from the sizes the parallax and compress stages recorded in the metadata).
-  nlohmann::json by_name = nlohmann::json::object();
-  for (const auto& s : sections) {
-    const std::string name = s["name"].get<std::string>();
-    by_name[name] = by_name.value(name, uint64_t(0)) + s["bytes"].get<uint64_t>();
-  }
+  nlohmann::json by_name(bytes_by_name);
   int64_t raw_total = int64_t(asset.file_size());
   // The recorded sizes are information: a value of an unexpected type leaves the total as the
   // file's size instead of failing the command.
@@ -137,7 +145,7 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
   return doc;
 }
 
-void print_text(const nlohmann::json& doc) {
+void print_text(const nlohmann::json& doc, const Asset& asset) {
   std::ostream& out = std::cout;
   // Names and paths come from the asset: escape what a terminal would interpret.
   auto text = [](const nlohmann::json& value) { return terminal_safe(value.get<std::string>()); };
@@ -187,21 +195,23 @@ void print_text(const nlohmann::json& doc) {
       out << "  left out: " << (what.is_string() ? terminal_safe(what.get<std::string>()) : "?")
           << '\n';
   }
-  out << "sections: " << doc["sections"].size() << '\n';
+  out << "sections: " << asset.section_count() << '\n';
   out << "  " << std::left << std::setw(4) << "#" << std::setw(26) << "name" << std::setw(6)
       << "inst" << std::setw(5) << "ver" << std::setw(6) << "type" << std::setw(18) << "shape"
       << std::right << std::setw(12) << "bytes" << '\n';
-  for (const auto& s : doc["sections"]) {
+  for (uint32_t i = 0; i < asset.section_count(); ++i) {
+    SectionInfo s;
+    (void)asset.section(i, &s);
     std::string shape;
-    for (const auto& d : s["dims"]) {
+    for (uint32_t d = 0; d < s.rank; ++d) {
       if (!shape.empty()) shape += 'x';
-      shape += std::to_string(d.get<uint32_t>());
+      shape += std::to_string(s.dims[d]);
     }
-    out << "  " << std::left << std::setw(4) << s["index"].get<uint32_t>() << std::setw(26)
-        << s["name"].get<std::string>() << std::setw(6) << s["instance"].get<uint32_t>()
-        << std::setw(5) << s["version"].get<int>() << std::setw(6)
-        << s["element"].get<std::string>() << std::setw(18) << (shape.empty() ? "-" : shape)
-        << std::right << std::setw(12) << s["bytes"].get<uint64_t>() << '\n';
+    const char* element = element_type_name(s.element_type);
+    out << "  " << std::left << std::setw(4) << i << std::setw(26) << section_name(s)
+        << std::setw(6) << s.instance << std::setw(5) << int(s.version) << std::setw(6)
+        << (element ? element : "unknown") << std::setw(18) << (shape.empty() ? "-" : shape)
+        << std::right << std::setw(12) << s.stored_size << '\n';
   }
   const auto& sizes = doc["sizes"];
   const double total = double(sizes["total_bytes"].get<uint64_t>());
@@ -216,6 +226,39 @@ void print_text(const nlohmann::json& doc) {
   out.flush();
 }
 
+// print_json(doc) with doc's empty "sections" placeholder replaced by the asset's section table,
+// written one entry at a time: the same bytes as one JSON tree, in memory bounded by one entry.
+void print_json_with_sections(const nlohmann::json& doc, const Asset& asset) {
+  auto dump = [](const nlohmann::json& value) {
+    return value.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+  };
+  const std::string text = dump(doc);
+  // The top-level key is the only one at an indent of two spaces; newlines inside strings are
+  // escaped, so this is found exactly once.
+  const std::string placeholder = "\n  \"sections\": []";
+  const size_t at = text.find(placeholder);
+  if (at == std::string::npos || asset.section_count() == 0) {
+    print_json(doc);
+    return;
+  }
+  std::ostream& out = std::cout;
+  out.write(text.data(), std::streamsize(at));
+  out << "\n  \"sections\": [";
+  for (uint32_t i = 0; i < asset.section_count(); ++i) {
+    std::string entry = dump(section_json(asset, i));
+    out << (i ? ",\n    " : "\n    ");
+    for (char c : entry) {
+      out.put(c);
+      if (c == '\n') out << "    ";
+    }
+  }
+  out << "\n  ]";
+  const size_t rest = at + placeholder.size();
+  out.write(text.data() + rest, std::streamsize(text.size() - rest));
+  out << '\n';
+  out.flush();
+}
+
 Action setup_info(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
@@ -225,9 +268,9 @@ Action setup_info(CLI::App& app) {
     const Asset asset = formats::open_asset(*path, Verify::Structure);
     const nlohmann::json doc = info_json(*path, asset);
     if (*json)
-      print_json(doc);
+      print_json_with_sections(doc, asset);
     else
-      print_text(doc);
+      print_text(doc, asset);
     return 0;
   };
 }

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,6 +27,7 @@ namespace clothbake::test_support {
 
 struct CliRun {
   int code = -1;  // exit status; -1 if the process did not exit normally (signal, exec failure)
+  long max_rss_kb = 0;  // the child's peak resident set (getrusage's ru_maxrss), KiB
   std::string out, err;
 };
 
@@ -74,10 +76,12 @@ inline CliRun spawn(const std::vector<std::string>& argv) {
     ::_exit(127);
   }
   int status = 0;
+  struct rusage usage {};
   pid_t waited;
   do {
-    waited = ::waitpid(pid, &status, 0);
+    waited = ::wait4(pid, &status, 0, &usage);
   } while (waited < 0 && errno == EINTR);
+  r.max_rss_kb = usage.ru_maxrss;
   r.code = waited == pid && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.out = slurp_and_remove(out_path);
   r.err = slurp_and_remove(err_path);

@@ -568,3 +568,44 @@ TEST_F(Hardening, ExtremeNumbersAndLongNames) {
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(fs::exists(out));
 }
+
+// Defect 15: `info` on an asset with the format's maximum of 2^20 sections built the whole listing
+// as one JSON tree (3.2 GB, 14 s). It now streams the table: bounded memory in text and JSON.
+TEST_F(Hardening, InfoOnTheMaximumSectionCountStaysInBoundedMemory) {
+  constexpr uint32_t kCount = reader::kMaxSectionCount;
+  // The good asset's metadata, then zero-length u8 arrays of a type no reader knows (skipped),
+  // instances 0 .. 2^20 - 2.
+  std::vector<formats::Section> sections;
+  sections.reserve(kCount);
+  {
+    std::vector<formats::Section> good_sections = test_support::sections_of(good());
+    sections.push_back(test_support::section_of(good_sections, SectionType::Metadata));
+  }
+  for (uint32_t i = 0; i + 1 < kCount; ++i) {
+    formats::Section empty;
+    empty.type = SectionType(0xF000);
+    empty.instance = i;
+    empty.element = reader::ElementType::U8;
+    empty.dims = {0};
+    sections.push_back(std::move(empty));
+  }
+  const std::string asset = path("million.cbk");
+  test_support::write_sections(asset, sections);
+  sections = {};
+
+  for (const char* json : {"", " --json"}) {
+    const CliRun r = run_clothbake_line("info " + asset + json + " > " + path("million.out"));
+    EXPECT_EQ(r.code, 0) << json << ": " << r.err;
+    // The mapped file is 64 MiB; the old listing needed 3.2 GB.
+    EXPECT_LT(r.max_rss_kb, 1024 * 1024) << json;
+  }
+  // The JSON listing is still one document with every section in order.
+  std::ifstream in(path("million.out"));
+  const nlohmann::json doc = nlohmann::json::parse(in);
+  ASSERT_EQ(doc["sections"].size(), kCount);
+  EXPECT_EQ(doc["sections"][kCount - 1]["instance"], kCount - 2);
+  EXPECT_EQ(doc["sections"][12345]["name"], "0xf000");
+  EXPECT_EQ(doc["sizes"]["by_name"]["0xf000"], 0);
+  fs::remove(asset);
+  fs::remove(path("million.out"));
+}
