@@ -265,12 +265,14 @@ std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax&
   return out;
 }
 
+std::size_t kept_direction_count(const std::vector<uint8_t>& keep) {
+  return std::size_t(std::count_if(keep.begin(), keep.end(), [](uint8_t k) { return k != 0; }));
+}
+
 std::vector<formats::Section> planned_entropy_parallax_sections(const QuantisedParallax& packed,
                                                                 const EntropyParallax& coded,
                                                                 const std::vector<uint8_t>& keep) {
-  std::size_t kept = 0;
-  for (uint8_t k : keep)
-    kept += k != 0;
+  const std::size_t kept = kept_direction_count(keep);
   if (kept == 0 || keep.size() + 1 != coded.offsets.size())
     throw_internal_error("planned entropy parallax: keep does not match the coded table");
   std::vector<formats::Section> out = entropy_parallax_sections(packed, coded);

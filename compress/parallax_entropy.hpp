@@ -60,6 +60,9 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
 std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& packed,
                                                         const EntropyParallax& coded);
 
+// Directions a plan's keep mask keeps (its non-zero entries; one entry per view bin).
+std::size_t kept_direction_count(const std::vector<uint8_t>& keep);
+
 // The planned form (format 1.3) of a table coded with `keep` (entropy_code_parallax): the same
 // instances, the info record flagged reader::kEntropyPlannedFlag (coverage: bin_map instance 1,
 // written by the scene plan) and its RMS offset error rescaled from all directions to the kept

@@ -12,6 +12,7 @@
 // did. A scene-planned bake (--scene) entropy-codes the kept directions' 8-bit codes, the left-out
 // ones as empty blocks (parallax_entropy flagged planned, format 1.3), or with 16-bit codes writes
 // the kept directions' codes plainly (parallax_planned, format 1.2; docs/scene-plans.md).
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -41,9 +42,7 @@ using namespace raycast;  // the algorithm library this stage drives
 // kept ones (the left-out bins cast no rays: code 0, error exactly 0).
 std::vector<formats::Section> planned_parallax_sections(std::vector<formats::Section> packed,
                                                         const std::vector<uint8_t>& keep) {
-  std::size_t kept = 0;
-  for (uint8_t k : keep)
-    kept += k != 0;
+  const std::size_t kept = compress::kept_direction_count(keep);
   for (formats::Section& s : packed) {
     s.type = reader::SectionType::ParallaxPlanned;
     if (s.instance == reader::kCompressedParallaxInfoInstance) {
@@ -132,9 +131,7 @@ void run_parallax(pipeline::StageContext& ctx) {
       const compress::EntropyParallax coded =
           compress::entropy_code_parallax(packed, settings.keep);
       sections = compress::planned_entropy_parallax_sections(packed, coded, settings.keep);
-      std::size_t kept = 0;
-      for (uint8_t k : settings.keep)
-        kept += k != 0;
+      const std::size_t kept = compress::kept_direction_count(settings.keep);
       meta["compressed"]["section"] = "parallax_entropy";
       meta["compressed"]["entropy_coded_bytes"] = coded.stream.size();
       meta["compressed"]["shifted_blocks"] = coded.shifted_blocks;

@@ -122,6 +122,19 @@ Status check_compressed_record(const CompressedParallaxInfoRecord& info,
   return {};
 }
 
+// A planned table's view directions: bin_map instance 1, which must be present. `what` names the
+// section in the error.
+Status read_view_bin_map(const Asset& asset, uint32_t dirs, const char* what,
+                         BinMapView* map) noexcept {
+  const Status s = read_bin_map(asset, kViewBinMap, dirs, map);
+  if (!s.ok()) return s;
+  if (!map->present())
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "%s: a planned table needs bin_map instance 1 (its view directions)",
+                         what);
+  return Status();
+}
+
 Status check_steps(const ArrayView<double>& steps, uint64_t d, const char* name) noexcept {
   if (steps.rank != 1 || steps.dims[0] != d)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
@@ -223,12 +236,8 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
   // every kept one has a block (an empty kept block or a non-empty left-out one is malformed).
   BinMapView map;
   if (planned) {
-    s = read_bin_map(asset, kViewBinMap, info.dirs, &map);
+    s = read_view_bin_map(asset, info.dirs, "parallax_entropy", &map);
     if (!s.ok()) return s;
-    if (!map.present())
-      return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                           "parallax_entropy: a planned table needs bin_map instance 1 (its "
-                           "view directions)");
     for (uint64_t i = 0; i < d; ++i) {
       const bool empty = offsets.data[i + 1] == offsets.data[i];
       if (empty == map.covers(uint32_t(i)))
@@ -379,11 +388,8 @@ Status ParallaxView::open_compressed(const Asset& asset, SectionType type) noexc
   uint64_t d = bins;  // stored planes
   BinMapView map;
   if (planned) {
-    s = read_bin_map(asset, kViewBinMap, info.dirs, &map);
+    s = read_view_bin_map(asset, info.dirs, "parallax_planned", &map);
     if (!s.ok()) return s;
-    if (!map.present())
-      return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                           "parallax_planned needs bin_map instance 1 (its view directions)");
     d = map.kept;
   }
   if (steps.rank != 1 || steps.dims[0] != d)
