@@ -27,6 +27,7 @@
 #include "common/image_io/image_io.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
+#include "model/lobe_integral.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -118,10 +119,17 @@ Rgb<double> slice_value(const model::LobeValues<double>& f, const std::string& l
 }
 
 struct SliceResult {
-  Rgb<double> max_value, integral;  // integral of f |cos theta_o| over the hemisphere
-  double scale = 1.0;               // pixel = value * scale (1 for EXR)
+  Rgb<double> max_value;
+  Rgb<double> pixel_sum;  // sum over the pixels of f |cos theta_o| dw: the image's integral
+  model::LobeIntegral
+      integral;        // importance-sampled integral of f |cos theta_o| over the hemisphere
+  double scale = 1.0;  // pixel = value * scale (1 for EXR)
   bool upper = true;
 };
+
+// Samples of the slice's integral_cos estimate: a standard error of ~0.2 % of a typical lobe's
+// albedo, in ~0.2 s.
+constexpr uint64_t kIntegralSamples = uint64_t(1) << 18;
 
 // Writes the slice image to a temporary file beside `path` and renames it into place.
 SliceResult write_slice(const model::ClothBsdf<double>& bsdf, const Vec3d& wi, double visibility,
@@ -147,8 +155,14 @@ SliceResult write_slice(const model::ClothBsdf<double>& bsdf, const Vec3d& wi, d
         image.at(x, y, c) = float(v[c]);
       result.max_value = {std::max(result.max_value.r, v.r), std::max(result.max_value.g, v.g),
                           std::max(result.max_value.b, v.b)};
-      result.integral += v * (std::abs(wo.z) * pixel_solid_angle);
+      result.pixel_sum += v * (std::abs(wo.z) * pixel_solid_angle);
     }
+  // The pixel sum misses lobes narrower than a pixel (roughness <= 1e-3); the reported integral
+  // follows the BSDF's sampler instead (model/lobe_integral.hpp).
+  result.integral = model::lobe_integral_cos(
+      bsdf, wi, visibility,
+      [&](const model::LobeValues<double>& f) { return slice_value(f, o.slice); }, result.upper,
+      kIntegralSamples, /*seed=*/1);
   const std::filesystem::path path(o.output);
   std::string ext = path.extension().string();
   for (char& ch : ext)
@@ -310,7 +324,10 @@ Action setup_bsdf(CLI::App& app) {
                       {"pixel", "f(wi, wo) in 1/sr, times scale"},
                       {"scale", s.scale},
                       {"max", rgb_json(s.max_value)},
-                      {"integral_cos", rgb_json(s.integral)}};
+                      {"integral_cos", rgb_json(s.integral.mean)},
+                      {"integral_cos_standard_error", rgb_json(s.integral.standard_error)},
+                      {"integral_cos_samples", s.integral.samples},
+                      {"integral_cos_pixel_sum", rgb_json(s.pixel_sum)}};
       text << fmt::format("wrote {} ({} over the {} hemisphere, {}x{}, scale {:.6g})\n", o->output,
                           o->slice, s.upper ? "upper" : "lower", o->resolution, o->resolution,
                           s.scale);
