@@ -363,7 +363,8 @@ TEST(SheenTables, ConventionsDifferOnlyWherePathsAreLong) {
 // the low-roughness grazing ones where the rules matter among them. Our published-rules table
 // reproduces R within 4 standard errors of the two runs plus the printing's rounding; (a, b)
 // within the difference of the two fits' losses (ours L2 of densities over histogram bins, theirs
-// L3 of BRDF values on a theta/phi grid): |da| <= 0.1 a + 0.01, |db| <= 0.03.
+// L3 of BRDF values on a theta/phi grid): |da| <= 0.1 a + 0.02, |db| <= 0.03 (at a ~ 0.02 the lobe
+// hugs the horizon within a few degrees, where the two losses weigh it differently).
 struct PublishedNode {
   int j, i;
   double a, b, R;
@@ -382,7 +383,7 @@ TEST(SheenTables, PublishedTableReproducesZeltnerValues) {
     const double se =
         std::sqrt(r * (1 - r) / double(table::kPathsPerNode) + p.R * (1 - p.R) / 2.0e6);
     EXPECT_NEAR(r, p.R, 4.0 * se + 5e-6) << "roughness node " << p.j << ", cos node " << p.i;
-    EXPECT_NEAR(node[0], p.a, 0.1 * p.a + 0.01) << "roughness node " << p.j << ", cos " << p.i;
+    EXPECT_NEAR(node[0], p.a, 0.1 * p.a + 0.02) << "roughness node " << p.j << ", cos " << p.i;
     EXPECT_NEAR(node[1], p.b, 0.03) << "roughness node " << p.j << ", cos node " << p.i;
   }
   // The converged table misses the headline value by far (the difference docs/sheen.md states).
