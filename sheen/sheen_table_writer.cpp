@@ -82,7 +82,7 @@ std::string format_sheen_table_header(const SheenTableFit& fit) {
       "// {:.4f} ({:.4f} above its noise floor); largest standard error of R {:.2e}; {} "
       "{}\n",
       s.binning.z_bins, s.binning.phi_bins, s.min_reflected, inherited, max_l1, max_excess, max_se,
-      truncated, published ? "paths cut at\n// the order cap." : "truncated\n// paths.");
+      truncated, published ? "\n// paths cut at the order cap." : "truncated\n// paths.");
   out += fmt::format("#pragma once\n\nnamespace clothbake::model::{} {{\n\n", name_space);
   out += fmt::format("inline constexpr int kCosCount = {};\n", s.cos_count);
   out += fmt::format("inline constexpr int kRoughnessCount = {};\n", s.roughness_count);
