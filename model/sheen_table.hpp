@@ -10,7 +10,7 @@
 // frame of wo; R = directional albedo of the layer.
 // Fit: exit histogram 32 x 32 bins (z, phi); lobes fitted from 2000 reflected paths or more;
 // 235 nodes inherit the shape of their rougher neighbour; largest L1 distance of a fitted lobe
-// 0.5242 (0.2921 above its noise floor); largest standard error of R 7.07e-04; 7895262 
+// 0.5242 (0.2921 above its noise floor); largest standard error of R 7.07e-04; 7895262
 // paths cut at the order cap.
 #pragma once
 

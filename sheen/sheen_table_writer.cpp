@@ -79,10 +79,10 @@ std::string format_sheen_table_header(const SheenTableFit& fit) {
       "more;\n"
       "// {} nodes inherit the shape of their rougher neighbour; largest L1 distance of a fitted "
       "lobe\n"
-      "// {:.4f} ({:.4f} above its noise floor); largest standard error of R {:.2e}; {} "
+      "// {:.4f} ({:.4f} above its noise floor); largest standard error of R {:.2e}; {}"
       "{}\n",
       s.binning.z_bins, s.binning.phi_bins, s.min_reflected, inherited, max_l1, max_excess, max_se,
-      truncated, published ? "\n// paths cut at the order cap." : "truncated\n// paths.");
+      truncated, published ? "\n// paths cut at the order cap." : " truncated\n// paths.");
   out += fmt::format("#pragma once\n\nnamespace clothbake::model::{} {{\n\n", name_space);
   out += fmt::format("inline constexpr int kCosCount = {};\n", s.cos_count);
   out += fmt::format("inline constexpr int kRoughnessCount = {};\n", s.roughness_count);
