@@ -18,6 +18,7 @@ model::TexelParams<double> EvalData::texel_params(uint64_t t) const {
   p.gap = maps.gap[t];
   p.sheen_color = sheen_color;
   p.sheen_roughness = sheen_roughness;
+  p.sheen_convention = options.sheen_convention;
   return p;
 }
 

@@ -85,6 +85,10 @@ struct EvalOptions {
   // given spp by a third to a half but doubles the cost, so per unit time it does not pay on the
   // example fabrics (docs/performance.md, "Evaluator").
   uint32_t warp_samples_per_sample = 0;
+  // The sheen table of every texel's BSDF (model/sheen.hpp, docs/sheen.md): the published one of
+  // Zeltner et al. by default, as renderers ship it; Converged for the layer's exact albedo. The
+  // asset stores only the sheen colour and roughness, so this is the evaluator's choice.
+  model::SheenConvention sheen_convention = model::SheenConvention::Published;
 };
 
 // The random source of the sampling methods: the project's SplitMix64 (model/splitmix64.hpp), bit

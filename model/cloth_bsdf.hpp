@@ -65,6 +65,8 @@ struct TexelParams {
   T gap = T(1);                          // I(x) in [0, 1]: 1 = yarn, 0 = gap (delta transmission)
   Rgb<T> sheen_color{T(0)};              // sheen colour in [0, 1]; zero disables sheen
   T sheen_roughness = T(0.5);            // sheen roughness in [1e-4, 1]
+  // Which sheen table (model/sheen.hpp): the published one by default, as renderers ship it.
+  SheenConvention sheen_convention = SheenConvention::Published;
 };
 
 // Which parameter is wrong, and why; field is empty when the parameters are valid.
@@ -233,6 +235,9 @@ class ClothBsdf {
     gap_ = std::isnan(params.gap) ? T(1) : clamp01(params.gap);
     sheen_color_ = clamp_rgb(params.sheen_color);
     sheen_roughness_ = clamp01(params.sheen_roughness);
+    sheen_convention_ = params.sheen_convention == SheenConvention::Converged
+                            ? SheenConvention::Converged
+                            : SheenConvention::Published;
     has_sheen_ = sheen_color_.max_component() > T(0);
   }
 
@@ -243,7 +248,7 @@ class ClothBsdf {
   // T_sheen = 1 - colour * R(|o_z|), per channel, in [0, 1].
   Rgb<T> sheen_transmittance(const Vec3<T>& wo) const {
     if (!has_sheen_) return Rgb<T>(T(1));
-    const T albedo = sheen_albedo(std::abs(wo.z), sheen_roughness_);
+    const T albedo = sheen_albedo(std::abs(wo.z), sheen_roughness_, sheen_convention_);
     return Rgb<T>(T(1)) - sheen_color_ * albedo;
   }
 
@@ -280,7 +285,7 @@ class ClothBsdf {
     const T t_sheen = sheen_transmittance(wo).mean();
     if (has_sheen_ && wo.z != T(0))
       a.p[int(Technique::Sheen)] =
-          sheen_color_.mean() * sheen_albedo(std::abs(wo.z), sheen_roughness_);
+          sheen_color_.mean() * sheen_albedo(std::abs(wo.z), sheen_roughness_, sheen_convention_);
     if (thickness_ > T(0) && wo.z != T(0)) {
       const T interact = -std::expm1(-thickness_ * spongecake_lambda(sggx_, wo));
       a.p[int(Technique::Specular)] = t_sheen * gap_ * alpha_.mean() * interact;
@@ -422,16 +427,17 @@ class ClothBsdf {
 
   T sheen_value(const Vec3<T>& wi, const Vec3<T>& wo) const {
     if (!has_sheen_) return T(0);
-    return wo.z < T(0) ? sheen_eval(mirror(wi), mirror(wo), sheen_roughness_)
-                       : sheen_eval(wi, wo, sheen_roughness_);
+    return wo.z < T(0) ? sheen_eval(mirror(wi), mirror(wo), sheen_roughness_, sheen_convention_)
+                       : sheen_eval(wi, wo, sheen_roughness_, sheen_convention_);
   }
   T sheen_density(const Vec3<T>& wi, const Vec3<T>& wo) const {
-    return wo.z < T(0) ? sheen_pdf(mirror(wi), mirror(wo), sheen_roughness_)
-                       : sheen_pdf(wi, wo, sheen_roughness_);
+    return wo.z < T(0) ? sheen_pdf(mirror(wi), mirror(wo), sheen_roughness_, sheen_convention_)
+                       : sheen_pdf(wi, wo, sheen_roughness_, sheen_convention_);
   }
   Vec3<T> sheen_direction(const Vec3<T>& wo, T u1, T u2) const {
-    return wo.z < T(0) ? mirror(sheen_sample(mirror(wo), sheen_roughness_, u1, u2))
-                       : sheen_sample(wo, sheen_roughness_, u1, u2);
+    return wo.z < T(0)
+               ? mirror(sheen_sample(mirror(wo), sheen_roughness_, u1, u2, sheen_convention_))
+               : sheen_sample(wo, sheen_roughness_, u1, u2, sheen_convention_);
   }
 
   FibreSggx<T> sggx_;
@@ -440,6 +446,7 @@ class ClothBsdf {
   T gap_ = T(1);
   Rgb<T> sheen_color_;
   T sheen_roughness_ = T(0.5);
+  SheenConvention sheen_convention_ = SheenConvention::Published;
   bool has_sheen_ = false;
 };
 

@@ -68,6 +68,7 @@ Renderer::Renderer(const Scene& scene, const RenderOptions& options)
       eval::EvalOptions eo;
       eo.tables = options.tables;
       eo.parallax = options.parallax;
+      eo.sheen_convention = options.sheen_convention;
       formats::throw_if_failed(m.evaluator.open(*m.asset, eo),
                                scene.path + ": " + o.name + ".asset: " + o.asset);
       m.cloth = true;

@@ -33,6 +33,8 @@ struct RenderOptions {
                            // one); 0: one pass
   eval::TableChoice tables = eval::TableChoice::Auto;
   bool parallax = true;  // false: the model without parallax offsets (near-field comparison)
+  // The sheen table (docs/sheen.md): the published one by default, as other renderers use.
+  model::SheenConvention sheen_convention = model::SheenConvention::Published;
 };
 
 struct RenderStats {

@@ -26,8 +26,9 @@ void validate(const SheenFitSettings& s) {
   if (s.binning.z_bins < 2 || s.binning.phi_bins < 2 || s.binning.z_bins > 256 ||
       s.binning.phi_bins > 256)
     throw std::invalid_argument("exit histogram bins must be 2 to 256 per axis");
-  if (!(s.min_simulated_cos > 0.0 && s.min_simulated_cos < 1.0))
-    throw std::invalid_argument("min_simulated_cos must be in (0, 1)");
+  if (s.convention != model::SheenConvention::Published &&
+      s.convention != model::SheenConvention::Converged)
+    throw std::invalid_argument("unknown sheen convention " + std::to_string(int(s.convention)));
 }
 
 SheenTableFit fit_sheen_table(const SheenFitSettings& settings,
@@ -39,6 +40,7 @@ SheenTableFit fit_sheen_table(const SheenFitSettings& settings,
   const int total = nc * nr;
   fit.nodes.resize(static_cast<std::size_t>(total));
   std::vector<std::vector<double>> targets(static_cast<std::size_t>(total));
+  const SheenSimulationRules rules = settings.rules();
 
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
@@ -50,14 +52,15 @@ SheenTableFit fit_sheen_table(const SheenFitSettings& settings,
           SheenTableNode& node = fit.nodes[std::size_t(index)];
           node.cos_theta = double(i) / (nc - 1);
           node.roughness = double(j) / (nr - 1);
-          node.simulated_cos = std::max(node.cos_theta, settings.min_simulated_cos);
+          node.simulated_cos = std::max(node.cos_theta, rules.min_cos);
+          node.simulated_roughness = std::max(node.roughness, rules.min_roughness);
           LayerSimulationSettings sim;
           sim.paths = settings.paths_per_node;
           sim.seed = settings.seed;
           sim.stream = uint64_t(index);
           sim.binning = settings.binning;
-          const LayerSimulation result =
-              simulate_sheen_layer(node.simulated_cos, node.roughness, sim);
+          const LayerSimulation result = simulate_sheen_layer(
+              node.simulated_cos, node.simulated_roughness, with_rules(sim, rules));
           node.albedo = result.albedo();
           node.albedo_standard_error = result.albedo_standard_error();
           node.reflected = result.reflected;

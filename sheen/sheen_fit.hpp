@@ -15,6 +15,9 @@
 namespace clothbake::sheen {
 
 struct SheenFitSettings {
+  // Simulation rules (SheenSimulationRules): Published, the rules of Zeltner et al.'s published
+  // table (the default, as renderers ship it), or Converged (every path followed to the end).
+  model::SheenConvention convention = model::SheenConvention::Published;
   int cos_count = 32;        // nodes cos theta_o = i / (cos_count - 1)
   int roughness_count = 32;  // nodes roughness = j / (roughness_count - 1)
   uint64_t paths_per_node = 500000;
@@ -24,9 +27,10 @@ struct SheenFitSettings {
   // neighbour at the next higher roughness (its R is still the simulated one). Such nodes have
   // R < min_reflected / paths_per_node, so their shape barely matters.
   uint64_t min_reflected = 2000;
-  // cos theta_o = 0 is simulated at this cosine (a ray parallel to the layer never enters it; the
-  // limit is continuous).
-  double min_simulated_cos = 1e-3;
+
+  // The rules of `convention`; cos theta_o = 0 is simulated at rules().min_cos (a ray parallel to
+  // the layer never enters it; the limit is continuous). Throws for an unknown convention.
+  SheenSimulationRules rules() const { return simulation_rules(convention); }
 };
 
 // Validates the settings; throws std::invalid_argument naming the offending one.
@@ -35,15 +39,16 @@ void validate(const SheenFitSettings& settings);
 struct SheenTableNode {
   double cos_theta = 0.0, roughness = 0.0;  // the node
   double simulated_cos = 0.0;               // cos theta_o the layer was simulated at
+  double simulated_roughness = 0.0;         // roughness the layer was simulated at
   double a = 1.0, b = 0.0;                  // LTC coefficients
   double albedo = 0.0;                      // R: fraction of reflected paths
   double albedo_standard_error = 0.0;
-  uint64_t reflected = 0, truncated = 0;
-  double mean_scattering_order = 0.0;  // scattering events per path
-  double l1_error = 0.0;               // sum_k |p_k - P_k| of the fit (noise included)
-  double noise_l1 = 0.0;               // the part of l1_error expected from noise alone
-  bool inherited_shape = false;        // too few reflected paths: (a, b) of the rougher neighbour
-  int evaluations = 0;                 // Nelder-Mead objective evaluations
+  uint64_t reflected = 0, truncated = 0;  // truncated: cut at the rules' order cap
+  double mean_scattering_order = 0.0;     // scattering events per path
+  double l1_error = 0.0;                  // sum_k |p_k - P_k| of the fit (noise included)
+  double noise_l1 = 0.0;                  // the part of l1_error expected from noise alone
+  bool inherited_shape = false;  // too few reflected paths: (a, b) of the rougher neighbour
+  int evaluations = 0;           // Nelder-Mead objective evaluations
 };
 
 struct SheenTableFit {

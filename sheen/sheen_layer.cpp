@@ -9,9 +9,10 @@
 // direction drawn exactly from the specular phase function. Because the albedo is 1 every path has
 // weight 1: the estimator is analog and unbiased, and exit directions are samples of f cos / R.
 //
-// Difference from the published fitting code: it stops after 16 bounces and classifies the last
-// direction; here paths are followed until they leave the slab (the cap max_order is never reached
-// in practice and truncated paths are reported, not counted as reflected).
+// Two sets of rules (SheenSimulationRules): the converged ones follow paths until they leave the
+// slab (the cap max_order is never reached in practice and truncated paths are reported, not
+// counted as reflected); the published ones (Zeltner et al.'s fitting code) cut a path right after
+// its 16th scattering event and classify it by that last direction, as their table was made.
 #include "sheen/sheen_layer.hpp"
 
 #include <algorithm>
@@ -23,6 +24,23 @@
 #include "sheen/rng.hpp"
 
 namespace clothbake::sheen {
+
+SheenSimulationRules simulation_rules(model::SheenConvention convention) {
+  switch (convention) {
+    case model::SheenConvention::Published:
+      return {16, true, 0.01, 0.01};
+    case model::SheenConvention::Converged:
+      return {100000, false, 1e-3, 0.0};
+  }
+  throw std::invalid_argument("sheen layer: unknown convention " + std::to_string(int(convention)));
+}
+
+LayerSimulationSettings with_rules(LayerSimulationSettings settings,
+                                   const SheenSimulationRules& rules) {
+  settings.max_order = rules.max_order;
+  settings.classify_by_last_direction = rules.classify_by_last_direction;
+  return settings;
+}
 
 int ExitBinning::bin_of(const Vec3d& w) const {
   const double z = std::clamp(w.z, 0.0, 1.0);
@@ -96,6 +114,17 @@ LayerSimulation simulate_sheen_layer(double cos_theta_o, double roughness,
       d = flakes.sample_phase(-d, u1, u2);
       ++order;
       ++result.scattering_events;
+      if (settings.classify_by_last_direction && order == settings.max_order) {
+        // Published rules: the path ends here, wherever it is, and its new direction decides.
+        ++result.truncated;
+        if (d.z >= 0.0) {
+          ++result.reflected;
+          if (settings.histogram) ++result.exit_counts[settings.binning.bin_of(d)];
+        } else {
+          ++result.transmitted;
+        }
+        break;
+      }
     }
   }
   return result;

@@ -3,7 +3,8 @@
 //
 //   clothbake bsdf --tangent x,y,z --roughness S --thickness T --albedo A
 //                  [--diffuse-reflectance R] [--diffuse-transmittance R]
-//                  [--sheen-color C --sheen-roughness R] [--gap I] [--visibility V]
+//                  [--sheen-color C --sheen-roughness R [--sheen-convention published|converged]]
+//                  [--gap I] [--visibility V]
 //                  --wi x,y,z (--wo x,y,z | --slice LOBE -o FILE [--resolution N]
 //                  [--hemisphere upper|lower]) [--json]
 //
@@ -39,6 +40,7 @@ struct BsdfOptions {
   std::string tangent, roughness, thickness, albedo;
   std::string diffuse_reflectance = "0", diffuse_transmittance = "0";
   std::string sheen_color = "0", sheen_roughness = "0.5", gap = "1", visibility = "1";
+  std::string sheen_convention = "published";
   std::string wi, wo;
   std::string slice, output, hemisphere = "auto";
   int resolution = 256;
@@ -212,6 +214,10 @@ Action setup_bsdf(CLI::App& app) {
   app.add_option("--sheen-color", o->sheen_color, "sheen colour: v or r,g,b (default 0: no sheen)");
   app.add_option("--sheen-roughness", o->sheen_roughness,
                  "sheen roughness in [1e-4, 1] (default 0.5)");
+  app.add_option("--sheen-convention", o->sheen_convention,
+                 "sheen table: published (Zeltner et al.'s, as Cycles ships it; default) or "
+                 "converged (docs/sheen.md)")
+      ->check(CLI::IsMember({"published", "converged"}));
   app.add_option("--gap", o->gap, "yarn indicator I in [0, 1]: 1 yarn, 0 gap (default 1)");
   app.add_option("--visibility", o->visibility, "visibility V(x', wi) in [0, 1] (default 1)");
   app.add_option("--wi", o->wi, "direction towards the light x,y,z (normalised)")->required();
@@ -238,6 +244,7 @@ Action setup_bsdf(CLI::App& app) {
     p.diffuse_transmittance = parse_color(o->diffuse_transmittance, "--diffuse-transmittance");
     p.sheen_color = parse_color(o->sheen_color, "--sheen-color");
     p.sheen_roughness = parse_number(o->sheen_roughness, "--sheen-roughness");
+    model::parse_sheen_convention(o->sheen_convention, p.sheen_convention);  // checked above
     p.gap = parse_number(o->gap, "--gap");
     const double visibility = parse_number(o->visibility, "--visibility");
     if (!(visibility >= 0 && visibility <= 1))

@@ -4,7 +4,7 @@
 //   clothbake eval ASSET --rect x0,y0,x1,y1 --wi x,y,z --wo x,y,z
 //                  [--method multiscale|multiscale-paper|brute|reference] [--spp N] [--seed S]
 //                  [--repeat K] [--lobes all|NAME[,NAME...]] [--tables auto|raw|compressed]
-//                  [--json]
+//                  [--sheen-convention published|converged] [--json]
 //
 // Exit codes: 1 bad arguments (naming the option), 2 missing file or a section the method needs,
 // 3 invalid asset, 0 otherwise.
@@ -29,6 +29,7 @@ namespace {
 
 struct EvalCliOptions {
   std::string asset, rect, wi, wo, method = "multiscale", lobes = "all", tables = "auto";
+  std::string sheen_convention = "published";
   uint32_t spp = 2, repeat = 1;
   uint64_t seed = 1;
   bool json = false;
@@ -80,6 +81,7 @@ int run_eval(const EvalCliOptions& o) {
   options.tables = o.tables == "raw"          ? eval::TableChoice::Raw
                    : o.tables == "compressed" ? eval::TableChoice::Compressed
                                               : eval::TableChoice::Auto;
+  model::parse_sheen_convention(o.sheen_convention, options.sheen_convention);  // IsMember
 
   const reader::Asset asset = formats::open_valid_asset(o.asset);
   eval::Evaluator evaluator;
@@ -183,6 +185,10 @@ const bool registered = register_command(
                       "Integral-Radiance tables of the multi-scale methods: auto (compressed if "
                       "present, else raw), raw, compressed")
            ->check(CLI::IsMember({"auto", "raw", "compressed"}));
+       app.add_option("--sheen-convention", o->sheen_convention,
+                      "sheen table: published (Zeltner et al.'s, as Cycles ships it; default) or "
+                      "converged (docs/sheen.md)")
+           ->check(CLI::IsMember({"published", "converged"}));
        add_json_flag(app, o->json, "print the estimate as JSON on stdout");
        return [o] { return run_eval(*o); };
      }});

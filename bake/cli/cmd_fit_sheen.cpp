@@ -1,8 +1,10 @@
-// clothbake fit-sheen [-o model/sheen_table.hpp] [--samples N] [--resolution COS,ROUGH] [--seed S]
-// [--threads T] [--json]: simulate the volumetric sheen layer of Zeltner et al. 2022 by Monte
-// Carlo at every (cos theta_o, roughness) node and fit one LTC lobe per node; write the table as
-// the C++ header that model/sheen.hpp includes (docs/sheen.md). Deterministic for the same
-// options, whatever the thread count. Without -o the header goes to stdout (unless --json).
+// clothbake fit-sheen [--convention published|converged] [-o model/sheen_table.hpp] [--samples N]
+// [--resolution COS,ROUGH] [--seed S] [--threads T] [--json]: simulate the volumetric sheen layer
+// of Zeltner et al. 2022 by Monte Carlo at every (cos theta_o, roughness) node under the
+// convention's rules (published, the default: paths cut after 16 scattering events as in their
+// published table; converged: every path followed to the end) and fit one LTC lobe per node; write
+// the table as the C++ header that model/sheen.hpp includes (docs/sheen.md). Deterministic for the
+// same options, whatever the thread count. Without -o the header goes to stdout (unless --json).
 #include <tbb/global_control.h>
 
 #include <filesystem>
@@ -23,6 +25,7 @@ namespace clothbake::cli {
 namespace {
 
 struct FitSheenOptions {
+  std::string convention = "published";
   std::string output;
   uint64_t samples = 500000;
   std::string resolution = "32,32";
@@ -51,6 +54,7 @@ nlohmann::json fit_json(const sheen::SheenTableFit& fit, const std::string& outp
     nodes.push_back({{"cos_theta", n.cos_theta},
                      {"roughness", n.roughness},
                      {"simulated_cos", n.simulated_cos},
+                     {"simulated_roughness", n.simulated_roughness},
                      {"a", n.a},
                      {"b", n.b},
                      {"albedo", n.albedo},
@@ -72,6 +76,11 @@ nlohmann::json fit_json(const sheen::SheenTableFit& fit, const std::string& outp
   }
   const auto& s = fit.settings;
   return {{"output", output.empty() ? nlohmann::json(nullptr) : nlohmann::json(output)},
+          {"convention", model::sheen_convention_name(s.convention)},
+          {"max_scattering_order", s.rules().max_order},
+          {"classified_by_last_direction", s.rules().classify_by_last_direction},
+          {"min_simulated_cos", s.rules().min_cos},
+          {"min_simulated_roughness", s.rules().min_roughness},
           {"cos_count", s.cos_count},
           {"roughness_count", s.roughness_count},
           {"paths_per_node", s.paths_per_node},
@@ -91,6 +100,13 @@ nlohmann::json fit_json(const sheen::SheenTableFit& fit, const std::string& outp
 
 Action setup_fit_sheen(CLI::App& app) {
   auto o = std::make_shared<FitSheenOptions>();
+  app.add_option("--convention", o->convention,
+                 "simulation rules: published (Zeltner et al.'s table: paths cut after 16 "
+                 "scattering events, classified by their last direction; for "
+                 "model/sheen_table.hpp) or converged (every path followed to the end; for "
+                 "model/sheen_table_converged.hpp)")
+      ->check(CLI::IsMember({"published", "converged"}))
+      ->capture_default_str();
   app.add_option("-o,--output", o->output,
                  "header to write (e.g. model/sheen_table.hpp); default: stdout");
   app.add_option("--samples", o->samples, "simulated light paths per table node")
@@ -119,6 +135,7 @@ Action setup_fit_sheen(CLI::App& app) {
     settings.roughness_count = roughness_count;
     settings.paths_per_node = o->samples;
     settings.seed = o->seed;
+    model::parse_sheen_convention(o->convention, settings.convention);  // checked by IsMember
     std::optional<tbb::global_control> threads;
     if (o->threads > 0)
       threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(o->threads));
@@ -136,8 +153,10 @@ Action setup_fit_sheen(CLI::App& app) {
             info(std::string("fit-sheen: ") + phase + " " + std::to_string(decile * 10) + "%");
           }
         });
+    // Under the published rules paths are cut on purpose; under the converged ones a cut path is
+    // one the table misses.
     for (const sheen::SheenTableNode& n : fit.nodes)
-      if (n.truncated > 0)
+      if (n.truncated > 0 && !settings.rules().classify_by_last_direction)
         warn("fit-sheen: " + std::to_string(n.truncated) + " paths truncated at cos " +
              std::to_string(n.cos_theta) + ", roughness " + std::to_string(n.roughness));
     const std::string header = sheen::format_sheen_table_header(fit);
@@ -156,8 +175,8 @@ Action setup_fit_sheen(CLI::App& app) {
 
 const bool registered = register_command(
     {"fit-sheen",
-     "Fit the sheen LTC table (model/sheen_table.hpp) to a Monte Carlo simulation of the sheen "
-     "layer",
+     "Fit the sheen LTC table (model/sheen_table.hpp, or model/sheen_table_converged.hpp with "
+     "--convention converged) to a Monte Carlo simulation of the sheen layer",
      setup_fit_sheen});
 
 }  // namespace

@@ -1,7 +1,8 @@
 // clothbake render: renders a scene with the evaluator (docs/rendering.md, docs/scene-format.md).
 //
 //   clothbake render SCENE.toml -o OUT.exr [--method M] [--spp N] [--time-budget S] [--threads N]
-//                    [--seed S] [--tables auto|raw|compressed] [--cache DIR] [--json]
+//                    [--seed S] [--tables auto|raw|compressed]
+//                    [--sheen-convention published|converged] [--cache DIR] [--json]
 //
 // Writes OUT.exr (linear float RGB) and OUT.png (sRGB preview) atomically (temporary names renamed
 // on success). Objects with `fabric =` are baked into the cache first (scene_bake.hpp).
@@ -31,6 +32,7 @@ namespace fs = std::filesystem;
 
 struct RenderCliOptions {
   std::string scene, output, method = "multiscale", tables = "auto", cache;
+  std::string sheen_convention = "published";
   uint32_t spp = 2;
   double time_budget = 0;
   int threads = 0;
@@ -83,6 +85,7 @@ int run_render(const RenderCliOptions& o) {
   ro.tables = o.tables == "raw"          ? eval::TableChoice::Raw
               : o.tables == "compressed" ? eval::TableChoice::Compressed
                                          : eval::TableChoice::Auto;
+  model::parse_sheen_convention(o.sheen_convention, ro.sheen_convention);  // checked by IsMember
   const render::Renderer renderer(loaded.scene, ro);
   ProgressBar bar(!o.json);
   const render::RenderResult result = renderer.render([&](double f) { bar.update(f); });
@@ -138,6 +141,10 @@ const bool registered = register_command(
        app.add_option("--seed", o->seed, "seed of every sample (default 1)");
        app.add_option("--tables", o->tables, "Integral-Radiance tables: auto, raw, compressed")
            ->check(CLI::IsMember({"auto", "raw", "compressed"}));
+       app.add_option("--sheen-convention", o->sheen_convention,
+                      "sheen table: published (Zeltner et al.'s, as Cycles ships it; default) or "
+                      "converged (docs/sheen.md)")
+           ->check(CLI::IsMember({"published", "converged"}));
        app.add_option("--cache", o->cache,
                       "folder for assets baked from `fabric =` objects (default: $CLOTHBAKE_CACHE, "
                       "else ~/.cache/clothbake)");

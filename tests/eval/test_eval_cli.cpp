@@ -65,6 +65,41 @@ TEST(EvalCli, RepeatsGiveAStandardErrorAndTheSeedReproduces) {
   EXPECT_EQ(jo["value"], jo["lobes"]["specular_reflection"]);
 }
 
+// --sheen-convention reaches the evaluator's texel BSDFs; the default is the published table.
+TEST(EvalCli, SheenConventionPicksTheTable) {
+  reader::Asset asset;
+  ASSERT_TRUE(asset.open_file(assets().twill.c_str()).ok());
+  const double wi[3] = {0.3, 0.2, 0.9}, wo[3] = {-0.999, 0.0, 0.03};
+  double values[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    EvalOptions options;
+    options.sheen_convention =
+        k == 0 ? model::SheenConvention::Published : model::SheenConvention::Converged;
+    Evaluator ev;
+    ASSERT_TRUE(ev.open(asset, options).ok());
+    Rng rng(1);
+    Estimate e;
+    ASSERT_TRUE(ev.estimate({3.5, 2.25, 35.5, 34.25}, wi, wo, Method::Reference, 1, rng,
+                            lobe_bit(model::Lobe::Sheen), &e)
+                    .ok());
+    values[k] = e.value.g;
+    std::vector<std::string> args = {"eval",    assets().twill, "--rect",   "3.5,2.25,35.5,34.25",
+                                     "--wi",    "0.3,0.2,0.9",  "--wo",     "-0.999,0,0.03",
+                                     "--lobes", "sheen",        "--method", "reference",
+                                     "--json"};
+    if (k == 1) args.insert(args.end(), {"--sheen-convention", "converged"});
+    const auto run = run_clothbake(args);
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_NEAR(nlohmann::json::parse(run.out)["value"][1].get<double>(), e.value.g,
+                1e-12 * std::max(1.0, e.value.g));
+  }
+  EXPECT_GT(values[0], 0.0);
+  EXPECT_NE(values[0], values[1]);
+  const auto bad = run_clothbake(query(assets().twill, {"--sheen-convention", "exact"}));
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("--sheen-convention"), std::string::npos) << bad.err;
+}
+
 TEST(EvalCli, BadInputHasItsExitCode) {
   const std::string twill = assets().twill;
   auto code = [&](std::vector<std::string> args) {

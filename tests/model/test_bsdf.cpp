@@ -166,6 +166,31 @@ TEST(ClothBsdf, SheenLayering) {
   }
 }
 
+// The sheen table follows TexelParams::sheen_convention (published by default), in the lobe, in
+// T_sheen and in the sheen technique's probability; an out-of-range value acts as Published.
+TEST(ClothBsdf, SheenConventionSelectsTheTable) {
+  TexelParams<double> p = typical();
+  EXPECT_EQ(p.sheen_convention, m::SheenConvention::Published);
+  p.sheen_color = Rgb<double>(1.0);
+  p.sheen_roughness = 1.0 / 31.0;  // where the two tables differ most
+  const Vec3d o = m::normalize(Vec3d{0.999, 0.0, 0.02}), i = m::normalize(Vec3d{-0.5, 0.1, 0.3});
+  for (m::SheenConvention c : {m::SheenConvention::Published, m::SheenConvention::Converged}) {
+    p.sheen_convention = c;
+    const ClothBsdf<double> bsdf(p);
+    const double R = m::sheen_albedo(o.z, p.sheen_roughness, c);
+    EXPECT_NEAR(bsdf.sheen_transmittance(o).g, 1.0 - R, 1e-15);
+    EXPECT_NEAR(bsdf.eval(i, o).sheen.g, m::sheen_eval(i, o, p.sheen_roughness, c), 1e-15);
+  }
+  p.sheen_convention = m::SheenConvention::Converged;
+  const double t_converged = ClothBsdf<double>(p).sheen_transmittance(o).g;
+  p.sheen_convention = m::SheenConvention(9);
+  const double t_other = ClothBsdf<double>(p).sheen_transmittance(o).g;
+  p.sheen_convention = m::SheenConvention::Published;
+  const double t_published = ClothBsdf<double>(p).sheen_transmittance(o).g;
+  EXPECT_EQ(t_other, t_published);
+  EXPECT_GT(t_published - t_converged, 0.2);  // 0.27 at this o
+}
+
 // White furnace: with alpha + R_d + T_d = 1 and white sheen, the integral of f^ |i_z| plus the
 // delta weight is at most 1, for every lobe and for the sum, across roughness, thickness, gap and
 // view. Estimated with the BSDF's own sampler (weights bounded), 4e4 samples per case.

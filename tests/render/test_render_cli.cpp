@@ -50,6 +50,29 @@ TEST(RenderCli, WritesTheExrAndThePreview) {
   EXPECT_EQ(sa, sb);
 }
 
+// --sheen-convention reaches the evaluator: an explicit published equals the default, converged
+// changes the cloth pixels; a bad value is a usage error.
+TEST(RenderCli, SheenConventionPicksTheTable) {
+  const fs::path scene = write_scene("sheen.toml", good_scene());
+  auto render = [&](const std::string& name, std::vector<std::string> extra) {
+    const fs::path out = assets().dir / (name + ".exr");
+    std::vector<std::string> args = {"render", scene.string(), "-o", out.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto run = run_clothbake(args);
+    EXPECT_EQ(run.code, 0) << run.err;
+    std::ifstream in(out, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  const std::string by_default = render("sheen-default", {});
+  EXPECT_EQ(render("sheen-published", {"--sheen-convention", "published"}), by_default);
+  EXPECT_NE(render("sheen-converged", {"--sheen-convention", "converged"}), by_default);
+  const auto bad =
+      run_clothbake({"render", scene.string(), "-o", (assets().dir / "sheen-bad.exr").string(),
+                     "--sheen-convention", "exact"});
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_FALSE(fs::exists(assets().dir / "sheen-bad.exr"));
+}
+
 TEST(RenderCli, BadScenesNameTheKeyAndWriteNothing) {
   const std::string base = good_scene();
   auto replace = [&](const std::string& from, const std::string& to) {

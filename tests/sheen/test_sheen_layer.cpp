@@ -163,4 +163,25 @@ TEST(SheenLayer, RejectsArgumentsOutsideTheirRange) {
   EXPECT_THROW(simulate_sheen_layer(0.5, NAN, s), std::invalid_argument);
 }
 
+// A path cut by the published rules counts as reflected iff its last direction points up, so
+// every path ends up reflected or transmitted; with a cap of one event the reflected fraction is
+// that of paths whose first scattering sends them up (more than the paths that also escape).
+TEST(SheenLayer, PublishedRulesClassifyCutPathsByTheirLastDirection) {
+  LayerSimulationSettings s;
+  s.paths = 20000;
+  s.max_order = 1;
+  s.classify_by_last_direction = true;
+  const LayerSimulation cut = simulate_sheen_layer(0.3, 0.5, s);
+  EXPECT_EQ(cut.reflected + cut.transmitted, cut.paths);
+  EXPECT_GT(cut.truncated, 0u);
+  s.classify_by_last_direction = false;
+  const LayerSimulation kept = simulate_sheen_layer(0.3, 0.5, s);
+  EXPECT_EQ(kept.reflected + kept.transmitted + kept.truncated, kept.paths);
+  EXPECT_GT(cut.albedo(), kept.albedo() + 0.05);
+  uint64_t histogram = 0;
+  for (uint64_t c : cut.exit_counts)
+    histogram += c;
+  EXPECT_EQ(histogram, cut.reflected);
+}
+
 }  // namespace

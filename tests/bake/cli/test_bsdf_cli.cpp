@@ -91,6 +91,34 @@ TEST(CliBsdf, JsonMatchesTheLibrary) {
     EXPECT_NE(text.out.find(m::lobe_name(m::Lobe(l))), std::string::npos);
 }
 
+// --sheen-convention picks the sheen table; the default is the published one.
+TEST(CliBsdf, SheenConventionPicksTheTable) {
+  const std::string args = kParams + "--sheen-color 1 --sheen-roughness 0.04 " +
+                           "--wi 0.7,0,0.7 --wo -0.9999,0,0.01 --json";
+  m::TexelParams<double> p = params();
+  p.sheen_color = m::Rgb<double>(1.0);
+  p.sheen_roughness = 0.04;
+  const m::Vec3d wi = m::normalize(m::Vec3d{0.7, 0, 0.7});
+  const m::Vec3d wo = m::normalize(m::Vec3d{-0.9999, 0, 0.01});
+  for (const char* option :
+       {"", "--sheen-convention published ", "--sheen-convention converged "}) {
+    const CliRun r = run(option + args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    p.sheen_convention = std::string(option).find("converged") != std::string::npos
+                             ? m::SheenConvention::Converged
+                             : m::SheenConvention::Published;
+    const double sheen = m::ClothBsdf<double>(p).eval(wi, wo).sheen.g;
+    EXPECT_NEAR(j["lobes"]["sheen"][1].get<double>(), sheen, 1e-12 * std::max(1.0, sheen))
+        << option;
+  }
+  p.sheen_convention = m::SheenConvention::Published;
+  const double published = m::ClothBsdf<double>(p).eval(wi, wo).sheen.g;
+  p.sheen_convention = m::SheenConvention::Converged;
+  const double converged = m::ClothBsdf<double>(p).eval(wi, wo).sheen.g;
+  EXPECT_GT(std::abs(converged - published), 0.1 * std::max(converged, published));
+}
+
 TEST(CliBsdf, SliceImageHoldsTheLobeOnTheEqualAreaMap) {
   TempDir dir;
   const fs::path exr = dir.path() / "slice.exr";
@@ -147,6 +175,9 @@ TEST(CliBsdf, BadArgumentsNameTheOption) {
       {"--tangent 1,0,0 --roughness 0.3 --thickness 1 --albedo 0.5 --sheen-color 0.5,nan,0 " +
            ok_dirs,
        "--sheen-color", 1},
+      {"--tangent 1,0,0 --roughness 0.3 --thickness 1 --albedo 0.5 --sheen-convention zeltner " +
+           ok_dirs,
+       "--sheen-convention", 1},
       {"--tangent 1,0,0 --roughness 0.3 --thickness 1 --albedo 0.5 --wi 0,0,0 --wo 0,0,1", "--wi",
        1},
       {"--tangent 1,0,0 --roughness 0.3 --thickness 1 --albedo 0.5 --wi 0,0,1 --wo inf,0,1", "--wo",
