@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -27,6 +28,7 @@
 #include "formats/writer/valid_asset.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
+#include "model/parallax.hpp"
 #include "model/parameter_ranges.hpp"
 #include "model/sggx.hpp"
 #include "model/sheen.hpp"
@@ -50,8 +52,8 @@ constexpr double kPi = 3.14159265358979323846;
 // range; the fabric loader accepts (0, 1000]).
 const std::vector<double> kRoughness = {model::kMinRoughness, 1e-3, 1e-2, 0.1, 0.3, 1.0};
 const std::vector<double> kCosines = {1.0, 0.5, 0.1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6};
-const std::vector<double> kThickness = {0.0, 1e-12, 1e-6, 1e-3, 0.1, 1.0,
-                                        10.0, 1e3, 1e6, 1e12, 1e30, kInf};
+const std::vector<double> kThickness = {0.0,  1e-12, 1e-6, 1e-3, 0.1,  1.0,
+                                        10.0, 1e3,   1e6,  1e12, 1e30, kInf};
 
 std::string num(double v) {
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
@@ -73,6 +75,8 @@ struct Sample {
 
 // Samples of one quantity; rows are made per value of each swept axis.
 struct Quantity {
+  Quantity(std::string c, std::string q, std::string d)
+      : case_name(std::move(c)), quantity(std::move(q)), direct(std::move(d)) {}
   std::string case_name, quantity, direct;
   double rel_floor = DBL_MIN;
   std::optional<double> tolerance;
@@ -251,7 +255,7 @@ std::vector<Vec3d> tangents() {
 
 void model_rows(Report& report) {
   // SGGX projected area against the quadrature of D.
-  Quantity area{"sggx", "projected_area", "quadrature of the model's D(m) <w,m>+ over the sphere"};
+  Quantity area("sggx", "projected_area", "quadrature of the model's D(m) <w,m>+ over the sphere");
   area.tolerance = 1e-6;
   for (std::size_t r = 0; r < kRoughness.size(); ++r)
     for (const Vec3d& t : tangents()) {
@@ -269,10 +273,10 @@ void model_rows(Report& report) {
   report.add(area);
 
   // SpongeCake f_r, f_t against long double; reciprocity.
-  Quantity fr{"spongecake", "f_r", "closed form in long double from S"};
-  Quantity ft{"spongecake", "f_t", "closed form in long double from S"};
-  Quantity tr{"spongecake", "unscattered_transmittance", "exp(-T Lambda) in long double"};
-  Quantity rec{"spongecake", "reciprocity f(i,o) vs f(o,i)", "f(o,i) of the model"};
+  Quantity fr("spongecake", "f_r", "closed form in long double from S");
+  Quantity ft("spongecake", "f_t", "closed form in long double from S");
+  Quantity tr("spongecake", "unscattered_transmittance", "exp(-T Lambda) in long double");
+  Quantity rec("spongecake", "reciprocity f(i,o) vs f(o,i)", "f(o,i) of the model");
   fr.tolerance = ft.tolerance = tr.tolerance = 1e-9;
   rec.tolerance = 1e-12;
   // Relative to the value itself; values below 1e-280 (underflow of a product) count absolutely.
@@ -288,7 +292,8 @@ void model_rows(Report& report) {
           for (std::size_t co = 0; co < kCosines.size(); co += 1) {
             const Vec3d i = direction(kCosines[ci], 0.3);
             // Specular configurations too: o mirrors i about a normal of the fibre.
-            for (const Vec3d& o : {direction(kCosines[co], 2.1), direction(kCosines[co], 0.3 + kPi)}) {
+            for (const Vec3d& o :
+                 {direction(kCosines[co], 2.1), direction(kCosines[co], 0.3 + kPi)}) {
               const Vec3d ob{o.x, o.y, -o.z};
               Sample s;
               s.roughness = int(r), s.thickness = int(k);
@@ -327,9 +332,9 @@ void model_rows(Report& report) {
   // Cells of a G x G grid of the cosine lobe's square are mapped by M; the solid angle of a cell
   // after the map is (pi / (G^2 z_o)) |M^-1 w|^3 / a^2 (the LTC Jacobian), so
   //   R = integral f cos dw ~ sum_k f(w_k) z_k (pi / (G^2 z_o,k)) |M^-1 w_k|^3 / a^2.
-  Quantity sheen{"sheen", "albedo (LTC quadrature vs table R)",
-                 "quadrature of sheen_eval cos over the hemisphere"};
-  Quantity sheen_t{"sheen", "T_sheen in [0,1] and lobe finite", ""};
+  Quantity sheen("sheen", "albedo (LTC quadrature vs table R)",
+                 "quadrature of sheen_eval cos over the hemisphere");
+  Quantity sheen_t("sheen", "T_sheen in [0,1] and lobe finite", "");
   sheen.tolerance = 1e-6;
   sheen.rel_floor = 1e-6;
   for (std::size_t r = 0; r < kRoughness.size(); ++r)
@@ -346,7 +351,8 @@ void model_rows(Report& report) {
           const double zo = std::sqrt(std::max(0.0, 1 - ro * ro));
           // |M^-1 w| in the frame of wo (x along wo's azimuth).
           const double planar = std::hypot(wo.x, wo.y);
-          const double cp = planar > 1e-12 ? wo.x / planar : 1, sp = planar > 1e-12 ? wo.y / planar : 0;
+          const double cp = planar > 1e-12 ? wo.x / planar : 1,
+                       sp = planar > 1e-12 ? wo.y / planar : 0;
           const double x = w.x * cp + w.y * sp, y = -w.x * sp + w.y * cp;
           const double tx = ltc.a * x + ltc.b * w.z, ty = ltc.a * y;
           const double len = std::sqrt(tx * tx + ty * ty + w.z * w.z);
@@ -378,9 +384,9 @@ void model_rows(Report& report) {
   // against double (reported only: at roughness 1e-4 the half vector's rounding in float moves
   // t.h by more than the lobe's width); reciprocity without sheen (the sheen lobe is not
   // reciprocal, model/sheen.hpp).
-  Quantity ev{"cloth_bsdf", "eval/pdf/sample (double)", ""};
-  Quantity evf{"cloth_bsdf", "eval (float) vs double", "the same evaluation in double"};
-  Quantity crec{"cloth_bsdf", "reciprocity without sheen", "f(o,i) of the model"};
+  Quantity ev("cloth_bsdf", "eval/pdf/sample (double)", "");
+  Quantity evf("cloth_bsdf", "eval (float) vs double", "the same evaluation in double");
+  Quantity crec("cloth_bsdf", "reciprocity without sheen", "f(o,i) of the model");
   evf.rel_floor = 1e-30;
   crec.tolerance = 1e-12;
   crec.rel_floor = 1e-280;
@@ -415,16 +421,16 @@ void model_rows(Report& report) {
             s.roughness = int(r), s.thickness = int(k);
             s.cosine = int(std::max(ci, co));
             const auto f = bsdf.eval(i, o);
-            for (double v : {f.total.r, f.total.g, f.total.b, f.delta_transmission.r,
-                             bsdf.pdf(i, o)}) {
+            for (double v :
+                 {f.total.r, f.total.g, f.total.b, f.delta_transmission.r, bsdf.pdf(i, o)}) {
               s.q = v;
               ev.samples.push_back(s);
             }
             const auto smp = bsdf.sample(o, 0.37, 0.61, 0.23);
             s.q = smp.valid ? smp.weight.max_component() + smp.pdf : 0.0;
             ev.samples.push_back(s);
-            const Vec3f fi{float(i.x), float(i.y), float(i.z)}, fo{float(o.x), float(o.y),
-                                                                     float(o.z)};
+            const Vec3f fi{float(i.x), float(i.y), float(i.z)},
+                fo{float(o.x), float(o.y), float(o.z)};
             const auto ff = bsdf_f.eval(fi, fo);
             s.q = ff.total.r;
             s.d = report.perturb(f.total.r, 1e-30);
@@ -585,7 +591,7 @@ void baked_rows(Report& report, const BakedCase& c, const std::string& scratch) 
 
   // Parallax: every texel at every bin centre, raw and compressed, against the direct ray cast;
   // footprint means against direct sums of the per-texel answers.
-  std::vector<double> profile(std::size_t(n));
+  std::vector<double> profile(static_cast<std::size_t>(n));
   for (int x = 0; x < n; ++x)
     profile[std::size_t(x)] = double(fabric.maps.height[std::size_t(x)]);
   const double range = *std::max_element(profile.begin(), profile.end()) -
@@ -595,8 +601,9 @@ void baked_rows(Report& report, const BakedCase& c, const std::string& scratch) 
     reader::ParallaxView view;
     StabilityRow depth_row = row_of(raw ? "parallax_depth (raw)" : "parallax_depth (compressed)",
                                     "ray cast of the profile between texel centres");
-    StabilityRow foot_row = row_of(raw ? "parallax_footprint (raw)" : "parallax_footprint (compressed)",
-                                   "area-weighted sum of the per-texel depths");
+    StabilityRow foot_row =
+        row_of(raw ? "parallax_footprint (raw)" : "parallax_footprint (compressed)",
+               "area-weighted sum of the per-texel depths");
     const reader::Status st = view.open(asset, source);
     if (!st.ok()) {
       depth_row.warnings.push_back(std::string("parallax view: ") + st.message());
@@ -637,9 +644,10 @@ void baked_rows(Report& report, const BakedCase& c, const std::string& scratch) 
         // Footprints: sub-texel, one texel at the far corner, a few sizes, a whole tile, more.
         const int bin = j * dirs + i;
         if ((i + j) % 3 != 0 && n > 64) continue;  // large tables: a third of the directions
-        std::vector<reader::Footprint> rects = {
-            {n - 0.3, n - 0.3, n - 0.1, n - 0.05}, {n - 1.0, n - 1.0, double(n), double(n)},
-            {0, 0, double(n), double(n)}, {-0.5 * n, 0.25, 1.0 * n, 1.5 * n}};
+        std::vector<reader::Footprint> rects = {{n - 0.3, n - 0.3, n - 0.1, n - 0.05},
+                                                {n - 1.0, n - 1.0, double(n), double(n)},
+                                                {0, 0, double(n), double(n)},
+                                                {-0.5 * n, 0.25, 1.0 * n, 1.5 * n}};
         for (int k = 0; k < c.footprints; ++k) {
           const double side = std::min(double(n), std::pow(2.0, 6 * unit(rng)) * 0.37);
           const double x0 = (unit(rng) * 3 - 1) * n, y0 = (unit(rng) * 3 - 1) * n;
@@ -815,19 +823,21 @@ std::vector<StabilityRow> stability_rows(const StabilityOptions& o, const std::s
   if (o.model) model_rows(report);
   if (o.baked) {
     std::vector<BakedCase> cases;
-    cases.push_back({"flat", "height=0", profile_fabric("flat", 16, [](double) { return 0.0; }, 8, 2)});
+    cases.push_back({"flat", "height=0",
+                     profile_fabric(
+                         "flat", 16, [](double) { return 0.0; }, 8, 2)});
     for (double a : {0.01, 0.1, 1.0, 8.0, inputs::kMaxHeightTiles}) {
       const double amp = a;
-      cases.push_back({"relief", "amplitude=" + num(a),
-                       profile_fabric("relief", 16,
-                                      [amp](double u) { return amp * std::sin(2 * kPi * u); }, 8,
-                                      2)});
+      cases.push_back(
+          {"relief", "amplitude=" + num(a),
+           profile_fabric(
+               "relief", 16, [amp](double u) { return amp * std::sin(2 * kPi * u); }, 8, 2)});
     }
     const int big = o.large ? 2048 : 256;
     BakedCase table{"table", fmt::format("resolution={}", big),
-                    profile_fabric("table", big,
-                                   [](double u) { return 0.02 * std::sin(2 * kPi * 3 * u); },
-                                   o.large ? 4 : 8, o.large ? 1 : 2)};
+                    profile_fabric(
+                        "table", big, [](double u) { return 0.02 * std::sin(2 * kPi * 3 * u); },
+                        o.large ? 4 : 8, o.large ? 1 : 2)};
     table.footprints = 4;
     if (o.table_case) cases.push_back(std::move(table));
     for (const BakedCase& c : cases)
@@ -881,7 +891,10 @@ int run_stability_report(const StabilityOptions& o) {
   }
   fs::remove_all(tmp, ec);
   if (o.json) {
-    print_json(doc);
+    // print_json's format (main.cpp, which this library does not link): pretty, U+FFFD for bytes
+    // that are not UTF-8.
+    std::cout << doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
+    std::cout.flush();
   } else {
     std::printf("stability report: %zu rows, %d failed; %s/{stability.csv,stability.json}\n",
                 rows.size(), failed, o.output.c_str());

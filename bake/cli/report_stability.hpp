@@ -46,7 +46,7 @@ struct StabilityRow {
   double max_abs_error = 0, max_rel_error = 0;  // against `direct` (0 without one)
   double rel_floor = 0;                         // rel = |q - d| / max(|d|, rel_floor)
   std::optional<double> tolerance;              // on max_rel_error; none: reported only
-  bool pass = true;  // finite, non-negative where required, within tolerance
+  bool pass = true;                   // finite, non-negative where required, within tolerance
   std::vector<std::string> warnings;  // the bake's warnings (baked cases)
 };
 
