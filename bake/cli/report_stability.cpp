@@ -3,9 +3,13 @@
 
 #include <fmt/format.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <cfloat>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +19,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <thread>
 
 #include "bake/cli/command.hpp"
 #include "bake/inputs/map_limits.hpp"
@@ -545,31 +550,98 @@ struct BakedCase {
   int footprints = 24;
 };
 
-void baked_rows(Report& report, const BakedCase& c, const std::string& scratch) {
+// What a bake left behind for the queries.
+struct BakeOutcome {
+  std::string path, failure;
+  std::vector<std::string> warnings;
+  double seconds = 0;
+};
+
+std::string case_path(const BakedCase& c, const std::string& scratch) {
+  return (fs::path(scratch) / (c.name + "-" + c.parameter + ".cbk")).string();
+}
+
+// Bakes `c` in a child process (fork) with a time limit, so that a stage that never returns
+// (docs/hardening.md, "Open problems": an Embree occlusion call that hangs) becomes a failed row
+// instead of a hung report. The child writes the asset, its warnings (PATH.warnings, one a line)
+// and any error (PATH.error), and leaves with _exit. Call before this process starts TBB threads.
+BakeOutcome bake_in_child(const BakedCase& c, const std::string& scratch, int timeout_seconds) {
+  BakeOutcome out;
+  out.path = case_path(c, scratch);
+  info(fmt::format("report stability: baking {} {} ({}^2)", c.name, c.parameter,
+                   c.fabric.maps.resolution));
+  std::fflush(nullptr);
+  const auto t0 = std::chrono::steady_clock::now();
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    out.failure = "fork failed";
+    return out;
+  }
+  if (pid == 0) {
+    set_quiet(true);
+    int code = 0;
+    try {
+      pipeline::BakeRequest request;
+      request.fabric = c.fabric;
+      request.output_path = out.path;
+      request.force = true;
+      compress::CompressRequest keep;
+      keep.keep_raw = true;  // the compressed forms a renderer reads, and the raw ones to verify
+      request.seeds.put(stages::kCompressSettingsArtifact, keep);
+      pipeline::bake(request, stages::bake_stages());
+    } catch (const std::exception& e) {
+      std::ofstream(out.path + ".error") << e.what();
+      code = 1;
+    }
+    std::ofstream w(out.path + ".warnings");
+    for (std::string line : take_warnings()) {
+      std::replace(line.begin(), line.end(), '\n', ' ');
+      w << line << '\n';
+    }
+    w.close();
+    ::_exit(code);
+  }
+  int status = 0;
+  bool done = false;
+  while (!done) {
+    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) {
+      done = true;
+      break;
+    }
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (elapsed > timeout_seconds) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      out.failure = fmt::format("bake timed out after {} s (killed)", timeout_seconds);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::ifstream w(out.path + ".warnings");
+  for (std::string line; std::getline(w, line);)
+    if (!line.empty()) out.warnings.push_back(line);
+  std::ifstream e(out.path + ".error");
+  std::string error((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
+  if (!error.empty()) out.failure = "bake failed: " + error;
+  if (out.failure.empty() && done && !(WIFEXITED(status) && WEXITSTATUS(status) == 0))
+    out.failure = "bake process ended abnormally";
+  return out;
+}
+
+void baked_rows(Report& report, const BakedCase& c, const BakeOutcome& baked) {
   const Fabric& fabric = c.fabric;
   const int n = fabric.maps.resolution;
-  info(fmt::format("report stability: baking {} {} ({}^2)", c.name, c.parameter, n));
-  (void)take_warnings();
-  pipeline::BakeRequest request;
-  request.fabric = fabric;
-  request.output_path = (fs::path(scratch) / (c.name + "-" + c.parameter + ".cbk")).string();
-  request.force = true;
-  compress::CompressRequest keep;
-  keep.keep_raw = true;  // the compressed forms a renderer reads, and the raw ones to verify
-  request.seeds.put(stages::kCompressSettingsArtifact, keep);
-  const bool quiet = is_quiet();
-  set_quiet(true);
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings = baked.warnings;
   std::optional<reader::Asset> opened;
-  std::string failure;
-  try {
-    pipeline::bake(request, stages::bake_stages());
-    opened.emplace(formats::open_valid_asset(request.output_path));
-  } catch (const Error& e) {
-    failure = e.what();
-  }
-  set_quiet(quiet);
-  warnings = take_warnings();
+  std::string failure = baked.failure;
+  if (failure.empty()) try {
+      opened.emplace(formats::open_valid_asset(baked.path));
+    } catch (const Error& e) {
+      failure = e.what();
+    }
   auto row_of = [&](const std::string& quantity, const std::string& direct) {
     StabilityRow row;
     row.case_name = c.name;
@@ -840,8 +912,12 @@ std::vector<StabilityRow> stability_rows(const StabilityOptions& o, const std::s
                         o.large ? 4 : 8, o.large ? 1 : 2)};
     table.footprints = 4;
     if (o.table_case) cases.push_back(std::move(table));
+    // Every bake first, each in a child process, before this process runs any TBB code.
+    std::vector<BakeOutcome> outcomes;
     for (const BakedCase& c : cases)
-      baked_rows(report, c, scratch);
+      outcomes.push_back(bake_in_child(c, scratch, c.fabric.maps.resolution > 256 ? 3600 : 60));
+    for (std::size_t k = 0; k < cases.size(); ++k)
+      baked_rows(report, cases[k], outcomes[k]);
   }
   return std::move(report.rows);
 }
