@@ -691,7 +691,11 @@ void baked_rows(Report& report, const BakedCase& c, const BakeOutcome& baked) {
     // ray caster's float rounding; errors are relative to the relief's range (flat: exactly 0).
     depth_row.rel_floor = foot_row.rel_floor = std::max(range, 1e-300);
     depth_row.tolerance = range > 0 ? (step_max / 2) / range + 1e-5 : 0.0;
-    foot_row.tolerance = range > 0 ? 1e-9 : 0.0;
+    // Footprint means: exact integer SAT sums, then the covered fractions in double. Measured
+    // 6e-11 of the relief at 256^2 and 2.8e-9 at 2048^2 (growing with the table, as a cancellation
+    // of prefix sums of up to N^2 x 65535 codes would); 1e-7 of the relief is below 1e-4 texel of
+    // Eq. 2 offset at 2048^2.
+    foot_row.tolerance = range > 0 ? 1e-7 : 0.0;
     std::vector<Sample> depth_samples, foot_samples;
     std::mt19937_64 rng(fabric.bake.seed);
     std::uniform_real_distribution<double> unit(0, 1);
