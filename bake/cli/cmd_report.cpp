@@ -14,6 +14,9 @@
 // Visibility clusters come from the bake's own stages (visibility, cluster).
 // Files are written to a temporary directory next to DIR and moved into place at the end.
 // Exit codes: 0, 1 usage, 2 bad fabric or unwritable output.
+//
+// clothbake report stability -o DIR [--large] [--json]: report_stability.hpp (exit 5 when a row
+// fails, after writing DIR/stability.csv and .json).
 #include <fmt/format.h>
 
 #include <atomic>
@@ -30,6 +33,7 @@
 #include "bake/cli/options.hpp"
 #include "bake/cli/report_error_time.hpp"
 #include "bake/cli/report_plan.hpp"
+#include "bake/cli/report_stability.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
@@ -110,12 +114,16 @@ Action setup_report(CLI::App& app) {
   auto o = std::make_shared<ReportCliOptions>();
   app.add_option("WHAT", o->what,
                  "report to produce: compression (FABRIC), error-time (SCENE, "
-                 "docs/rendering.md) or plan (SCENE, docs/scene-plans.md)")
+                 "docs/rendering.md), plan (SCENE, docs/scene-plans.md) or stability (no input, "
+                 "docs/hardening.md)")
       ->required()
-      ->check(CLI::IsMember({"compression", "error-time", "plan"}));
+      ->check(CLI::IsMember({"compression", "error-time", "plan", "stability"}));
   app.add_option("FABRIC", o->fabric,
-                 "fabric description (compression) or scene (error-time, plan)")
-      ->required();
+                 "fabric description (compression) or scene (error-time, plan); none for "
+                 "stability");
+  auto large = std::make_shared<bool>(false);
+  app.add_flag("--large", *large,
+               "stability: bake the table case at 2048^2 instead of 256^2 (minutes, ~2 GB)");
   auto et = std::make_shared<ErrorTimeOptions>();
   std::string methods = "multiscale,multiscale-paper,brute", spp = "1,2,4,8,16,32,64";
   auto m = std::make_shared<std::string>(methods);
@@ -152,7 +160,19 @@ Action setup_report(CLI::App& app) {
   app.add_flag("--no-raw", o->no_raw, "skip the raw tables (built in memory: 2 GiB at 256^2)");
   app.add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
   add_json_flag(app, o->json, "print the rows as JSON on stdout");
-  return [o, et, m, s, resolution] {
+  return [o, et, m, s, resolution, large] {
+    if (o->what == "stability") {
+      if (!o->fabric.empty())
+        throw Error(ExitCode::Usage, "report stability takes no FABRIC or SCENE argument");
+      StabilityOptions so;
+      so.output = o->output;
+      so.large = *large;
+      so.json = o->json;
+      return run_stability_report(so);
+    }
+    if (o->fabric.empty())
+      throw Error(ExitCode::Usage, "report " + o->what + ": FABRIC (or SCENE) is required");
+    if (*large) throw Error(ExitCode::Usage, "--large applies to report stability only");
     if (o->what == "plan") {
       PlanReportOptions po;
       po.scene = o->fabric;
