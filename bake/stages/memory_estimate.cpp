@@ -77,10 +77,12 @@ struct Builder {
 // `width` (compress/cpca.cpp, compress/randomized_svd.cpp): Y = A Omega and its Householder QR and
 // Q (three rows x width doubles), or Q plus the per-block partials of A^T Q (ceil(rows / 1024)
 // blocks of dim x width doubles) and Z; the Gaussian test matrix.
-double cpca_svd_bytes(double rows, double dim, double width) {
+// Each thread gathers blocks of 1024 rows (floats) to multiply.
+double cpca_svd_bytes(double rows, double dim, double width, double threads) {
   const double qr = 3 * rows * width * 8;
   const double partials = rows * width * 8 + std::ceil(rows / kSvdBlockRows) * dim * width * 8;
-  return std::max(qr, partials) + 2 * dim * width * 8;
+  const double gather = threads * std::min(rows, kSvdBlockRows) * dim * 4;
+  return std::max(qr, partials) + 2 * dim * width * 8 + gather;
 }
 
 }  // namespace
@@ -112,9 +114,10 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     const double codes = 2 * d;
     double stored = 0, transient = 0;
     if (parallax_compressed) {
-      // 8-bit codes (or a 16-bit copy of the codes when 8 bits miss the target) and the
-      // per-direction entropy stream, at most the codes' size, and its section copy.
-      transient += 2 * d + d;
+      // compress::quantise_parallax: 8-bit codes (or a 16-bit copy when 8 bits miss the target),
+      // then the entropy stream and its sections, at most the 8-bit codes' size (the twill's:
+      // 0.3 bytes a texel-direction; a 16-bit fallback keeps 2).
+      transient += 2 * d;
       stored += d;
     }
     if (parallax_raw) stored += 6 * d;  // codes and u32 SATs (raycast/raycast_sections)
@@ -171,7 +174,8 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     const double fill_blocks = keep_raw_tables ? 0.0 : threads * texels * kBinBlock * 4;
     const double rank = std::min({double(c.rank), bins, texels});
     const double width = std::min({rank + kOversampling, bins, texels});
-    const double svd = cpca_svd_bytes(texels, bins, width);
+    // Rows: a C-PCA stratum is one visibility cluster; every texel in one is the upper bound.
+    const double svd = cpca_svd_bytes(texels, bins, width, threads);
     const double coefficients = texels * rank * 4;  // every cell's float coefficients
     // The stored set: int16 coefficients, half basis and its float decode, the cell map, indices.
     const double images = std::min(4096.0, double(b.clusters) * c.clusters * (rank + 1));
