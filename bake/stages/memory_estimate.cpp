@@ -43,6 +43,8 @@ constexpr double kBinBlock = 16;
 // C-PCA oversampling (compress::CpcaOptions::oversampling) and SVD block rows.
 constexpr double kOversampling = 8;
 constexpr double kSvdBlockRows = 1024;
+// The first rank cap of the C-PCA's target mode (compress/cpca.cpp).
+constexpr double kTargetFirstRankCap = 16;
 
 struct Builder {
   MemoryEstimate out;
@@ -115,10 +117,10 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     double stored = 0, transient = 0;
     if (parallax_compressed) {
       // compress::quantise_parallax: 8-bit codes (or a 16-bit copy when 8 bits miss the target),
-      // then the entropy stream and its sections, at most the 8-bit codes' size (the twill's:
-      // 0.3 bytes a texel-direction; a 16-bit fallback keeps 2).
+      // then the entropy stream and its sections. Kept: 2 bytes a texel-direction, the 16-bit
+      // fallback (the plain weave's; the twill's entropy-coded 8-bit codes keep 0.05).
       transient += 2 * d;
-      stored += d;
+      stored += 2 * d;
     }
     if (parallax_raw) stored += 6 * d;  // codes and u32 SATs (raycast/raycast_sections)
     m.add("parallax", codes + kEmbreeBytesPerTexel * texels + transient + stored, stored,
@@ -172,7 +174,11 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
   if (compressing) {
     const double values = 4 * texels * bins + texels;  // DirectionalTexels
     const double fill_blocks = keep_raw_tables ? 0.0 : threads * texels * kBinBlock * 4;
-    const double rank = std::min({double(c.rank), bins, texels});
+    // Target mode (the default) fits every cell at a rank cap of 16 first and refits at 32, 64, ...
+    // only when cells saturate it without reaching the target (compress/cpca.cpp), which the
+    // example fabrics never do (ranks 4 to 24); a fixed shape fits at its rank.
+    const double cap = c.fixed ? double(c.rank) : std::min(double(c.rank), kTargetFirstRankCap);
+    const double rank = std::min({cap, bins, texels});
     const double width = std::min({rank + kOversampling, bins, texels});
     // Rows: a C-PCA stratum is one visibility cluster; every texel in one is the upper bound.
     const double svd = cpca_svd_bytes(texels, bins, width, threads);

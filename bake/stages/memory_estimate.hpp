@@ -22,7 +22,10 @@
 //                 coefficients and the compressed set
 //   write         the metadata section (sections are written from where the stages keep them)
 // Upper bounds where the maps decide (every cluster stored, a gap table present, 16-bit parallax
-// codes), so the estimate is at or above the measured peak; calibration in docs/performance.md.
+// codes, one C-PCA stratum holding every texel), so the estimate is at or above the measured peak;
+// one exception: the C-PCA's target mode is counted at its first rank cap (16), as the example
+// fabrics need; a table that saturates it refits at 32 and 64, up to 3x the C-PCA's working
+// memory (a small share of the directional vectors). Calibration in docs/performance.md.
 //
 // Pure and cheap (no allocation proportional to the settings); safe for any settings in the
 // loader's ranges (sizes are computed in double, so nothing overflows).
