@@ -1,11 +1,13 @@
 // clothbake bake FABRIC.toml -o OUT.cbk [--stages a,b] [--threads N] [--quiet] [--report R.json]
 // [--json] [--force] [--record-timings] [--list-stages]
-// [--compress K,R | --max-error E] [--keep-raw] [--no-compress] [--scene SCENE.toml]: runs the
-// bake pipeline
-// (docs/pipeline.md) and writes one asset atomically. By default the asset holds the C-PCA
-// compressed Integral-Radiance tables only (docs/compression.md, "Bake"). Exit 2 on bad input or
-// an unwritable output (nothing written), 1 on a bad command line (unknown stage, conflicting
-// compression options, compression options with --stages that leave out the compress stage).
+// [--compress K,R | --max-error E] [--keep-raw] [--no-compress] [--scene SCENE.toml]
+// [--max-memory S]: runs the bake pipeline (docs/pipeline.md) and writes one asset atomically,
+// after refusing a bake whose estimated peak memory is above --max-memory (default: the machine's
+// RAM or cgroup limit) before any map is loaded. By default the asset holds the C-PCA
+// compressed Integral-Radiance tables only (docs/compression.md, "Bake"). Exit 2 on bad input, an
+// unwritable output or a bake too large for --max-memory (nothing written), 1 on a bad command
+// line (unknown stage, conflicting compression options, compression options with --stages that
+// leave out the compress stage, a malformed --max-memory).
 #include <algorithm>
 #include <iostream>
 #include <memory>
@@ -55,7 +57,7 @@ struct BakeOptions {
   CLI::Option* max_error_option = nullptr;
   bool keep_raw = false;
   bool no_compress = false;
-  std::string scene;  // --scene: bake the scene's plan
+  std::string scene;       // --scene: bake the scene's plan
   std::string max_memory;  // --max-memory S (default: the machine's memory)
 };
 
@@ -226,7 +228,8 @@ Action setup_bake(CLI::App& app) {
     if (!o->depfile.empty()) formats::check_output_path(o->depfile, report_output);
     // Before any map is decoded or generated: a bake that cannot fit is refused in milliseconds
     // instead of failing (or being killed) after minutes.
-    const std::optional<stages::MemoryEstimate> estimate = check_memory(*o, compression, max_memory);
+    const std::optional<stages::MemoryEstimate> estimate =
+        check_memory(*o, compression, max_memory);
 
     pipeline::BakeRequest request;
     request.fabric_path = o->fabric;

@@ -59,7 +59,8 @@ std::string own_cgroup(const std::string& prefix) {
   while (std::getline(in, line)) {
     if (prefix == "0::" && line.rfind("0::", 0) == 0) return line.substr(3);
     const auto colon = line.find(':');
-    if (prefix != "0::" && colon != std::string::npos && line.compare(colon + 1, prefix.size(), prefix) == 0)
+    if (prefix != "0::" && colon != std::string::npos &&
+        line.compare(colon + 1, prefix.size(), prefix) == 0)
       return line.substr(colon + 1 + prefix.size());
   }
   return "";

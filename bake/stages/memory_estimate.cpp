@@ -132,9 +132,8 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     const double words = std::ceil(double(b.visibility_dirs) * b.visibility_dirs / 64.0);
     const double samples = words * 8 * texels;
     const double kept = (kAsgBytesPerTexel + kLobeBytesPerTexel) * texels;
-    m.add("visibility",
-          samples + kEmbreeBytesPerTexel * texels + kAsgBytesPerTexel * texels + kept, kept,
-          "the visibility samples of every texel and light direction",
+    m.add("visibility", samples + kEmbreeBytesPerTexel * texels + kAsgBytesPerTexel * texels + kept,
+          kept, "the visibility samples of every texel and light direction",
           {"resolution", "visibility_dirs"});
   }
 
@@ -192,6 +191,8 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     m.add("compress", working, kept,
           "the per-texel directional vectors of the Integral-Radiance tables and their C-PCA",
           keys);
+  } else {
+    m.add("compress", 0, 0, "nothing (compression is off)", {});
   }
 
   // write: the metadata section; the sections are written from where the stages hold them.
@@ -211,8 +212,11 @@ std::string format_bytes(double bytes) {
   if (u == 0)
     std::snprintf(text, sizeof text, "%.0f B", v);
   else
-    std::snprintf(text, sizeof text, v < 10 ? "%.2f %s" : v < 100 ? "%.1f %s" : "%.0f %s", v,
-                  units[u]);
+    std::snprintf(text, sizeof text,
+                  v < 10    ? "%.2f %s"
+                  : v < 100 ? "%.1f %s"
+                            : "%.0f %s",
+                  v, units[u]);
   return text;
 }
 
@@ -266,8 +270,8 @@ void check_memory_estimate(const MemoryEstimate& e, const BakeSettings& bake, do
     lower += (i == 0 ? "" : i + 1 == sorted.size() ? " or " : ", ") + sorted[i];
   throw_input_error(where + ": " + subject + " ~" + format_bytes(e.peak_bytes) + " in the " +
                     s.stage + " stage (" + s.what + "); --max-memory is " +
-                    format_bytes(max_bytes) + ": lower " + (lower.empty() ? "the settings" : lower) +
-                    ", or raise --max-memory");
+                    format_bytes(max_bytes) + ": lower " +
+                    (lower.empty() ? "the settings" : lower) + ", or raise --max-memory");
 }
 
 }  // namespace clothbake::stages

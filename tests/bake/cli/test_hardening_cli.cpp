@@ -655,8 +655,8 @@ TEST_F(Hardening, MaxMemoryBoundsTheBakeAndTheReportHasTheEstimate) {
   const auto estimate = stages::estimate_bake_memory(in);
   EXPECT_LT(estimate.peak_bytes, double(pipeline::machine_memory_bytes()));
   EXPECT_LT(estimate.peak_bytes, 2.0 * (1u << 30));
-  EXPECT_NO_THROW(stages::check_memory_estimate(
-      estimate, in.bake, double(pipeline::machine_memory_bytes()), twill));
+  EXPECT_NO_THROW(stages::check_memory_estimate(estimate, in.bake,
+                                                double(pipeline::machine_memory_bytes()), twill));
   // A small bake under the default bound succeeds and reports the estimate per stage.
   const std::string fabric = path("fits.toml");
   std::ofstream(fabric) << fabric_text();
