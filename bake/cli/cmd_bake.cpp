@@ -127,8 +127,13 @@ std::optional<stages::MemoryEstimate> check_memory(const BakeOptions& o,
   in.image_maps = peek->image_maps;
   in.threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   const auto list = stages::bake_stages();
-  for (const pipeline::Stage* s : pipeline::plan_stages(list, o.stages, {"fabric_path", "output"}))
-    in.stages.push_back(s->name);
+  try {
+    for (const pipeline::Stage* s :
+         pipeline::plan_stages(list, o.stages, {"fabric_path", "output"}))
+      in.stages.push_back(s->name);
+  } catch (const Error&) {
+    in.stages.clear();  // an unknown stage name: every stage (the bake reports the name after)
+  }
   stages::MemoryEstimate estimate = stages::estimate_bake_memory(in);
   stages::check_memory_estimate(estimate, in.bake, double(max_memory), o.fabric);
   return estimate;
