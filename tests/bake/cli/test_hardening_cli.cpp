@@ -620,7 +620,7 @@ TEST_F(Hardening, BakesThatCannotFitInMemoryAreRefusedBeforeLoading) {
     for (const auto& what : c.named)
       EXPECT_TRUE(mentions(r, what)) << what << " not in: " << r.err;
     EXPECT_TRUE(mentions(r, "--max-memory is ")) << r.err;
-    EXPECT_LT(seconds, 2.0) << r.err;  // measured ~0.05 s: nothing was loaded
+    EXPECT_LT(seconds, 5.0) << r.err;  // no more than the start-up: nothing is loaded
     EXPECT_FALSE(fs::exists(out));
     for (const auto& entry : fs::directory_iterator(*dir_))
       EXPECT_EQ(entry.path().filename().string().find(".huge.cbk.tmp"), std::string::npos);
