@@ -156,7 +156,7 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     if (keep_raw_tables) {
       const double sats = (bins + 1) * texels * double(b.clusters) * element;
       m.add("tables", sats + quadrature + kSggxBytesPerTexel * texels + threads * 4 * texels, sats,
-            "the raw Integral-Radiance tables (one SAT per cluster and half-vector bin)",
+            "the raw Integral-Radiance tables, one SAT per cluster and half-vector bin",
             {"resolution", "radiance_dirs", "clusters"});
     } else {
       const double fills =
