@@ -1,25 +1,31 @@
 // clothbake bake FABRIC.toml -o OUT.cbk [--stages a,b] [--threads N] [--quiet] [--report R.json]
 // [--json] [--force] [--record-timings] [--list-stages]
-// [--compress K,R | --max-error E] [--keep-raw] [--no-compress] [--scene SCENE.toml]: runs the
-// bake pipeline
-// (docs/pipeline.md) and writes one asset atomically. By default the asset holds the C-PCA
-// compressed Integral-Radiance tables only (docs/compression.md, "Bake"). Exit 2 on bad input or
-// an unwritable output (nothing written), 1 on a bad command line (unknown stage, conflicting
-// compression options, compression options with --stages that leave out the compress stage).
+// [--compress K,R | --max-error E] [--keep-raw] [--no-compress] [--scene SCENE.toml]
+// [--max-memory S]: runs the bake pipeline (docs/pipeline.md) and writes one asset atomically,
+// after refusing a bake whose estimated peak memory is above --max-memory (default: the machine's
+// RAM or cgroup limit) before any map is loaded. By default the asset holds the C-PCA
+// compressed Integral-Radiance tables only (docs/compression.md, "Bake"). Exit 2 on bad input, an
+// unwritable output or a bake too large for --max-memory (nothing written), 1 on a bad command
+// line (unknown stage, conflicting compression options, compression options with --stages that
+// leave out the compress stage, a malformed --max-memory).
 #include <algorithm>
 #include <iostream>
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include "bake/cache/stage_cache.hpp"
 #include "bake/cli/command.hpp"
 #include "bake/cli/depfile.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/cli/scene_plan.hpp"
+#include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/pipeline/plan.hpp"
 #include "bake/pipeline/progress.hpp"
 #include "bake/stages/cache_support.hpp"
+#include "bake/stages/memory_estimate.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -51,7 +57,8 @@ struct BakeOptions {
   CLI::Option* max_error_option = nullptr;
   bool keep_raw = false;
   bool no_compress = false;
-  std::string scene;  // --scene: bake the scene's plan
+  std::string scene;       // --scene: bake the scene's plan
+  std::string max_memory;  // --max-memory S (default: the machine's memory)
 };
 
 std::string default_max_error_text() {
@@ -104,6 +111,32 @@ compress::CompressRequest compress_request(const BakeOptions& o) {
                                      "stage (add it, or drop " +
                                      given.front() + ")");
   return r;
+}
+
+// The bake's peak memory estimated from the fabric's settings alone, before any map is decoded
+// (bake/stages/memory_estimate.hpp); throws Error(Input) naming the [bake] keys when it exceeds
+// max_memory. Nullopt when the settings cannot be read: the load reports that.
+std::optional<stages::MemoryEstimate> check_memory(const BakeOptions& o,
+                                                   const compress::CompressRequest& compression,
+                                                   uint64_t max_memory) {
+  const auto peek = peek_fabric_settings(o.fabric);
+  if (!peek) return std::nullopt;
+  stages::MemoryEstimateInput in;
+  in.bake = peek->bake;
+  in.compression = compress::resolve_compress_settings(peek->bake, compression);
+  in.image_maps = peek->image_maps;
+  in.threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  const auto list = stages::bake_stages();
+  try {
+    for (const pipeline::Stage* s :
+         pipeline::plan_stages(list, o.stages, {"fabric_path", "output"}))
+      in.stages.push_back(s->name);
+  } catch (const Error&) {
+    in.stages.clear();  // an unknown stage name: every stage (the bake reports the name after)
+  }
+  stages::MemoryEstimate estimate = stages::estimate_bake_memory(in);
+  stages::check_memory_estimate(estimate, in.bake, double(max_memory), o.fabric);
+  return estimate;
 }
 
 void print_stage_list(bool json) {
@@ -179,6 +212,9 @@ Action setup_bake(CLI::App& app) {
   app.add_option("--scene", o->scene,
                  "bake only what this scene can query (its plan: `clothbake plan`; "
                  "docs/scene-plans.md)");
+  app.add_option("--max-memory", o->max_memory,
+                 "refuse (exit 2, before loading the maps) a bake whose estimated peak memory is "
+                 "above this size, e.g. 8G (default: the machine's RAM or cgroup limit)");
   return [o] {
     if (o->list_stages) {
       print_stage_list(o->json);
@@ -188,12 +224,17 @@ Action setup_bake(CLI::App& app) {
     if (o->output.empty()) throw CLI::RequiredError("--output");
     if (o->quiet) set_quiet(true);
     const compress::CompressRequest compression = compress_request(*o);
+    const uint64_t max_memory = max_memory_option(o->max_memory, 1.0);
     take_warnings();
     // Check the report path before the bake, so that a typo does not cost a whole bake.
     formats::OutputOptions report_output;
     report_output.require_asset_to_replace = false;
     if (!o->report.empty()) formats::check_output_path(o->report, report_output);
     if (!o->depfile.empty()) formats::check_output_path(o->depfile, report_output);
+    // Before any map is decoded or generated: a bake that cannot fit is refused in milliseconds
+    // instead of failing (or being killed) after minutes.
+    const std::optional<stages::MemoryEstimate> estimate =
+        check_memory(*o, compression, max_memory);
 
     pipeline::BakeRequest request;
     request.fabric_path = o->fabric;
@@ -248,6 +289,9 @@ Action setup_bake(CLI::App& app) {
       report["scene_plan"] = planned->metadata;
     }
     report["inputs"] = inputs;
+    report["memory_estimate"] =
+        estimate ? stages::memory_estimate_json(*estimate) : nlohmann::json(nullptr);
+    report["memory_estimate"]["max_memory_bytes"] = max_memory;
     report["warnings"] = take_warnings();
     if (!o->report.empty()) {
       const std::string text =

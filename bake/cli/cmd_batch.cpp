@@ -82,17 +82,6 @@ std::string options_key(const BatchOptions& o) {
   return o.scene.empty() ? "bake defaults" : "bake --scene " + fs::absolute(o.scene).string();
 }
 
-uint64_t default_max_memory() {
-  std::ifstream in("/proc/meminfo");
-  std::string key;
-  uint64_t kb = 0;
-  while (in >> key >> kb) {
-    if (key == "MemTotal:") return kb * 1024 / 10 * 8;  // 80 %
-    in.ignore(256, '\n');
-  }
-  return uint64_t(8) << 30;
-}
-
 std::vector<Job> list_jobs(const BatchOptions& o) {
   std::vector<std::string> fabrics;
   std::error_code ec;
@@ -361,7 +350,8 @@ Action setup_batch(CLI::App& app) {
       ->required();
   app.add_option("--jobs", o->jobs, "bakes at once (default 1)")->check(CLI::PositiveNumber);
   app.add_option("--max-memory", o->max_memory,
-                 "never start bakes whose measured peaks sum above this (default 80 % of RAM)");
+                 "never start bakes whose measured peaks sum above this (default 80 % of RAM or of "
+                 "the cgroup limit)");
   app.add_option("--cache", o->cache, "stage cache shared by the bakes (default $CLOTHBAKE_CACHE)");
   app.add_option("--cache-max-size", o->cache_max_size, "bound of the cache (default 10G)");
   app.add_flag("--force-rebake", o->force, "bake every fabric, up to date or not");
@@ -372,9 +362,7 @@ Action setup_batch(CLI::App& app) {
       ->check(CLI::IsMember({"slurm"}));
   add_json_flag(app, o->json, "print the summary as JSON on stdout");
   return [o] {
-    const uint64_t max_memory = o->max_memory.empty()
-                                    ? default_max_memory()
-                                    : cache::parse_size(o->max_memory, "--max-memory");
+    const uint64_t max_memory = max_memory_option(o->max_memory, 0.8);
     if (!o->cache_max_size.empty()) (void)cache::parse_size(o->cache_max_size, "--cache-max-size");
     if (!o->scene.empty()) inputs::require_regular_file(o->scene, "--scene");
     std::error_code ec;

@@ -1,5 +1,9 @@
 #include "bake/cli/options.hpp"
 
+#include "bake/cache/stage_cache.hpp"
+#include "bake/pipeline/resource_usage.hpp"
+#include "common/error.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -73,6 +77,14 @@ std::array<double, 3> parse_direction(const std::string& text, const std::string
     for (double& c : d)
       c /= largest;
   return d;
+}
+
+uint64_t max_memory_option(const std::string& text, double default_share) {
+  if (text.empty()) return uint64_t(double(pipeline::machine_memory_bytes()) * default_share);
+  const uint64_t bytes = cache::parse_size(text, "--max-memory");
+  if (bytes == 0)
+    throw Error(ExitCode::Usage, "--max-memory must be above 0 bytes, got '" + text + "'");
+  return bytes;
 }
 
 }  // namespace clothbake::cli

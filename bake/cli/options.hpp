@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -43,5 +44,11 @@ std::array<double, 3> parse_vec3(const std::string& text, const std::string& opt
 // below 1e-150 is divided by it (its squared length would overflow or underflow). Throws
 // CLI::ValidationError naming the option otherwise.
 std::array<double, 3> parse_direction(const std::string& text, const std::string& option);
+
+// --max-memory S of `bake` and `batch`: a size as cache::parse_size reads it (500M, 10G, 123456
+// bytes; powers of 1024); empty: `default_share` of pipeline::machine_memory_bytes() (physical RAM
+// or the cgroup limit; bake uses all of it, batch 80 %). Throws Error(Usage) (exit 1) naming
+// --max-memory for a malformed size or 0, as for the other size options.
+uint64_t max_memory_option(const std::string& text, double default_share);
 
 }  // namespace clothbake::cli

@@ -493,6 +493,30 @@ LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOpt
   return out;
 }
 
+std::optional<FabricSettingsPeek> peek_fabric_settings(const std::string& toml_path,
+                                                       const LoadOptions& options) {
+  try {
+    FabricSettingsPeek out;
+    const std::string text = inputs::read_file_bytes(toml_path);
+    const toml::table root_table = inputs::parse_toml_text(text, toml_path);
+    const TomlSection root(root_table, toml_path, "");
+    if (auto bake = root.table("bake")) out.bake = parse_bake(*bake);
+    if (options.resolution) out.bake.resolution = *options.resolution;
+    if (auto maps = root.table("maps")) {
+      out.image_maps = true;
+      const auto file = maps->string("height");
+      if (!file || file->empty()) return std::nullopt;
+      const std::string base_dir = std::filesystem::path(toml_path).parent_path().string();
+      const int side = inputs::map_image_side(inputs::resolve_relative(base_dir, *file));
+      if (side < kMinResolution || side > kMaxResolution) return std::nullopt;
+      out.bake.resolution = side;
+    }
+    return out;
+  } catch (const Error&) {
+    return std::nullopt;  // the full load reports it
+  }
+}
+
 Fabric load_fabric(const std::string& toml_path) {
   return load_fabric_description(toml_path).fabric;
 }

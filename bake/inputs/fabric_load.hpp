@@ -43,6 +43,21 @@ struct LoadOptions {
 // or WIF file read, each with its XXH64 content hash.
 LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOptions& options = {});
 
+// What the up-front memory estimate needs to know of a fabric before anything is decoded.
+struct FabricSettingsPeek {
+  BakeSettings bake;  // [bake] as load_fabric_description parses it; resolution = the maps' side
+  bool image_maps = false;  // [maps] (image files) rather than [weave]
+};
+
+// The bake settings of the description at `toml_path` without generating or decoding any map:
+// the TOML is read and parsed (at most 64 MiB, regular files only), [bake] is range-checked as
+// load_fabric_description does, and the resolution is [bake] resolution (or options.resolution)
+// for a weave, the height image's side from its header for an image fabric (no pixel read).
+// Returns nullopt when the description cannot be read or has an error: the full load then reports
+// it with its usual message. Warns nothing. Safe on untrusted input.
+std::optional<FabricSettingsPeek> peek_fabric_settings(const std::string& toml_path,
+                                                       const LoadOptions& options = {});
+
 // load_fabric_description(toml_path).fabric.
 Fabric load_fabric(const std::string& toml_path);
 

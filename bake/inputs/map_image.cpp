@@ -121,6 +121,11 @@ std::vector<Vec3f> decode_vectors(const MapImage& map, bool is_normal) {
 
 }  // namespace
 
+int map_image_side(const std::string& path) {
+  const StoredType t = probe_stored_type(path);
+  return t.readable ? t.width : 0;
+}
+
 MapImage read_map_image(const std::string& path, const std::string& role,
                         const std::string& key_context) {
   const ChannelRule& rule = rule_for(role);

@@ -49,6 +49,10 @@ struct MapImage {
 MapImage read_map_image(const std::string& path, const std::string& role,
                         const std::string& key_context);
 
+// The width of the image at `path` from its header (no pixel read), or 0 when it is not a
+// readable regular file. For estimates before loading; read_map_image does the checks.
+int map_image_side(const std::string& path);
+
 // Decoders: each checks every pixel it uses (NaN/Inf, range, zero length, non-integer id) and
 // throws Error(Input) naming the pixel. Output is row-major, resolution^2 entries.
 std::vector<float> decode_height(const MapImage& map, double scale);

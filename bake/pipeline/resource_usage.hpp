@@ -12,6 +12,12 @@ double process_cpu_seconds();
 double wall_seconds();
 // Peak resident set size so far, bytes: VmHWM of /proc/self/status, else getrusage ru_maxrss.
 uint64_t peak_rss_bytes();
+// Memory this process can have: physical RAM (sysconf _SC_PHYS_PAGES x _SC_PAGE_SIZE), or the
+// cgroup's limit when that is smaller (cgroup v2 memory.max of the process's own cgroup, else v1
+// memory.limit_in_bytes). The default of `bake --max-memory` (all of it) and of `batch
+// --max-memory` (80 %). 8 GiB when nothing can be read.
+uint64_t machine_memory_bytes();
+
 // Resets the peak (writes "5" to /proc/self/clear_refs, Linux >= 4.0). False if not permitted,
 // in which case peaks are process-wide.
 bool reset_peak_rss();

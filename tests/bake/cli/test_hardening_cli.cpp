@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,8 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/pipeline/resource_usage.hpp"
+#include "bake/stages/memory_estimate.hpp"
 #include "bake/stages/stages.hpp"
 #include "compress/compress_settings.hpp"
 #include "formats/reader/compressed_layout.hpp"
@@ -608,4 +611,105 @@ TEST_F(Hardening, InfoOnTheMaximumSectionCountStaysInBoundedMemory) {
   EXPECT_EQ(doc["sizes"]["by_name"]["0xf000"], 0);
   fs::remove(asset);
   fs::remove(path("million.out"));
+
+// Defect 8: no up-front size check. Resolution 256 with radiance_dirs 256 and 64 clusters (about
+// 1 TiB of raw tables) exited 4 "out of memory"; resolution 4096 with radiance_dirs 64 ran for
+// minutes at 7.7 GB before being killed; resolution 8192 reached 6.2 GB of maps before the
+// parallax check refused it. The bake now estimates every stage's peak from the settings alone
+// and refuses at once (exit 2, naming the keys), before a map is generated or decoded. The old
+// build runs under `ulimit -v` so that this test fails there instead of exhausting the machine.
+TEST_F(Hardening, BakesThatCannotFitInMemoryAreRefusedBeforeLoading) {
+  struct Case {
+    std::vector<std::pair<std::string, std::string>> edits;
+    std::string options;
+    std::vector<std::string> named;
+  };
+  const std::pair<std::string, std::string> r256{"resolution = 16", "resolution = 256"};
+  const Case cases[] = {
+      // The issue's ~1 TiB of raw tables (--no-compress keeps them).
+      {{r256, {"radiance_dirs = 6", "radiance_dirs = 256"}, {"clusters = 2", "clusters = 64"}},
+       "--no-compress",
+       {"[bake] resolution = 256, radiance_dirs = 256, clusters = 64 need ~", "TiB",
+        "tables stage"}},
+      // The same compressed: 16 GiB of per-texel directional vectors for the C-PCA.
+      {{r256, {"radiance_dirs = 6", "radiance_dirs = 256"}, {"clusters = 2", "clusters = 64"}},
+       "--max-memory 8G",
+       {"[bake] resolution = 256, radiance_dirs = 256 need ~", "compress stage",
+        "--max-memory is 8.00 GiB"}},
+      // 4096^2 texels x 64^2 bins x 4 bytes = 256 GiB.
+      {{{"resolution = 16", "resolution = 4096"}, {"radiance_dirs = 6", "radiance_dirs = 64"}},
+       "",
+       {"[bake] resolution = 4096, radiance_dirs = 64 need ~", "GiB in the compress stage"}},
+      // 8192^2 at the default 32^2 parallax directions: 128 GiB of parallax codes.
+      {{{"resolution = 16", "resolution = 8192"}, {"parallax_dirs = 8", "parallax_dirs = 32"}},
+       "",
+       {"[bake] resolution = 8192, parallax_dirs = 32 need ~", "parallax stage"}},
+  };
+  const std::string out = path("huge.cbk");
+  for (const Case& c : cases) {
+    const std::string fabric = path("huge.toml");
+    std::ofstream(fabric) << fabric_text(c.edits);
+    const auto start = std::chrono::steady_clock::now();
+    const CliRun r = test_support::detail::spawn(
+        {"/bin/sh", "-c",
+         "ulimit -v 8000000; exec '" + test_support::clothbake_executable() + "' bake " + fabric +
+             " -o " + out + " --quiet " + c.options});
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(r.code, 2) << c.options << ": " << r.err;
+    for (const auto& what : c.named)
+      EXPECT_TRUE(mentions(r, what)) << what << " not in: " << r.err;
+    EXPECT_TRUE(mentions(r, "--max-memory is ")) << r.err;
+    EXPECT_LT(seconds, 5.0) << r.err;  // no more than the start-up: nothing is loaded
+    EXPECT_FALSE(fs::exists(out));
+    for (const auto& entry : fs::directory_iterator(*dir_))
+      EXPECT_EQ(entry.path().filename().string().find(".huge.cbk.tmp"), std::string::npos);
+  }
+}
+
+// --max-memory: a small bound refuses the default twill (naming its keys), a malformed one is a
+// usage error like every other size option (exit 1), and the report carries the estimate.
+TEST_F(Hardening, MaxMemoryBoundsTheBakeAndTheReportHasTheEstimate) {
+  const std::string twill = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/fabrics/twill.toml";
+  const std::string out = path("twill.cbk");
+  CliRun r = run_clothbake({"bake", twill, "-o", out, "--quiet", "--max-memory", "64M"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(mentions(r, "[bake] resolution = 256")) << r.err;
+  EXPECT_TRUE(mentions(r, "--max-memory is 64.0 MiB")) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  for (const std::string bad : {"lots", "-1G", "12Q", "0", "1e400"}) {
+    r = run_clothbake({"bake", twill, "-o", out, "--quiet", "--max-memory", bad});
+    EXPECT_EQ(r.code, 1) << "'" << bad << "': " << r.err;
+    EXPECT_TRUE(mentions(r, "--max-memory")) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // The default bound (the machine's memory) lets the default twill through: its estimate, from
+  // the settings alone, is a few hundred MiB.
+  const auto peek = peek_fabric_settings(twill);
+  ASSERT_TRUE(peek);
+  EXPECT_EQ(peek->bake.resolution, 256);
+  stages::MemoryEstimateInput in;
+  in.bake = peek->bake;
+  in.compression = compress::settings_from_bake(peek->bake);
+  in.threads = 2;
+  const auto estimate = stages::estimate_bake_memory(in);
+  EXPECT_LT(estimate.peak_bytes, double(pipeline::machine_memory_bytes()));
+  EXPECT_LT(estimate.peak_bytes, 2.0 * (1u << 30));
+  EXPECT_NO_THROW(stages::check_memory_estimate(estimate, in.bake,
+                                                double(pipeline::machine_memory_bytes()), twill));
+  // A small bake under the default bound succeeds and reports the estimate per stage.
+  const std::string fabric = path("fits.toml");
+  std::ofstream(fabric) << fabric_text();
+  r = run_clothbake({"bake", fabric, "-o", out, "--quiet", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  const auto& e = doc["memory_estimate"];
+  EXPECT_GT(e["peak_bytes"].get<double>(), 0.0);
+  EXPECT_EQ(e["max_memory_bytes"].get<uint64_t>(), pipeline::machine_memory_bytes());
+  ASSERT_EQ(e["stages"].size(), doc["stages"].size());
+  for (std::size_t i = 0; i < e["stages"].size(); ++i)
+    EXPECT_EQ(e["stages"][i]["name"], doc["stages"][i]["name"]);
+  // (How close it comes to the measured peak depends on the build: sanitizers multiply the RSS;
+  // docs/performance.md has the Release calibration.)
+  fs::remove(out);
 }
