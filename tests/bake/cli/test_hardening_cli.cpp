@@ -611,6 +611,7 @@ TEST_F(Hardening, InfoOnTheMaximumSectionCountStaysInBoundedMemory) {
   EXPECT_EQ(doc["sizes"]["by_name"]["0xf000"], 0);
   fs::remove(asset);
   fs::remove(path("million.out"));
+}
 
 // Defect 8: no up-front size check. Resolution 256 with radiance_dirs 256 and 64 clusters (about
 // 1 TiB of raw tables) exited 4 "out of memory"; resolution 4096 with radiance_dirs 64 ran for
