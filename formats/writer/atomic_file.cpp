@@ -50,7 +50,32 @@ bool same_file(const struct stat& a, const struct stat& b) {
   return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
 }
 
+// Removes dir_fd/leaf if it is a regular file whose exclusive flock is free.
+bool remove_at_if_unlocked(int dir_fd, const std::string& leaf) {
+  // O_NOFOLLOW: a symbolic link of that name is not followed (and not removed); O_NONBLOCK: a
+  // FIFO of that name does not block the open.
+  const int fd = ::openat(dir_fd, leaf.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return false;
+  struct stat opened {}, named {};
+  // A free lock means no live writer: each holds its temporary's lock until it is renamed away.
+  // The name must still lead to the file that was locked when it is removed.
+  const bool removed = ::fstat(fd, &opened) == 0 && S_ISREG(opened.st_mode) &&
+                       ::flock(fd, LOCK_EX | LOCK_NB) == 0 &&
+                       ::fstatat(dir_fd, leaf.c_str(), &named, AT_SYMLINK_NOFOLLOW) == 0 &&
+                       same_file(opened, named) && ::unlinkat(dir_fd, leaf.c_str(), 0) == 0;
+  ::close(fd);  // releases the lock
+  return removed;
+}
+
 }  // namespace
+
+bool remove_if_unlocked(const fs::path& path) {
+  const int dir_fd = ::open(directory_of(path).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd < 0) return false;
+  const bool removed = remove_at_if_unlocked(dir_fd, path.filename().string());
+  ::close(dir_fd);
+  return removed;
+}
 
 std::string temp_file_prefix(const fs::path& destination) {
   const std::string name = destination.filename().string();
@@ -86,23 +111,11 @@ int remove_stale_temp_files(const fs::path& destination, const std::string& suff
   }
   ::closedir(listing);
   int removed = 0;
-  for (const std::string& leaf : candidates) {
-    // O_NOFOLLOW: a symbolic link of that name is not followed (and not removed); O_NONBLOCK: a
-    // FIFO of that name does not block the open.
-    const int fd = ::openat(dir_fd, leaf.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) continue;
-    struct stat opened {
-    }, named{};
-    // A free lock means no live writer: each holds its temporary's lock until it is renamed away.
-    if (::fstat(fd, &opened) == 0 && S_ISREG(opened.st_mode) &&
-        ::flock(fd, LOCK_EX | LOCK_NB) == 0 &&
-        ::fstatat(dir_fd, leaf.c_str(), &named, AT_SYMLINK_NOFOLLOW) == 0 &&
-        same_file(opened, named) && ::unlinkat(dir_fd, leaf.c_str(), 0) == 0) {
+  for (const std::string& leaf : candidates)
+    if (remove_at_if_unlocked(dir_fd, leaf)) {
       ++removed;
       info("removed " + (dir / leaf).string() + ", a temporary file left by an interrupted write");
     }
-    ::close(fd);  // releases the lock
-  }
   ::close(dir_fd);
   return removed;
 }

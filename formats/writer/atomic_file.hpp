@@ -77,6 +77,10 @@ std::string temp_file_prefix(const std::filesystem::path& destination);
 int remove_stale_temp_files(const std::filesystem::path& destination,
                             const std::string& suffix = "");
 
+// Removes `path` if it is a regular file (not a symbolic link) whose exclusive flock can be taken
+// at once, i.e. no live TempFile holds it. Returns whether it was removed; errors are ignored.
+bool remove_if_unlocked(const std::filesystem::path& path);
+
 // check_output_path, then `produce` writes into a temporary file that is committed on success.
 // Anything `produce` throws propagates after the temporary file is removed.
 void write_file_atomically(const std::filesystem::path& path,
