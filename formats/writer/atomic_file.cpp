@@ -56,7 +56,8 @@ bool remove_at_if_unlocked(int dir_fd, const std::string& leaf) {
   // FIFO of that name does not block the open.
   const int fd = ::openat(dir_fd, leaf.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) return false;
-  struct stat opened {}, named {};
+  struct stat opened {};
+  struct stat named {};
   // A free lock means no live writer: each holds its temporary's lock until it is renamed away.
   // The name must still lead to the file that was locked when it is removed.
   const bool removed = ::fstat(fd, &opened) == 0 && S_ISREG(opened.st_mode) &&
@@ -175,12 +176,21 @@ TempFile::TempFile(const fs::path& destination, const std::string& suffix)
                         ": cannot create a temporary file in " + dir.string() + ": " +
                         errno_text(errno));
     ::fcntl(fd, F_SETFD, FD_CLOEXEC);
-    struct stat opened {
-    }, named{};
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0 || ::fstat(fd, &opened) != 0 ||
-        ::stat(buffer.data(), &named) != 0 || !same_file(opened, named)) {
-      ::close(fd);
-      continue;
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      if (errno == EWOULDBLOCK) {  // a clean-up holds it, and removes it
+        ::close(fd);
+        continue;
+      }
+      // A file system without flock: written unlocked. Clean-ups cannot lock it either, so they
+      // never take it for stale (nor any killed writer's there).
+    } else {
+      struct stat opened {};
+      struct stat named {};
+      if (::fstat(fd, &opened) != 0 || ::stat(buffer.data(), &named) != 0 ||
+          !same_file(opened, named)) {
+        ::close(fd);
+        continue;
+      }
     }
     fd_ = fd;
     temp_ = buffer.data();
