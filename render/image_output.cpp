@@ -1,31 +1,15 @@
 // EXR and PNG outputs of a render (image_output.hpp).
 #include "render/image_output.hpp"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <filesystem>
 
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
+#include "formats/writer/atomic_file.hpp"
 
 namespace clothbake::render {
-namespace {
-
 namespace fs = std::filesystem;
-
-std::string temporary_name(const fs::path& path) {
-  // Appended piecewise: GCC 12 warns (-Wrestrict, a false positive) on "." + string + ...
-  // The extension stays last: OpenImageIO picks the format by it.
-  std::string name = ".";
-  name.append(path.stem().string());
-  name.append(".tmp-");
-  name.append(std::to_string(::getpid()));
-  name.append(path.extension().string());
-  return (path.parent_path() / name).string();
-}
-
-}  // namespace
 
 double srgb_encode(double v) {
   if (!(v > 0)) return 0;
@@ -55,23 +39,13 @@ OutputFiles write_render_images(const std::string& exr_path, const RenderResult&
     linear.pixels[k] = r.rgb[k];
     preview.pixels[k] = float(srgb_encode(r.rgb[k]));
   }
-  const std::string exr_tmp = temporary_name(files.exr), png_tmp = temporary_name(files.png);
-  std::error_code ec;
-  try {
-    write_image(exr_tmp, linear, PixelType::Float32);
-    write_image(png_tmp, preview, PixelType::UInt8);
-  } catch (...) {
-    fs::remove(exr_tmp, ec);
-    fs::remove(png_tmp, ec);
-    throw;
-  }
-  fs::rename(exr_tmp, files.exr, ec);
-  if (!ec) fs::rename(png_tmp, files.png, ec);
-  if (ec) {
-    fs::remove(exr_tmp, ec);
-    fs::remove(png_tmp, ec);
-    throw_input_error(exr_path + ": cannot write the render: " + ec.message());
-  }
+  // formats::TempFile: locked, registered for the signal handlers, and any stale temporaries of a
+  // killed render are removed first. The extension stays last: OpenImageIO picks the format by it.
+  formats::TempFile exr_tmp(files.exr, ".exr"), png_tmp(files.png, ".png");
+  write_image(exr_tmp.path().string(), linear, PixelType::Float32);
+  write_image(png_tmp.path().string(), preview, PixelType::UInt8);
+  exr_tmp.commit();
+  png_tmp.commit();
   return files;
 }
 

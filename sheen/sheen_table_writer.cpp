@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "common/error.hpp"
+#include "common/temp_registry.hpp"
 
 namespace clothbake::sheen {
 namespace {
@@ -134,6 +135,12 @@ void write_file_atomically(const std::string& path, const std::string& text) {
   temporary_name.append(target.filename().string()).append(".tmp.");
   temporary_name.append(std::to_string(::getpid()));
   const fs::path temporary = directory / temporary_name;
+  // Registered so that SIGINT/SIGTERM/SIGHUP remove it (common/temp_registry.hpp). Absolute: the
+  // handler must find it whatever the working directory is then.
+  struct Registration {
+    int slot;
+    ~Registration() { unregister_temp_path(slot); }
+  } registration{register_temp_path(fs::absolute(temporary, ec).c_str())};
   {
     std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
     if (!file)

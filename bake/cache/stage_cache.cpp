@@ -508,8 +508,9 @@ PruneResult prune_cache(const std::string& dir, uint64_t max_bytes) {
                                std::chrono::system_clock::now().time_since_epoch())
                                .count() -
                            int64_t(3600) * 1000000000;
+  // Only unlocked ones: a live store or bake holds its temporary's flock however long it takes.
   for (const auto& t : temporary)
-    if (t.mtime_ns < hour_ago) fs::remove(t.path, ec);
+    if (t.mtime_ns < hour_ago) formats::remove_if_unlocked(t.path);
   return result;
 }
 

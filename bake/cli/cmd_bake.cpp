@@ -309,6 +309,8 @@ Action setup_bake(CLI::App& app) {
       write_depfile(o->depfile, o->depfile_target.empty() ? o->output : o->depfile_target, deps);
     }
     if (o->json) print_json(report);
+    // An unchanged asset is not rewritten, so no TempFile cleaned up after a killed earlier bake.
+    if (result.asset.unchanged) formats::remove_stale_temp_files(result.asset.path);
     if (result.asset.unchanged)
       info(result.asset.path +
            " is up to date: the bake gave the same bytes, so the file and its "

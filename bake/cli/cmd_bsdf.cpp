@@ -26,6 +26,7 @@
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
+#include "formats/writer/atomic_file.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
 #include "model/lobe_integral.hpp"
@@ -179,22 +180,11 @@ SliceResult write_slice(const model::ClothBsdf<double>& bsdf, const Vec3d& wi, d
     for (float& p : image.pixels)
       p = float(p * result.scale);
   }
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
-  const std::filesystem::path temp =
-      dir / fmt::format(".{}.tmp{}{}", path.stem().string(), long(::getpid()), ext);
-  try {
-    write_image(temp.string(), image, type);
-  } catch (...) {
-    std::error_code ignored;
-    std::filesystem::remove(temp, ignored);
-    throw;
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) {
-    std::filesystem::remove(temp, ec);
-    throw_input_error(fmt::format("{}: cannot write ({})", o.output, ec.message()));
-  }
+  // Locked, registered for the signal handlers, stale ones of a killed run removed first; the
+  // extension stays last (OpenImageIO picks the format by it).
+  formats::TempFile temp(path, ext);
+  write_image(temp.path().string(), image, type);
+  temp.commit();
   return result;
 }
 

@@ -1,5 +1,7 @@
 // clothbake: the command-line entry point. Subcommands register themselves (see command.hpp).
 // Exit codes (docs/cli.md): 0 ok, 1 usage, 2 input or I/O error, 3 invalid asset, 4 internal error.
+// SIGINT, SIGTERM and SIGHUP remove the temporary output files, then end the process by the
+// signal (common/temp_registry.hpp).
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -9,6 +11,7 @@
 #include "bake/cli/command.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
+#include "common/temp_registry.hpp"
 #include "common/version.hpp"
 
 namespace clothbake::cli {
@@ -55,6 +58,8 @@ int checked_stdout(int code) {
 
 int main(int argc, char** argv) {
   using namespace clothbake;
+  // First: a Ctrl-C at any later point must not leave a temporary output file behind.
+  install_temp_file_signal_handlers();
   CLI::App app{
       "clothbake: offline precompute and asset baking for the multi-scale cloth appearance model"};
   app.set_version_flag("--version", std::string("clothbake ") + CLOTHBAKE_VERSION_STRING);

@@ -11,6 +11,7 @@
 
 #include "bake/inputs/map_image.hpp"
 #include "common/error.hpp"
+#include "common/temp_registry.hpp"
 #include "common/version.hpp"
 
 namespace clothbake {
@@ -230,29 +231,45 @@ std::vector<WrittenFile> write_fabric_directory(const Fabric& fabric, const std:
       target.parent_path() /
       fmt::format(".{}.tmp-{}-{}", target.filename().string(), ::getpid(), counter.fetch_add(1));
   std::vector<WrittenFile> written;
+  // The temporary directory and each file in it are registered for the signal handlers
+  // (common/temp_registry.hpp): SIGINT/SIGTERM/SIGHUP remove the files, then the directory.
+  std::vector<int> slots;
+  auto track = [&](const fs::path& path, bool directory) {
+    slots.push_back(register_temp_path(fs::absolute(path, ec).c_str(), directory));
+  };
+  auto untrack = [&] {
+    for (const int slot : slots)
+      unregister_temp_path(slot);
+    slots.clear();
+  };
   auto cleanup = [&] {
     std::error_code ignored;
     fs::remove_all(temp, ignored);
+    untrack();
     for (auto it = created_parents.rbegin(); it != created_parents.rend(); ++it)
       fs::remove(*it, ignored);  // only removes directories that are still empty
   };
   try {
+    track(temp, true);
     if (!fs::create_directory(temp, ec) || ec)
       throw_input_error(fmt::format("{}: cannot create temporary directory ({})", temp.string(),
                                     ec ? ec.message() : "already exists"));
     std::vector<std::string> names;
     for (const auto& [role, image] : images) {
+      track(temp / (role + ".exr"), false);
       write_image((temp / (role + ".exr")).string(), image, PixelType::Float32);
       names.push_back(role + ".exr");
       written.push_back({role, (target / (role + ".exr")).string()});
     }
     for (const auto& [role, image] : images) {
       std::string name = role + ".preview.png";
+      track(temp / name, false);
       write_image((temp / name).string(), preview_image(fabric.maps, role), PixelType::UInt8);
       names.push_back(name);
       written.push_back({role + "_preview", (target / name).string()});
     }
     {
+      track(temp / "fabric.toml", false);
       std::ofstream out(temp / "fabric.toml", std::ios::binary);
       out << toml;
       out.close();
@@ -279,6 +296,7 @@ std::vector<WrittenFile> write_fabric_directory(const Fabric& fabric, const std:
     cleanup();
     throw;
   }
+  untrack();
   return written;
 }
 

@@ -1,8 +1,13 @@
 // Atomic output files: bytes go to a temporary file in the destination directory, which is
 // flushed (fsync) and renamed over the destination only when complete; the directory is then
-// fsynced. An interrupted or failed write (error, disk full, SIGKILL) therefore never leaves a
-// partial file at the destination and never destroys what was there before. A killed process
-// can leave its temporary file (".NAME.tmp-XXXXXX" beside the destination) behind.
+// fsynced. An interrupted or failed write (error, disk full, a signal) therefore never leaves a
+// partial file at the destination and never destroys what was there before.
+//
+// Temporary files are never left behind either, as far as a process can see to it: each is
+// registered for the SIGINT/SIGTERM/SIGHUP handler (common/temp_registry.hpp) and holds an
+// exclusive flock(2) for its whole life. SIGKILL (or a power cut) can still leave one
+// (".NAME.tmp-XXXXXX" beside the destination); the next TempFile for the same destination removes
+// such files of its own name whose lock is free, i.e. that no live process is writing.
 #pragma once
 
 #include <filesystem>
@@ -31,10 +36,14 @@ struct OutputOptions {
 void check_output_path(const std::filesystem::path& path, const OutputOptions& options);
 
 // A temporary file beside `destination` (same directory, so rename is atomic), removed by the
-// destructor unless commit() succeeded.
+// destructor unless commit() succeeded. Its name is temp_file_prefix(destination), six random
+// characters [A-Za-z0-9] (mkstemps) and `suffix`. It holds an exclusive flock until it is renamed
+// or removed, and is registered with common/temp_registry so that a termination signal removes it.
 class TempFile {
  public:
   // `suffix` is appended to the temporary name (OpenImageIO picks the format by extension).
+  // First removes stale temporaries of the same destination and suffix
+  // (remove_stale_temp_files). Throws Error(Input) when no temporary file can be created.
   explicit TempFile(const std::filesystem::path& destination, const std::string& suffix = "");
   ~TempFile();
   TempFile(const TempFile&) = delete;
@@ -48,9 +57,29 @@ class TempFile {
  private:
   std::filesystem::path destination_;
   std::filesystem::path temp_;
-  int fd_ = -1;
+  int fd_ = -1;       // written through; closed (and its error checked) before the rename
+  int lock_fd_ = -1;  // same open file, holds the flock until after the rename
+  int slot_ = -1;     // common/temp_registry slot
   bool committed_ = false;
 };
+
+// ".NAME.tmp-": the start of every temporary file name for `destination`. NAME is the file name,
+// or for names longer than 200 bytes their first 191 bytes, '~' and 8 hex digits of a hash of the
+// whole name (so that temporaries stay within the 255-byte limit and two long names sharing their
+// first 200 bytes still have different prefixes).
+std::string temp_file_prefix(const std::filesystem::path& destination);
+
+// Removes the temporaries a killed writer left for `destination` and `suffix`: the regular files
+// in its directory named temp_file_prefix(destination) + 6 characters [A-Za-z0-9] + suffix, whose
+// exclusive flock can be taken at once (a live writer holds its own). Files of any other name,
+// symbolic links, and files another process holds are never touched; errors are ignored (a file
+// that cannot be removed stays). Returns the number removed. Safe on any directory contents.
+int remove_stale_temp_files(const std::filesystem::path& destination,
+                            const std::string& suffix = "");
+
+// Removes `path` if it is a regular file (not a symbolic link) whose exclusive flock can be taken
+// at once, i.e. no live TempFile holds it. Returns whether it was removed; errors are ignored.
+bool remove_if_unlocked(const std::filesystem::path& path);
 
 // check_output_path, then `produce` writes into a temporary file that is committed on success.
 // Anything `produce` throws propagates after the temporary file is removed.

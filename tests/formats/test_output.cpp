@@ -1,8 +1,11 @@
 // Atomic asset files: bad output paths, refusing to overwrite non-assets, simulated disk-full and
-// short writes (fault-injecting sink and RLIMIT_FSIZE in a child), and a SIGKILL mid-write. In
-// every failure the previous file at the output path is intact and no partial file is left.
+// short writes (fault-injecting sink and RLIMIT_FSIZE in a child), SIGKILL, SIGTERM and SIGINT
+// mid-write, and the clean-up of stale temporaries. In every failure the previous file at the
+// output path is intact and no partial file is left (after SIGKILL: until the next write).
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -14,6 +17,7 @@
 #include <thread>
 
 #include "common/error.hpp"
+#include "common/temp_registry.hpp"
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -197,14 +201,18 @@ TEST_F(Output, FileSizeLimitInAChildIsAnErrorAndKeepsThePreviousAsset) {
   EXPECT_TRUE(others("a.cbk").empty());
 }
 
-TEST_F(Output, SigkillMidWriteLeavesThePreviousAssetIntact) {
-  const fs::path out = dir_ / "a.cbk";
-  formats::write_asset_file(out, sections(4, "good"), {});
-  const std::string good = read(out);
-  const auto next = sections(32, "killed");
+// A child process that writes `next` to `out` and pauses after 3000 bytes (the sink's test hook),
+// with the CLI's signal handlers installed or not. Returns once the temporary file holds part of
+// the asset (`partial` false if it never did).
+pid_t start_paused_writer(const fs::path& out, const std::vector<formats::Section>& next,
+                          bool handlers, bool& partial) {
   const pid_t pid = ::fork();
-  ASSERT_GE(pid, 0);
+  if (pid < 0) return pid;
   if (pid == 0) {
+    // A shell may start the test with SIGINT ignored, which the handlers would keep so.
+    ::signal(SIGINT, SIG_DFL);
+    ::signal(SIGTERM, SIG_DFL);
+    if (handlers) install_temp_file_signal_handlers();
     ::setenv("CLOTHBAKE_TEST_PAUSE_AFTER_BYTES", "3000", 1);
     try {
       formats::write_asset_file(out, next, {});
@@ -212,13 +220,24 @@ TEST_F(Output, SigkillMidWriteLeavesThePreviousAssetIntact) {
     }
     ::_exit(0);
   }
-  // Wait until the temporary file holds part of the asset, then kill the writer.
-  bool partial = false;
+  partial = false;
+  const std::string prefix = "." + out.filename().string() + ".tmp-";
   for (int i = 0; i < 500 && !partial; ++i) {
-    for (const auto& e : fs::directory_iterator(dir_))
-      if (e.path().filename() != "a.cbk" && fs::file_size(e.path()) >= 3000) partial = true;
+    for (const auto& e : fs::directory_iterator(out.parent_path()))
+      if (e.path().filename().string().rfind(prefix, 0) == 0 && fs::file_size(e.path()) >= 3000)
+        partial = true;
     if (!partial) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+  return pid;
+}
+
+TEST_F(Output, SigkillMidWriteLeavesThePreviousAssetIntact) {
+  const fs::path out = dir_ / "a.cbk";
+  formats::write_asset_file(out, sections(4, "good"), {});
+  const std::string good = read(out);
+  bool partial = false;
+  const pid_t pid = start_paused_writer(out, sections(32, "killed"), true, partial);
+  ASSERT_GE(pid, 0);
   ::kill(pid, SIGKILL);
   int status = 0;
   ::waitpid(pid, &status, 0);
@@ -227,9 +246,151 @@ TEST_F(Output, SigkillMidWriteLeavesThePreviousAssetIntact) {
   EXPECT_EQ(read(out), good);
   reader::Asset asset;
   EXPECT_TRUE(asset.open_file(out.c_str()).ok());
-  // The only other file is the killed writer's temporary, named so that it cannot be mistaken.
-  for (const auto& name : others("a.cbk"))
-    EXPECT_EQ(name.rfind(".a.cbk.tmp-", 0), 0u) << name;
+  // SIGKILL cannot be caught: the only other file is the killed writer's temporary, named so that
+  // it cannot be mistaken...
+  const std::vector<std::string> left = others("a.cbk");
+  ASSERT_EQ(left.size(), 1u);
+  EXPECT_EQ(left[0].rfind(".a.cbk.tmp-", 0), 0u) << left[0];
+  // ...and the next write to that output removes it (its lock died with the process).
+  formats::write_asset_file(out, sections(8, "next"), {});
+  EXPECT_TRUE(others("a.cbk").empty());
+  EXPECT_TRUE(asset.open_file(out.c_str()).ok());
+}
+
+// SIGTERM and SIGINT mid-write: the handler removes the temporary file and the process still ends
+// by the signal; the previous asset is untouched.
+TEST_F(Output, SigtermAndSigintMidWriteRemoveTheTemporaryFile) {
+  const fs::path out = dir_ / "a.cbk";
+  formats::write_asset_file(out, sections(4, "good"), {});
+  const std::string good = read(out);
+  for (const int signo : {SIGTERM, SIGINT}) {
+    SCOPED_TRACE(signo);
+    bool partial = false;
+    const pid_t pid = start_paused_writer(out, sections(32, "interrupted"), true, partial);
+    ASSERT_GE(pid, 0);
+    ::kill(pid, signo);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(partial) << "the writer never paused mid-write";
+    ASSERT_TRUE(WIFSIGNALED(status));
+    EXPECT_EQ(WTERMSIG(status), signo);
+    EXPECT_EQ(read(out), good);
+    EXPECT_TRUE(others("a.cbk").empty());
+  }
+}
+
+// A temporary of the same output whose lock is free (its writer was killed) is removed by the next
+// write; one that a live process holds locked, and files of any other name or kind, are not.
+TEST_F(Output, NextWriteRemovesOnlyItsOwnUnlockedStaleTemporaries) {
+  const fs::path out = dir_ / "a.cbk";
+  auto make = [&](const std::string& name) { std::ofstream(dir_ / name) << "partial " << name; };
+  make(".a.cbk.tmp-Ab3xZ9");  // stale: removed
+  make(".a.cbk.tmp-000000");  // stale: removed
+  make(".a.cbk.tmp-Locked");  // held by another process: stays
+  const std::vector<std::string> unrelated = {
+      ".b.cbk.tmp-Ab3xZ9",      // another output
+      ".xa.cbk.tmp-Ab3xZ9",     // another output whose name ends like this one
+      ".a.cbk.tmp-Ab3xZ",       // five characters: not a mkstemps name
+      ".a.cbk.tmp-Ab3xZ99",     // seven
+      ".a.cbk.tmp-Ab3x-9",      // not [A-Za-z0-9]
+      ".a.cbk.tmp-Ab3xZ9.exr",  // another suffix (an image export to a.cbk would use it)
+      "a.cbk.tmp-Ab3xZ9",       // not hidden
+      ".a.cbk.tmp-",            // no random part
+      "a.cbk.old",
+  };
+  for (const auto& name : unrelated)
+    make(name);
+  // A symbolic link and a directory with a temporary's name are not regular files: left alone (the
+  // link's target too).
+  make("target");
+  fs::create_symlink("target", dir_ / ".a.cbk.tmp-Link00");
+  fs::create_directory(dir_ / ".a.cbk.tmp-Dir000");
+
+  // Another process holds the flock of one candidate, as a live writer does.
+  int ready[2], release[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  ASSERT_EQ(::pipe(release), 0);
+  const pid_t holder = ::fork();
+  ASSERT_GE(holder, 0);
+  if (holder == 0) {
+    const int fd = ::open((dir_ / ".a.cbk.tmp-Locked").c_str(), O_RDONLY);
+    const char ok = (fd >= 0 && ::flock(fd, LOCK_EX) == 0) ? 'y' : 'n';
+    (void)!::write(ready[1], &ok, 1);
+    char c;
+    (void)!::read(release[0], &c, 1);
+    ::_exit(0);
+  }
+  char ok = 0;
+  ASSERT_EQ(::read(ready[0], &ok, 1), 1);
+  ASSERT_EQ(ok, 'y');
+
+  formats::write_asset_file(out, sections(4, "fresh"), {});
+  reader::Asset asset;
+  EXPECT_TRUE(asset.open_file(out.c_str()).ok());
+  EXPECT_FALSE(fs::exists(dir_ / ".a.cbk.tmp-Ab3xZ9"));
+  EXPECT_FALSE(fs::exists(dir_ / ".a.cbk.tmp-000000"));
+  EXPECT_TRUE(fs::exists(dir_ / ".a.cbk.tmp-Locked"));
+  for (const auto& name : unrelated)
+    EXPECT_EQ(read(dir_ / name), "partial " + name) << name;
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir_ / ".a.cbk.tmp-Link00")));
+  EXPECT_EQ(read(dir_ / "target"), "partial target");
+  EXPECT_TRUE(fs::is_directory(dir_ / ".a.cbk.tmp-Dir000"));
+
+  // Once the holder is gone its file is stale too.
+  (void)!::write(release[1], "x", 1);
+  int status = 0;
+  ASSERT_EQ(::waitpid(holder, &status, 0), holder);
+  for (int fd : {ready[0], ready[1], release[0], release[1]})
+    ::close(fd);
+  EXPECT_EQ(formats::remove_stale_temp_files(out), 1);
+  EXPECT_FALSE(fs::exists(dir_ / ".a.cbk.tmp-Locked"));
+  EXPECT_TRUE(fs::exists(dir_ / ".b.cbk.tmp-Ab3xZ9"));
+}
+
+// While a TempFile exists its file is locked: another writer's clean-up leaves it alone, and a
+// registered temporary is what the signal handler removes.
+TEST_F(Output, ALiveTemporaryIsLockedAndRegistered) {
+  const fs::path out = dir_ / "a.cbk";
+  {
+    formats::TempFile live(out);
+    EXPECT_EQ(formats::remove_stale_temp_files(out), 0);
+    EXPECT_TRUE(fs::exists(live.path()));
+    const int fd = ::open(live.path().c_str(), O_RDONLY);
+    ASSERT_GE(fd, 0);
+    EXPECT_NE(::flock(fd, LOCK_EX | LOCK_NB), 0) << "the live temporary is not locked";
+    ::close(fd);
+  }
+  EXPECT_TRUE(others("").empty());
+  // The registry in isolation: a registered path is removed, an unregistered one is not.
+  std::ofstream(dir_ / "registered") << "x";
+  std::ofstream(dir_ / "forgotten") << "x";
+  const int kept = register_temp_path((dir_ / "forgotten").c_str());
+  unregister_temp_path(kept);
+  ASSERT_GE(register_temp_path((dir_ / "registered").c_str()), 0);
+  EXPECT_EQ(unlink_registered_temp_paths(), 1);
+  EXPECT_FALSE(fs::exists(dir_ / "registered"));
+  EXPECT_TRUE(fs::exists(dir_ / "forgotten"));
+  EXPECT_EQ(register_temp_path(std::string(kTempPathMax, 'x').c_str()), -1);
+  // A registered directory is removed after the registered files in it, whatever the order of
+  // registration.
+  fs::create_directory(dir_ / "tmpdir");
+  std::ofstream(dir_ / "tmpdir" / "file") << "x";
+  ASSERT_GE(register_temp_path((dir_ / "tmpdir").c_str(), true), 0);
+  ASSERT_GE(register_temp_path((dir_ / "tmpdir" / "file").c_str()), 0);
+  EXPECT_EQ(unlink_registered_temp_paths(), 2);
+  EXPECT_FALSE(fs::exists(dir_ / "tmpdir"));
+}
+
+// Temporary names stay within 255 bytes, and two long names that share their first 200 bytes
+// still have prefixes of their own (so neither cleans up the other's temporaries).
+TEST_F(Output, LongNamesHaveDistinctTemporaryPrefixes) {
+  const std::string stem(240, 'n');
+  const fs::path a = dir_ / (stem + "a.cbk"), b = dir_ / (stem + "b.cbk");
+  EXPECT_NE(formats::temp_file_prefix(a), formats::temp_file_prefix(b));
+  EXPECT_LE(formats::temp_file_prefix(a).size() + 6, 255u);
+  EXPECT_EQ(formats::temp_file_prefix(dir_ / "a.cbk"), ".a.cbk.tmp-");
+  formats::write_asset_file(a, sections(4, "long"), {});
+  EXPECT_TRUE(fs::exists(a));
 }
 
 TEST_F(Output, ReaderReportsIoErrors) {

@@ -1,6 +1,7 @@
 // The clothbake executable end to end: bake, info, validate, export; determinism across thread
-// counts and runs; the documented exit codes and messages for bad inputs; a SIGKILL mid-write and
-// a file-size limit (disk full) leave the previous asset intact.
+// counts and runs; the documented exit codes and messages for bad inputs; SIGKILL, SIGINT and
+// SIGTERM mid-write and a file-size limit (disk full) leave the previous asset intact (and, but
+// for SIGKILL, no temporary file; the next bake removes a killed one's).
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -49,6 +50,9 @@ pid_t spawn(const fs::path& dir, const std::vector<std::string>& args,
   ::dup2(out, 1);
   ::dup2(err, 2);
   ::chdir(dir.c_str());
+  // A shell may start the tests with SIGINT ignored, which clothbake would keep so.
+  ::signal(SIGINT, SIG_DFL);
+  ::signal(SIGTERM, SIG_DFL);
   for (const auto& e : options.env)
     ::putenv(const_cast<char*>(e.c_str()));
   if (options.file_size_limit >= 0) {
@@ -100,6 +104,7 @@ class Cli : public ::testing::Test {
     return out;
   }
   std::string file(const std::string& name) const { return slurp(dir_ / name); }
+  int interrupt_bake_mid_write(int signo, bool& partial);
   std::vector<std::string> others(const std::string& keep) const {
     std::vector<std::string> names;
     for (const auto& e : fs::directory_iterator(dir_)) {
@@ -258,9 +263,10 @@ TEST_F(Cli, DiskFullKeepsThePreviousAsset) {
   EXPECT_TRUE(others("a.cbk").empty());
 }
 
-TEST_F(Cli, SigkillMidWriteLeavesThePreviousAsset) {
-  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps"}).code, 0);
-  const std::string good = file("a.cbk");
+// Bakes big.toml over a.cbk, paused mid-write by the sink's test hook, and sends `signo` once the
+// temporary file holds 50 000 bytes. Returns the wait status; `partial` says whether the pause
+// was reached.
+int Cli::interrupt_bake_mid_write(int signo, bool& partial) {
   std::ofstream(dir_ / "big.toml") << "name = \"big\"\n[weave]\nname = \"plain\"\n"
                                       "[[yarn]]\nname = \"warp\"\n[[yarn]]\nname = \"weft\"\n"
                                       "[bake]\nresolution = 128\n";
@@ -269,20 +275,51 @@ TEST_F(Cli, SigkillMidWriteLeavesThePreviousAsset) {
   const pid_t pid =
       spawn(dir_ / "io", prefix({"bake", "@big.toml", "-o", "@a.cbk", "--stages", "feature_maps"}),
             pause);
-  bool partial = false;
+  partial = false;
   for (int i = 0; i < 1000 && !partial; ++i) {
     for (const auto& name : others("a.cbk"))
       if (fs::file_size(dir_ / name) >= 50000) partial = true;
     if (!partial) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  ::kill(pid, SIGKILL);
+  ::kill(pid, signo);
   int status = 0;
   ::waitpid(pid, &status, 0);
+  return status;
+}
+
+TEST_F(Cli, SigkillMidWriteLeavesThePreviousAsset) {
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps"}).code, 0);
+  const std::string good = file("a.cbk");
+  bool partial = false;
+  const int status = interrupt_bake_mid_write(SIGKILL, partial);
   ASSERT_TRUE(partial) << "the bake never paused mid-write";
   EXPECT_TRUE(WIFSIGNALED(status));
   EXPECT_EQ(file("a.cbk"), good);
   const Outcome v = run({"validate", "@a.cbk"});
   EXPECT_EQ(v.code, 0) << v.out;
+  // SIGKILL cannot be caught, so its temporary file stays; the next bake to that path removes it.
+  ASSERT_EQ(others("a.cbk").size(), 1u);
+  const Outcome again = run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps"});
+  EXPECT_EQ(again.code, 0) << again.err;
+  EXPECT_TRUE(others("a.cbk").empty());
+  EXPECT_IN("a temporary file left by an interrupted write", again.err);
+}
+
+// Ctrl-C (SIGINT) and SIGTERM mid-write: the temporary file is removed, the previous asset stays
+// byte for byte, and the process ends by that signal (a shell reports 128 + N).
+TEST_F(Cli, SigintAndSigtermMidWriteRemoveTheTemporaryFile) {
+  ASSERT_EQ(run({"bake", "@fabric.toml", "-o", "@a.cbk", "--stages", "feature_maps"}).code, 0);
+  const std::string good = file("a.cbk");
+  for (const int signo : {SIGINT, SIGTERM}) {
+    SCOPED_TRACE(signo);
+    bool partial = false;
+    const int status = interrupt_bake_mid_write(signo, partial);
+    ASSERT_TRUE(partial) << "the bake never paused mid-write";
+    ASSERT_TRUE(WIFSIGNALED(status));
+    EXPECT_EQ(WTERMSIG(status), signo);
+    EXPECT_TRUE(others("a.cbk").empty());
+    EXPECT_EQ(file("a.cbk"), good);
+  }
 }
 
 TEST_F(Cli, DamagedAndForeignAssets) {

@@ -4,8 +4,10 @@
 // detected, removed and recomputed; an unusable cache is warned about and bypassed; concurrent
 // bakes of one key agree; a bake killed while storing leaves no torn entry; the size bound holds;
 // scene renders bake their fabrics through the same cache.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -221,6 +223,29 @@ TEST_F(Cache, KilledStoreLeavesNoTornEntry) {
   EXPECT_EQ(report["warnings"].size(), 0u) << report["warnings"];
   bake("plain.cbk", false);
   EXPECT_EQ(slurp(dir_ / "a.cbk"), slurp(dir_ / "plain.cbk"));
+  // Storing that entry again removed the killed store's temporary (its lock died with it).
+  const auto after = run_clothbake({"cache", "info", cache, "--json"});
+  EXPECT_EQ(nlohmann::json::parse(after.out)["temporary_files"], 0);
+}
+
+// `cache prune` removes old temporaries only when no live writer holds their flock.
+TEST_F(Cache, PruneLeavesALockedTemporary) {
+  bake("a.cbk");
+  const fs::path temp = dir_ / "cache" / "entries" / ".parallax-0123.entry.tmp-Ab3xZ9";
+  std::ofstream(temp) << "partial";
+  const auto two_hours_ago = fs::file_time_type::clock::now() - std::chrono::hours(2);
+  fs::last_write_time(temp, two_hours_ago);
+  // This process stands for a live store: it holds the lock while the CLI prunes.
+  const int fd = ::open(temp.c_str(), O_RDONLY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  CliRun r = run_clothbake({"cache", "prune", (dir_ / "cache").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(temp));
+  ::close(fd);
+  r = run_clothbake({"cache", "prune", (dir_ / "cache").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(temp));
 }
 
 TEST_F(Cache, SizeBoundAndPrune) {
