@@ -646,9 +646,9 @@ TEST_F(Hardening, BakesThatCannotFitInMemoryAreRefusedBeforeLoading) {
        "",
        {"[bake] resolution = 8192, parallax_dirs = 32 need ~", "parallax stage"}},
   };
-  const std::string out = path("huge.cbk");
+  const std::string out = path("too-large.cbk");
   for (const Case& c : cases) {
-    const std::string fabric = path("huge.toml");
+    const std::string fabric = path("too-large.toml");
     std::ofstream(fabric) << fabric_text(c.edits);
     const auto start = std::chrono::steady_clock::now();
     const CliRun r = test_support::detail::spawn(
@@ -664,7 +664,7 @@ TEST_F(Hardening, BakesThatCannotFitInMemoryAreRefusedBeforeLoading) {
     EXPECT_LT(seconds, 5.0) << r.err;  // no more than the start-up: nothing is loaded
     EXPECT_FALSE(fs::exists(out));
     for (const auto& entry : fs::directory_iterator(*dir_))
-      EXPECT_EQ(entry.path().filename().string().find(".huge.cbk.tmp"), std::string::npos);
+      EXPECT_EQ(entry.path().filename().string().find(".too-large.cbk.tmp"), std::string::npos);
   }
 }
 
