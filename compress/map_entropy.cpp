@@ -32,7 +32,8 @@ void put(std::vector<std::byte>& out, const void* p, std::size_t n) {
 
 }  // namespace
 
-formats::Section entropy_code_map(const formats::Section& packed) {
+formats::Section entropy_code_map(const formats::Section& packed, const ShiftList* shifts,
+                                  ShiftList* found) {
   const uint32_t type = uint32_t(packed.type);
   if (packed.version != reader::kFeatureMapPackedVersion || type < 0x0100 || type > 0x0105 ||
       type == 0x0104 || packed.dims.size() < 2 || packed.dims[0] != packed.dims[1] ||
@@ -48,6 +49,7 @@ formats::Section entropy_code_map(const formats::Section& packed) {
   std::vector<uint8_t> plane(texels);
   std::vector<std::vector<uint8_t>> blocks(planes);
   std::vector<uint16_t> tables;
+  ShiftList candidates;
   for (uint32_t p = 0; p < planes; ++p) {
     const uint32_t c = p / 2, byte = p % 2;
     for (uint64_t t = 0; t < texels; ++t)
@@ -55,7 +57,11 @@ formats::Section entropy_code_map(const formats::Section& packed) {
     uint32_t best_sx = 0, best_sy = 0;
     std::vector<uint64_t> best = parallax_residual_counts(plane.data(), n, 0, 0);
     double best_bits = entropy_bits(best);
-    for (const auto& [sx, sy] : parallax_shift_candidates(plane.data(), n)) {
+    if (p == 0) {
+      candidates = shifts ? *shifts : parallax_shift_candidates(plane.data(), n);
+      if (found) *found = candidates;
+    }
+    for (const auto& [sx, sy] : candidates) {
       std::vector<uint64_t> counts = parallax_residual_counts(plane.data(), n, sx, sy);
       const double bits = entropy_bits(counts);
       if (bits < best_bits) {

@@ -9,6 +9,10 @@
 // deterministic. C++20.
 #pragma once
 
+#include <cstdint>
+#include <utility>
+#include <vector>
+
 #include "formats/writer/asset_writer.hpp"
 
 namespace clothbake::compress {
@@ -16,6 +20,12 @@ namespace clothbake::compress {
 // The payload-version-3 form of `packed` (a version-2 map section), or `packed` itself when
 // coding would not make it smaller (noisy maps, tiny tiles). Throws Error(Internal) for a section
 // that is not a version-2 feature map.
-formats::Section entropy_code_map(const formats::Section& packed);
+// `shifts`: the tile's repeat candidates to try for every plane (parallax_shift_candidates); when
+// null they are searched on the map's first byte plane (an O(N^2) search of 64^2 samples per
+// shift, about 0.3 s at 256^2: the bake searches once, on the height map, and passes them on).
+// `found` (optional) receives the candidates used.
+using ShiftList = std::vector<std::pair<uint32_t, uint32_t>>;
+formats::Section entropy_code_map(const formats::Section& packed, const ShiftList* shifts = nullptr,
+                                  ShiftList* found = nullptr);
 
 }  // namespace clothbake::compress

@@ -23,8 +23,15 @@ void run_fabric_records(pipeline::StageContext& ctx) {
 // that is smaller: both format 1.4, docs/format.md §6.4.
 void run_feature_maps(pipeline::StageContext& ctx) {
   std::vector<formats::Section> sections = feature_map_sections(ctx.input<Fabric>("fabric").maps);
+  // The tile's repeat shifts are searched once, on the height map (the first section), and
+  // tried on every map's byte planes.
+  compress::ShiftList shifts;
+  bool searched = false;
   for (formats::Section& s : sections)
-    if (s.version == reader::kFeatureMapPackedVersion) s = compress::entropy_code_map(s);
+    if (s.version == reader::kFeatureMapPackedVersion) {
+      s = compress::entropy_code_map(s, searched ? &shifts : nullptr, searched ? nullptr : &shifts);
+      searched = true;
+    }
   ctx.output("section/feature_maps", std::move(sections));
 }
 
