@@ -219,7 +219,9 @@ TEST(MapEncoding, PackedMapsReadBackWithinTheBoundsOfTheF32Maps) {
     worst_tangent = std::max(worst_tangent, angle(maps.tangent.data + 3 * t, tv));
     worst_normal = std::max(worst_normal, angle(maps.normal.data + 3 * t, nv));
     ASSERT_EQ(maps.yarn_id[t], fabric.maps.yarn_id[t]);
-    if (t % 5 == 0) ASSERT_EQ(maps.gap[t], 1.f);  // 1 = yarn stays exact
+    if (t % 5 == 0) {
+      ASSERT_EQ(maps.gap[t], 1.f);  // 1 = yarn stays exact
+    }
   }
   EXPECT_LE(worst_height_rel, std::ldexp(1.0, -11));
   EXPECT_LE(worst_unorm, kUnormBound);
