@@ -46,7 +46,7 @@ struct TableSource {
 struct EvalData {
   EvalOptions options;
   uint32_t n = 0;  // resolution of every per-texel section
-  reader::FeatureMapsView maps;
+  reader::FeatureMaps maps;
   std::vector<YarnShading> yarns;
   model::Rgb<double> sheen_color;
   double sheen_roughness = 0.5;

@@ -5,6 +5,9 @@
 
 #include "common/error.hpp"
 #include "fabric/fabric_json.hpp"
+#include "formats/reader/map_encoding.hpp"
+#include "formats/writer/half_float.hpp"
+#include "formats/writer/map_encoding.hpp"
 
 namespace clothbake {
 namespace {
@@ -51,6 +54,59 @@ Section vector_map(SectionType type, const std::vector<Vec3f>& values, std::size
   check_texels(type, values.size(), texels, n);
   std::span<const float> flat(values.empty() ? nullptr : values.front().data(), values.size() * 3);
   return make_array_section<float>(type, 0, flat, {n, n, 3});
+}
+
+// Refuses NaN/Inf before a packed encoding would hide them (the f32 path's make_array_section
+// checks its own values): names the map and the texel.
+void check_finite_map(SectionType type, const float* values, std::size_t count, uint32_t channels,
+                      uint32_t n) {
+  for (std::size_t i = 0; i < count; ++i)
+    if (!std::isfinite(values[i])) {
+      // The f32 path's wording (make_array_section): element index and [y, x(, channel)].
+      const std::size_t t = i / channels;
+      throw_input_error(std::string("refusing to write a non-finite value: ") +
+                        reader::section_type_name(type) + " element " + std::to_string(i) + " [" +
+                        std::to_string(t / n) + ", " + std::to_string(t % n) +
+                        (channels > 1 ? ", " + std::to_string(i % channels) : "") + "] is " +
+                        (std::isnan(values[i]) ? "NaN" : "Inf"));
+    }
+}
+
+Section packed_height(const std::vector<float>& height, std::size_t texels, uint32_t n) {
+  check_texels(SectionType::HeightMap, height.size(), texels, n);
+  check_finite_map(SectionType::HeightMap, height.data(), height.size(), 1, n);
+  std::vector<reader::Half> codes(height.size());
+  for (std::size_t t = 0; t < height.size(); ++t) {
+    if (!(std::fabs(height[t]) <= 65504.0f))
+      throw_input_error("height map texel x=" + std::to_string(t % n) +
+                        ", y=" + std::to_string(t / n) + " is " + std::to_string(height[t]) +
+                        " tile sides, beyond the f16 range of the stored map (|h| <= 65504)");
+    codes[t] = formats::float_to_half(height[t]);
+  }
+  return make_array_section<reader::Half>(SectionType::HeightMap, 0, codes, {n, n},
+                                          reader::kFeatureMapPackedVersion);
+}
+
+Section packed_unit_vectors(SectionType type, const std::vector<Vec3f>& values, std::size_t texels,
+                            uint32_t n) {
+  check_texels(type, values.size(), texels, n);
+  check_finite_map(type, values.empty() ? nullptr : values.front().data(), values.size() * 3, 3, n);
+  std::vector<int16_t> codes(values.size() * 2);
+  for (std::size_t t = 0; t < values.size(); ++t)
+    formats::unit_to_octahedral(values[t].data(), codes.data() + 2 * t);
+  return make_array_section<int16_t>(type, 0, codes, {n, n, 2}, reader::kFeatureMapPackedVersion);
+}
+
+Section packed_unorm(SectionType type, const float* values, std::size_t count, uint32_t channels,
+                     std::size_t texels, uint32_t n) {
+  check_texels(type, count / channels, texels, n);
+  check_finite_map(type, values, count, channels, n);
+  std::vector<uint16_t> codes(count);
+  for (std::size_t i = 0; i < count; ++i)
+    codes[i] = formats::float_to_unorm16(values[i]);
+  std::vector<uint32_t> dims = {n, n};
+  if (channels > 1) dims.push_back(channels);
+  return make_array_section<uint16_t>(type, 0, codes, dims, reader::kFeatureMapPackedVersion);
 }
 
 }  // namespace
@@ -111,13 +167,25 @@ std::vector<Section> fabric_record_sections(const Fabric& fabric) {
   return sections;
 }
 
-std::vector<Section> feature_map_sections(const FabricMaps& maps) {
+std::vector<Section> feature_map_sections(const FabricMaps& maps, MapEncoding encoding) {
   if (maps.resolution <= 0)
     throw_input_error("feature maps have resolution " + std::to_string(maps.resolution) +
                       "; expected a positive N");
   const uint32_t n = uint32_t(maps.resolution);
   const std::size_t texels = maps.texel_count();
   std::vector<Section> sections;
+  if (encoding == MapEncoding::Packed) {
+    sections.push_back(packed_height(maps.height, texels, n));
+    sections.push_back(packed_unit_vectors(SectionType::TangentMap, maps.tangent, texels, n));
+    sections.push_back(packed_unit_vectors(SectionType::NormalMap, maps.normal, texels, n));
+    sections.push_back(
+        packed_unorm(SectionType::GapMap, maps.gap.data(), maps.gap.size(), 1, texels, n));
+    sections.push_back(scalar_map(SectionType::YarnIdMap, maps.yarn_id, texels, n));
+    sections.push_back(packed_unorm(SectionType::AlbedoMap,
+                                    maps.albedo.empty() ? nullptr : maps.albedo.front().data(),
+                                    maps.albedo.size() * 3, 3, texels, n));
+    return sections;
+  }
   sections.push_back(scalar_map(SectionType::HeightMap, maps.height, texels, n));
   sections.push_back(vector_map(SectionType::TangentMap, maps.tangent, texels, n));
   sections.push_back(vector_map(SectionType::NormalMap, maps.normal, texels, n));

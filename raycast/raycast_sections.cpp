@@ -61,7 +61,8 @@ std::vector<formats::Section> parallax_sections(ParallaxTable&& table) {
 }
 
 std::vector<formats::Section> visibility_sections(const VisibilityAsgs& asgs,
-                                                  const VisibilitySettings& settings, int dirs) {
+                                                  const VisibilitySettings& settings, int dirs,
+                                                  bool fit_error_section) {
   const uint32_t n = uint32_t(asgs.resolution);
   reader::VisibilityInfoRecord info{};
   info.resolution = n;
@@ -82,8 +83,9 @@ std::vector<formats::Section> visibility_sections(const VisibilityAsgs& asgs,
   out.push_back(formats::make_array_section<uint16_t>(reader::SectionType::VisibilityAsg,
                                                       reader::kVisibilityRecordsInstance, fields,
                                                       {n, n, reader::kAsgRecordFields}));
-  out.push_back(formats::make_array_section<float>(reader::SectionType::AsgFitError, 0,
-                                                   asgs.fit_error, {n, n}));
+  if (fit_error_section)
+    out.push_back(formats::make_array_section<float>(reader::SectionType::AsgFitError, 0,
+                                                     asgs.fit_error, {n, n}));
   return out;
 }
 

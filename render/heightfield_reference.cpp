@@ -30,7 +30,7 @@ HeightfieldReference render_heightfield_reference(const Scene& scene, std::size_
                       ": the near-field reference needs a plane "
                       "with a fabric");
   const reader::Asset asset = formats::open_valid_asset(o.asset);
-  reader::FeatureMapsView maps;
+  reader::FeatureMaps maps;
   eval::Evaluator ev;
   if (!reader::read_feature_maps(asset, &maps).ok() || !ev.open(asset).ok())
     throw_input_error(o.asset + ": cannot be opened for the near-field reference");

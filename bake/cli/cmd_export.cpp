@@ -21,6 +21,7 @@
 #include "common/image_io/image_io.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/compressed_tables.hpp"
+#include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/atomic_file.hpp"
 #include "formats/writer/open_asset.hpp"
@@ -146,6 +147,28 @@ Image section_export_image(const Asset& asset, const ExportOptions& o, SectionTy
   status = asset.verify_section(section);
   if (!status.ok()) throw Error(ExitCode::InvalidAsset, o.asset + ": " + formats::describe(status));
   const std::string label = o.section + " (instance " + std::to_string(o.instance) + ")";
+  // Feature maps of format 1.4 (payload version 2 or 3: f16, octahedral, unorm16, entropy-coded)
+  // are exported as the floats the reader decodes them to, like the f32 maps of version 1.
+  const uint32_t t = uint32_t(type);
+  if (t >= 0x0100 && t <= 0x0105 && t != 0x0104 && o.instance == 0 && section.version >= 2) {
+    reader::FeatureMaps maps;
+    status = reader::read_feature_maps(asset, &maps);
+    if (!status.ok())
+      throw Error(ExitCode::InvalidAsset, o.asset + ": " + formats::describe(status));
+    const reader::ArrayView<float>& view =
+        t == 0x0100
+            ? maps.height
+            : (t == 0x0101 ? maps.tangent
+                           : (t == 0x0102 ? maps.normal : (t == 0x0103 ? maps.gap : maps.albedo)));
+    SectionInfo decoded = section;
+    decoded.codec = Codec::Raw;
+    decoded.element_type = ElementType::F32;
+    decoded.rank = view.rank;
+    for (uint32_t d = 0; d < reader::kMaxRank; ++d)
+      decoded.dims[d] = view.dims[d];
+    decoded.data = reinterpret_cast<const unsigned char*>(view.data);
+    return section_image(decoded, o.index, label);
+  }
   return section_image(section, o.index, label);
 }
 

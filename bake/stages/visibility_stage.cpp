@@ -2,11 +2,15 @@
 // texel with its fit error out (raycast/visibility.hpp,
 // formats/reader/visibility_sections.hpp), plus the decoded lobes as the artifact
 // "visibility/asg_params" (std::vector<model::AsgParams<float>>, texel order) for the visibility
-// clustering. Settings: [bake] visibility_dirs.
+// clustering. Settings: [bake] visibility_dirs. The per-texel fit errors (asg_fit_error, f32, 0.26
+// MB at 256^2: information, no reader needs them) are written only when the raw data is kept
+// (--keep-raw, or uncompressed bakes: the parallax stage's rule); the info record's mean and
+// maximum fit error always are.
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/cache_support.hpp"
 #include "bake/stages/stages.hpp"
+#include "compress/compress_settings.hpp"
 #include "fabric/fabric.hpp"
 #include "raycast/raycast_sections.hpp"
 #include "raycast/visibility.hpp"
@@ -38,7 +42,15 @@ void run_visibility(pipeline::StageContext& ctx) {
       {"rings", samples.rings},
   };
   ctx.output("visibility/asg_params", decoded_lobes(asgs));
-  ctx.output("section/visibility", visibility_sections(asgs, settings, settings.dirs));
+  const compress::CompressSettings form =
+      ctx.has_input(kCompressSettingsArtifact)
+          ? compress::resolve_compress_settings(
+                fabric.bake, ctx.input<compress::CompressRequest>(kCompressSettingsArtifact))
+          : compress::settings_from_bake(fabric.bake);
+  const bool fit_error_section = form.keep_raw || !form.enabled;
+  meta["fit_error_section"] = fit_error_section;
+  ctx.output("section/visibility",
+             visibility_sections(asgs, settings, settings.dirs, fit_error_section));
   ctx.progress(1.0);
   ctx.output("metadata/visibility", std::move(meta));
 }
@@ -51,6 +63,7 @@ pipeline::Stage visibility_stage() {
   s.description = "per-texel visibility sampled by ray casting, fitted by one ASG (Sec. 3.1, 4.2)";
   s.inputs = {"fabric"};
   s.outputs = {"section/visibility", "metadata/visibility", "visibility/asg_params"};
+  s.collects = {kCompressSettingsArtifact};
   s.run = run_visibility;
   s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;

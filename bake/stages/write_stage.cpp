@@ -84,8 +84,9 @@ void run_write(StageContext& ctx) {
   }
   uint16_t minor = 0;
   for (const Section* s : sections)
-    minor = std::max(minor, reader::format_minor_of_payload(uint32_t(s->type), s->instance,
-                                                            s->bytes().data(), s->bytes().size()));
+    minor =
+        std::max(minor, reader::format_minor_of_section(uint32_t(s->type), s->version, s->instance,
+                                                        s->bytes().data(), s->bytes().size()));
   nlohmann::json meta = metadata(ctx, minor);
   if (!omitted.empty()) meta["omitted_sections"] = omitted;
   const Section metadata_section = formats::make_metadata_section(meta);

@@ -110,7 +110,7 @@ void BM_ReadFeatureMaps(benchmark::State& state) {
   if (!asset.open_memory(words.data(), size, {reader::Verify::Structure}).ok())
     state.SkipWithError("open failed");
   for (auto _ : state) {
-    reader::FeatureMapsView maps;
+    reader::FeatureMaps maps;
     auto status = reader::read_feature_maps(asset, &maps);
     benchmark::DoNotOptimize(maps.height.data);
     benchmark::DoNotOptimize(status);

@@ -1,5 +1,11 @@
 #include "formats/reader/fabric_sections.hpp"
 
+#include <cstring>
+#include <new>
+
+#include "formats/reader/map_encoding.hpp"
+#include "formats/reader/map_entropy.hpp"
+
 namespace clothbake::reader {
 namespace {
 
@@ -16,21 +22,21 @@ Status find_known(const Asset& asset, SectionType type, SectionInfo* info) noexc
   return {};
 }
 
+// A map's view after find_known: shape {N, N} (channels 1) or {N, N, channels}, one common N.
 template <class T>
-Status map_view(const Asset& asset, SectionType type, uint32_t channels, uint32_t* resolution,
-                ArrayView<T>* out) noexcept {
-  SectionInfo info;
-  Status status = find_known(asset, type, &info);
-  if (!status.ok()) return status;
-  status = asset.view_of(info, out);
-  if (!status.ok()) return status;
+Status map_view(const Asset& asset, const SectionInfo& info, uint32_t channels,
+                uint32_t* resolution, ArrayView<T>* out) noexcept {
+  const SectionType type = info.type;
+  Status status = asset.view_of(info, out);
+  if (!status.ok()) return status;  // WrongType names the element types
   const uint16_t rank = channels == 1 ? 2 : 3;
   if (out->rank != rank || out->dims[0] != out->dims[1] || (rank == 3 && out->dims[2] != channels))
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "%s map has shape rank %u {%u, %u, %u}, expected {N, N%s}",
-                         section_type_name(type), unsigned(out->rank), unsigned(out->dims[0]),
-                         unsigned(out->dims[1]), unsigned(out->dims[2]),
-                         channels == 1 ? "" : ", 3");
+                         "%s map (payload version %u) has shape rank %u {%u, %u, %u}, expected "
+                         "{N, N%s}",
+                         section_type_name(type), unsigned(info.version), unsigned(out->rank),
+                         unsigned(out->dims[0]), unsigned(out->dims[1]), unsigned(out->dims[2]),
+                         channels == 1 ? "" : (channels == 2 ? ", 2" : ", 3"));
   if (*resolution == 0) *resolution = out->dims[0];
   if (out->dims[0] != *resolution)
     return Status::error(ErrorCode::Malformed, Check::MapResolution,
@@ -38,6 +44,105 @@ Status map_view(const Asset& asset, SectionType type, uint32_t channels, uint32_
                          unsigned(out->dims[0]), unsigned(out->dims[1]), unsigned(*resolution),
                          unsigned(*resolution));
   return {};
+}
+
+// One float map: version 1 viewed in place; versions 2 and 3 checked here and decoded later into
+// the FeatureMaps' storage.
+struct FloatMap {
+  SectionType type{};
+  uint32_t channels = 1;  // floats per texel
+  ArrayView<float>* out = nullptr;
+  SectionInfo info;
+  uint32_t codes_per_texel = 0;     // 16-bit codes per texel of versions 2 and 3
+  const uint16_t* codes = nullptr;  // version 2: the stored codes (f16 bits, i16 or u16)
+  ArrayView<uint8_t> coded;         // version 3: the entropy-coded payload
+  MapEntropyHeader header;
+};
+
+uint32_t codes_per_texel(SectionType type) noexcept {
+  switch (type) {
+    case SectionType::TangentMap:
+    case SectionType::NormalMap:
+      return 2;
+    case SectionType::AlbedoMap:
+      return 3;
+    default:
+      return 1;
+  }
+}
+
+Status check_float_map(const Asset& asset, FloatMap& m, uint32_t* resolution) noexcept {
+  Status status = find_known(asset, m.type, &m.info);
+  if (!status.ok()) return status;
+  if (m.info.version == 1) return map_view(asset, m.info, m.channels, resolution, m.out);
+  m.codes_per_texel = codes_per_texel(m.type);
+  if (m.info.version == kFeatureMapEntropyVersion) {
+    status = asset.view_of(m.info, &m.coded);
+    if (status.ok() && m.coded.rank != 1)
+      status =
+          Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                        "%s map (payload version 3) must be u8 {bytes}", section_type_name(m.type));
+    if (status.ok())
+      status = check_map_entropy(section_type_name(m.type), m.coded.data, m.coded.size,
+                                 m.codes_per_texel, &m.header);
+    if (!status.ok()) return status;
+    if (*resolution == 0) *resolution = m.header.resolution;
+    if (m.header.resolution != *resolution)
+      return Status::error(ErrorCode::Malformed, Check::MapResolution,
+                           "%s map is %u x %u, the other maps are %u x %u",
+                           section_type_name(m.type), unsigned(m.header.resolution),
+                           unsigned(m.header.resolution), unsigned(*resolution),
+                           unsigned(*resolution));
+    return {};
+  }
+  // Version 2: f16, octahedral i16 or unorm16 codes, all 16-bit.
+  const uint32_t k = m.codes_per_texel;
+  if (m.type == SectionType::HeightMap) {
+    ArrayView<Half> v;
+    status = map_view(asset, m.info, k, resolution, &v);
+    m.codes = reinterpret_cast<const uint16_t*>(v.data);
+  } else if (k == 2) {
+    ArrayView<int16_t> v;
+    status = map_view(asset, m.info, k, resolution, &v);
+    m.codes = reinterpret_cast<const uint16_t*>(v.data);
+  } else {
+    ArrayView<uint16_t> v;
+    status = map_view(asset, m.info, k, resolution, &v);
+    m.codes = v.data;
+  }
+  return status;
+}
+
+// Turns the 16-bit codes of a version-2 (or decoded version-3) map into floats at `dst`
+// (texels * channels) and points m.out at them.
+void decode_codes(FloatMap& m, const uint16_t* codes, uint32_t n, float* dst) noexcept {
+  const uint64_t texels = uint64_t(n) * n, count = texels * m.channels;
+  switch (m.type) {
+    case SectionType::HeightMap:
+      for (uint64_t i = 0; i < count; ++i)
+        dst[i] = half_to_float(Half{codes[i]});
+      break;
+    case SectionType::TangentMap:
+    case SectionType::NormalMap:
+      for (uint64_t t = 0; t < texels; ++t) {
+        int16_t pair[2];
+        std::memcpy(pair, codes + 2 * t, 4);
+        decode_octahedral(pair, dst + 3 * t);
+      }
+      break;
+    default:
+      for (uint64_t i = 0; i < count; ++i)
+        dst[i] = unorm16_to_float(codes[i]);
+      break;
+  }
+  ArrayView<float>& v = *m.out;
+  v.data = dst;
+  v.size = count;
+  v.rank = m.channels == 1 ? 2 : 3;
+  v.dims[0] = n;
+  v.dims[1] = n;
+  v.dims[2] = m.channels == 1 ? 0 : m.channels;
+  v.dims[3] = 0;
 }
 
 template <class Record>
@@ -67,34 +172,84 @@ uint16_t known_section_version(SectionType type) noexcept {
     case SectionType::Metadata:
     case SectionType::FabricInfo:
     case SectionType::YarnMaterials:
-    case SectionType::HeightMap:
+    case SectionType::YarnIdMap:
+      return 1;
+    case SectionType::HeightMap:  // format 1.4: 2 reduced precision, 3 its codes entropy-coded
     case SectionType::TangentMap:
     case SectionType::NormalMap:
     case SectionType::GapMap:
-    case SectionType::YarnIdMap:
     case SectionType::AlbedoMap:
-      return 1;
+      return kFeatureMapEntropyVersion;
     default:
       return 0;
   }
 }
 
-Status read_feature_maps(const Asset& asset, FeatureMapsView* out) noexcept {
-  FeatureMapsView maps;
+Status read_feature_maps(const Asset& asset, FeatureMaps* out) noexcept {
+  FeatureMaps maps;
+  FloatMap floats[5];
+  const SectionType types[5] = {SectionType::HeightMap, SectionType::TangentMap,
+                                SectionType::NormalMap, SectionType::GapMap,
+                                SectionType::AlbedoMap};
+  ArrayView<float>* views[5] = {&maps.height, &maps.tangent, &maps.normal, &maps.gap, &maps.albedo};
+  for (int i = 0; i < 5; ++i) {
+    floats[i].type = types[i];
+    floats[i].channels = i == 0 || i == 3 ? 1 : 3;
+    floats[i].out = views[i];
+  }
   Status status;
-  if (status.ok())
-    status = map_view(asset, SectionType::HeightMap, 1, &maps.resolution, &maps.height);
-  if (status.ok())
-    status = map_view(asset, SectionType::TangentMap, 3, &maps.resolution, &maps.tangent);
-  if (status.ok())
-    status = map_view(asset, SectionType::NormalMap, 3, &maps.resolution, &maps.normal);
-  if (status.ok()) status = map_view(asset, SectionType::GapMap, 1, &maps.resolution, &maps.gap);
-  if (status.ok())
-    status = map_view(asset, SectionType::YarnIdMap, 1, &maps.resolution, &maps.yarn_id);
-  if (status.ok())
-    status = map_view(asset, SectionType::AlbedoMap, 3, &maps.resolution, &maps.albedo);
-  if (status.ok()) *out = maps;
-  return status;
+  for (int i = 0; i < 4 && status.ok(); ++i)
+    status = check_float_map(asset, floats[i], &maps.resolution);
+  SectionInfo yarn_info;
+  if (status.ok()) status = find_known(asset, SectionType::YarnIdMap, &yarn_info);
+  if (status.ok()) status = map_view(asset, yarn_info, 1, &maps.resolution, &maps.yarn_id);
+  if (status.ok()) status = check_float_map(asset, floats[4], &maps.resolution);
+  if (!status.ok()) return status;
+
+  const uint32_t n = maps.resolution;
+  const uint64_t texels = uint64_t(n) * n;
+  uint64_t decoded = 0;
+  bool entropy = false;
+  for (const FloatMap& m : floats) {
+    if (m.info.version != 1) decoded += texels * m.channels;
+    entropy = entropy || m.info.version == kFeatureMapEntropyVersion;
+  }
+  if (decoded > 0) {
+    // open() bounded every section by the file size, and a version-3 header's N is <= 16384 and
+    // equal to the others': these sizes cannot overflow.
+    maps.storage.reset(new (std::nothrow) float[decoded]);
+    // Version 3: the codes of one map (at most 3 per texel), one byte plane and the rANS tables.
+    std::unique_ptr<uint16_t[]> codes;
+    std::unique_ptr<uint8_t[]> plane;
+    std::unique_ptr<ParallaxEntropyScratch> scratch;
+    if (entropy) {
+      codes.reset(new (std::nothrow) uint16_t[texels * 3]);
+      plane.reset(new (std::nothrow) uint8_t[texels]);
+      scratch.reset(new (std::nothrow) ParallaxEntropyScratch);
+    }
+    if (!maps.storage || (entropy && (!codes || !plane || !scratch)))
+      return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
+                           "feature maps: cannot allocate %llu bytes for the decoded maps",
+                           static_cast<unsigned long long>(decoded * sizeof(float)));
+    float* dst = maps.storage.get();
+    for (FloatMap& m : floats) {
+      if (m.info.version == 1) continue;
+      const uint16_t* source = m.codes;
+      if (m.info.version == kFeatureMapEntropyVersion) {
+        status = decode_map_entropy(section_type_name(m.type), m.coded.data, m.coded.size, m.header,
+                                    codes.get(), plane.get(), scratch.get());
+        if (!status.ok()) return status;
+        source = codes.get();
+      }
+      decode_codes(m, source, n, dst);
+      dst += texels * m.channels;
+    }
+  }
+  const FloatMap* order[6] = {&floats[0], &floats[1], &floats[2], &floats[3], nullptr, &floats[4]};
+  for (int i = 0; i < 6; ++i)
+    maps.versions[i] = order[i] ? order[i]->info.version : yarn_info.version;
+  *out = std::move(maps);
+  return {};
 }
 
 Status read_fabric_info(const Asset& asset, const FabricInfoRecord** out) noexcept {

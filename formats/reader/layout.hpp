@@ -19,8 +19,9 @@ namespace clothbake::reader {
 // minor number grows when section types, codecs or element types are added in a way that an
 // older reader can skip; an older reader reads a newer minor and ignores what it does not know.
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor =
-    3;  // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans; 1.3: planned ParallaxEntropy
+// 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans; 1.3: planned ParallaxEntropy;
+// 1.4: feature maps at reduced precision (payload versions 2 and 3 of 0x0100-0x0103 and 0x0105).
+inline constexpr uint16_t kFormatMinor = 4;
 
 // The minor version that introduced a section type: writers stamp an asset with the largest minor
 // its sections need (so that an asset without 1.1 sections stays a byte-identical 1.0 file).
@@ -31,11 +32,16 @@ constexpr uint16_t format_minor_of(uint32_t section_type) {
                                   : 0;
 }
 
-// The same for one section's payload: a ParallaxEntropy info record (instance 0) with the planned
-// flag (bit 0 of its u32 flags at byte 12; parallax_entropy.hpp, kEntropyPlannedFlag) needs 1.3,
-// since a 1.2 reader would not know that its empty blocks are left-out directions.
-inline uint16_t format_minor_of_payload(uint32_t section_type, uint32_t instance,
+// The same for one section, by its payload version and payload: a feature map (0x0100-0x0103,
+// 0x0105) of payload version 2 (f16, octahedral snorm16, unorm16; map_encoding.hpp) or 3 (those
+// codes entropy-coded; map_entropy.hpp) needs 1.4; a
+// ParallaxEntropy info record (instance 0) with the planned flag (bit 0 of its u32 flags at byte
+// 12; parallax_entropy.hpp, kEntropyPlannedFlag) needs 1.3, since a 1.2 reader would not know that
+// its empty blocks are left-out directions.
+inline uint16_t format_minor_of_section(uint32_t section_type, uint16_t version, uint32_t instance,
                                         const void* payload, uint64_t size) {
+  if (section_type >= 0x0100 && section_type <= 0x0105 && section_type != 0x0104 && version >= 2)
+    return 4;
   if (section_type == 0x0203 && instance == 0 && size >= 16) {
     const unsigned char* p = static_cast<const unsigned char*>(payload);
     if (p[12] & 1u) return 3;

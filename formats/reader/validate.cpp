@@ -10,6 +10,7 @@
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/reader/map_entropy.hpp"
 #include "formats/reader/metadata_limits.hpp"
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
@@ -288,7 +289,7 @@ void check_feature_maps(const Asset& asset, Reporter& r, uint32_t yarn_count, bo
   for (SectionType t : map_types)
     present += asset.find(t, 0, &s).ok() ? 1 : 0;
   if (present == 0) return;
-  FeatureMapsView maps;
+  FeatureMaps maps;
   Status status = read_feature_maps(asset, &maps);
   if (!status.ok()) {
     r.report_status(status, kNoSection);
@@ -309,6 +310,19 @@ void check_feature_maps(const Asset& asset, Reporter& r, uint32_t yarn_count, bo
   };
   // Ranges of the scalar maps and the yarn ids.
   uint64_t bad = 0, first = 0;
+  // An entropy-coded height (payload version 3) hides its f16 codes from check_finite.
+  if (maps.versions[0] == kFeatureMapEntropyVersion) {
+    for (uint64_t t = 0; t < texels; ++t)
+      if (!std::isfinite(maps.height[t]) && bad++ == 0) first = t;
+    if (bad) {
+      unsigned x, y;
+      texel_xy(first, &x, &y);
+      r.report(Check::NonFinite, kNoSection,
+               "height map (entropy-coded): %" PRIu64 " NaN or Inf texels (first at x=%u, y=%u)",
+               bad, x, y);
+    }
+    bad = 0;
+  }
   for (uint64_t t = 0; t < texels; ++t)
     if (!(maps.gap[t] >= 0.f && maps.gap[t] <= 1.f) && bad++ == 0) first = t;
   if (bad) {

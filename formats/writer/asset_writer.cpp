@@ -239,8 +239,8 @@ uint64_t write_asset(SectionRefs sections, Sink& sink) {
   for (const Section* s : order)
     header.version_minor =
         std::max(header.version_minor,
-                 reader::format_minor_of_payload(uint32_t(s->type), s->instance, s->bytes().data(),
-                                                 s->bytes().size()));
+                 reader::format_minor_of_section(uint32_t(s->type), s->version, s->instance,
+                                                 s->bytes().data(), s->bytes().size()));
   header.section_count = uint32_t(order.size());
   header.section_entry_size = sizeof(reader::SectionEntry);
   header.flags = 0;

@@ -1,6 +1,8 @@
-// The small v1 asset checked in as tests/formats/data/golden_v1.cbk: the 4 x 4 test fabric's
-// records and feature maps plus a fixed metadata object (no tool version, so that a version bump
-// does not change the bytes). Regenerate deliberately (docs/format.md, "Golden file"):
+// The small assets checked in as tests/formats/data/golden_v1.cbk (format 1.0: f32 feature maps)
+// and golden_v1_4.cbk (format 1.4: the same maps at reduced precision, payload version 2): the
+// 4 x 4 test fabric's records and feature maps plus a fixed metadata object (no tool version, so
+// that a version bump does not change the bytes). Regenerate deliberately (docs/format.md,
+// "Golden file"):
 //   CLOTHBAKE_REGENERATE_GOLDEN=1 build-*/bin/formats_golden_test
 #pragma once
 
@@ -12,10 +14,10 @@
 
 namespace clothbake::test_support {
 
-inline std::vector<formats::Section> golden_sections() {
+inline std::vector<formats::Section> golden_sections(MapEncoding encoding = MapEncoding::Float32) {
   const Fabric fabric = make_test_fabric(4, "golden");
   std::vector<formats::Section> sections = fabric_record_sections(fabric);
-  for (auto& s : feature_map_sections(fabric.maps))
+  for (auto& s : feature_map_sections(fabric.maps, encoding))
     sections.push_back(std::move(s));
   nlohmann::json metadata;
   metadata["format"] = "clothbake-asset";
@@ -26,8 +28,10 @@ inline std::vector<formats::Section> golden_sections() {
   return sections;
 }
 
-inline std::string golden_path() {
-  return CLOTHBAKE_SOURCE_DIR "/tests/formats/data/golden_v1.cbk";
+inline std::string golden_path(MapEncoding encoding = MapEncoding::Float32) {
+  return encoding == MapEncoding::Float32 ? CLOTHBAKE_SOURCE_DIR "/tests/formats/data/golden_v1.cbk"
+                                          : CLOTHBAKE_SOURCE_DIR
+             "/tests/formats/data/golden_v1_4.cbk";
 }
 
 }  // namespace clothbake::test_support

@@ -2,6 +2,7 @@
 // must read the checked-in file (independently of today's writer) to the known values.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -15,6 +16,7 @@
 namespace {
 
 using namespace clothbake;
+using clothbake::MapEncoding;
 
 std::vector<std::byte> read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -24,19 +26,76 @@ std::vector<std::byte> read_file(const std::string& path) {
   return bytes;
 }
 
-TEST(Golden, WriterReproducesTheCheckedInBytes) {
-  const std::vector<std::byte> bytes = formats::serialize_asset(test_support::golden_sections());
+void expect_writer_reproduces(MapEncoding encoding) {
+  const std::vector<std::byte> bytes =
+      formats::serialize_asset(test_support::golden_sections(encoding));
+  const std::string path = test_support::golden_path(encoding);
   if (std::getenv("CLOTHBAKE_REGENERATE_GOLDEN")) {
-    std::ofstream out(test_support::golden_path(), std::ios::binary | std::ios::trunc);
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
     ASSERT_TRUE(out.good());
-    GTEST_SKIP() << "regenerated " << test_support::golden_path();
+    GTEST_SKIP() << "regenerated " << path;
   }
-  const std::vector<std::byte> golden = read_file(test_support::golden_path());
-  ASSERT_FALSE(golden.empty()) << "missing " << test_support::golden_path();
+  const std::vector<std::byte> golden = read_file(path);
+  ASSERT_FALSE(golden.empty()) << "missing " << path;
   ASSERT_EQ(bytes.size(), golden.size());
   for (std::size_t i = 0; i < bytes.size(); ++i)
     ASSERT_EQ(bytes[i], golden[i]) << "first difference at byte " << i;
+}
+
+TEST(Golden, WriterReproducesTheCheckedInBytes) {
+  expect_writer_reproduces(MapEncoding::Float32);
+}
+
+TEST(Golden, WriterReproducesTheCheckedIn14Bytes) {
+  expect_writer_reproduces(MapEncoding::Packed);
+}
+
+// The format 1.4 file: the same fabric with payload-version-2 maps, read to the f32 file's values
+// within the encodings' bounds (exact where the value is a code: 6/64 in f16, the axes, 0 and 1).
+TEST(Golden, ReaderReadsTheCheckedIn14File) {
+  reader::Asset asset, old;
+  reader::Status status = asset.open_file(test_support::golden_path(MapEncoding::Packed).c_str());
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(old.open_file(test_support::golden_path().c_str()).ok());
+  EXPECT_EQ(asset.version_major(), 1);
+  EXPECT_EQ(asset.version_minor(), 4);
+  EXPECT_EQ(asset.section_count(), 9u);
+  reader::SectionInfo s;
+  ASSERT_TRUE(asset.find(reader::SectionType::TangentMap, 0, &s).ok());
+  EXPECT_EQ(s.version, 2);
+  EXPECT_EQ(s.element_type, reader::ElementType::I16);
+  ASSERT_TRUE(asset.find(reader::SectionType::YarnIdMap, 0, &s).ok());
+  EXPECT_EQ(s.version, 1);
+
+  reader::FeatureMaps maps, f32;
+  status = reader::read_feature_maps(asset, &maps);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(reader::read_feature_maps(old, &f32).ok());
+  ASSERT_EQ(maps.resolution, 4u);
+  EXPECT_TRUE(maps.storage != nullptr);
+  EXPECT_TRUE(f32.storage == nullptr);  // f32 maps are viewed in place
+  const std::size_t t = 2 * 4 + 1;
+  EXPECT_EQ(maps.height[t], 6.f / 64.f);
+  EXPECT_EQ(maps.yarn_id[t], 1);
+  EXPECT_EQ(maps.tangent[3 * t + 0], 1.f);
+  EXPECT_NEAR(maps.normal[3 * t + 1], -0.6f, 5e-5);
+  EXPECT_NEAR(maps.albedo[3 * t + 2], 0.5f, 1.0 / 131070 + 1e-7);
+  EXPECT_EQ(maps.gap[3 * 4 + 3], 0.f);
+  EXPECT_EQ(maps.gap[0], 1.f);
+  for (std::size_t i = 0; i < 16; ++i) {
+    EXPECT_EQ(maps.yarn_id[i], f32.yarn_id[i]);
+    EXPECT_LE(std::fabs(maps.height[i] - f32.height[i]), std::ldexp(std::fabs(f32.height[i]), -11));
+    EXPECT_LE(std::fabs(maps.gap[i] - f32.gap[i]), 1.0 / 131070 + 1e-7);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_LE(std::fabs(maps.albedo[3 * i + c] - f32.albedo[3 * i + c]), 1.0 / 131070 + 1e-7);
+      EXPECT_NEAR(maps.tangent[3 * i + c], f32.tangent[3 * i + c], 5e-5);
+      EXPECT_NEAR(maps.normal[3 * i + c], f32.normal[3 * i + c], 5e-5);
+    }
+  }
+  const auto summary = reader::validate_asset(asset, nullptr, nullptr);
+  EXPECT_EQ(summary.errors, 0u);
+  EXPECT_EQ(summary.warnings, 0u);
 }
 
 TEST(Golden, ReaderReadsTheCheckedInFile) {
@@ -63,7 +122,7 @@ TEST(Golden, ReaderReadsTheCheckedInFile) {
   EXPECT_EQ(yarns[1].optical_thickness, 4.0);
   EXPECT_EQ(yarns[0].roughness, 0.25);
 
-  reader::FeatureMapsView maps;
+  reader::FeatureMaps maps;
   status = reader::read_feature_maps(asset, &maps);
   ASSERT_TRUE(status.ok()) << status.message();
   ASSERT_EQ(maps.resolution, 4u);

@@ -47,7 +47,7 @@ std::vector<unsigned char> golden_bytes() {
 
 // Everything a consumer might do with an asset that opened.
 void exercise(const Asset& asset) {
-  FeatureMapsView maps;
+  FeatureMaps maps;
   if (read_feature_maps(asset, &maps).ok()) {
     volatile float sink = 0;
     for (float v : maps.height)

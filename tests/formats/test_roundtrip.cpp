@@ -106,12 +106,12 @@ TEST(RoundTrip, HalfToFloatIsExactForEveryFiniteHalf) {
 TEST(RoundTrip, FabricSections) {
   const Fabric fabric = test_support::make_test_fabric(16);
   std::vector<Section> sections = fabric_record_sections(fabric);
-  for (auto& s : feature_map_sections(fabric.maps))
+  for (auto& s : feature_map_sections(fabric.maps, MapEncoding::Float32))  // exact: f32 (1.0)
     sections.push_back(std::move(s));
   sections.push_back(metadata());
   Opened opened(formats::serialize_asset(sections));
   ASSERT_TRUE(opened.status.ok()) << opened.status.message();
-  reader::FeatureMapsView maps;
+  reader::FeatureMaps maps;
   ASSERT_TRUE(reader::read_feature_maps(opened.asset, &maps).ok());
   ASSERT_EQ(maps.resolution, 16u);
   for (std::size_t t = 0; t < fabric.maps.texel_count(); ++t) {

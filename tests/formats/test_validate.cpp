@@ -17,9 +17,11 @@ using namespace clothbake;
 using formats::Section;
 using reader::SectionType;
 
+// f32 maps (payload version 1, formats 1.0-1.3): these tests plant out-of-range floats, which the
+// packed encodings of 1.4 could not hold; test_map_encoding.cpp validates the packed maps.
 std::vector<Section> fabric_sections(const Fabric& fabric) {
   auto s = fabric_record_sections(fabric);
-  for (auto& m : feature_map_sections(fabric.maps))
+  for (auto& m : feature_map_sections(fabric.maps, MapEncoding::Float32))
     s.push_back(std::move(m));
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;

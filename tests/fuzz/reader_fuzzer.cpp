@@ -42,12 +42,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (asset.view_of(info, &floats).ok() && floats.size)
         sink = sink + bits(floats[floats.size - 1]);
     }
-    FeatureMapsView maps;
+    FeatureMaps maps;
     if (read_feature_maps(asset, &maps).ok()) {
       const uint64_t texels = uint64_t(maps.resolution) * maps.resolution;
       if (texels) {
+        // Every decoded map's last element (format 1.4 maps are decoded into owned storage).
         sink = sink + bits(maps.height[texels - 1]) + maps.yarn_id[texels - 1] +
-               bits(maps.albedo[3 * texels - 1]) + bits(maps.normal[3 * texels - 1]);
+               bits(maps.albedo[3 * texels - 1]) + bits(maps.normal[3 * texels - 1]) +
+               bits(maps.tangent[3 * texels - 1]) + bits(maps.gap[texels - 1]);
       }
     }
     const FabricInfoRecord* info;

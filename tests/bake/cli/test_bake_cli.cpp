@@ -402,18 +402,35 @@ TEST_F(Cli, CompressionOptionsDecideWhichTablesAreWritten) {
   EXPECT_EQ(metadata["omitted_sections"][0]["artifact"], "section/tables");
   EXPECT_EQ(metadata["parameters"]["compress"]["mode"], "target");
   EXPECT_EQ(metadata["parameters"]["compress"]["keep_raw"], false);
+  // The per-texel ASG fit errors are information only: left out by default (the info record keeps
+  // their mean and maximum), and every reading command copes with their absence.
+  EXPECT_EQ(counts["visibility_asg"], 2);
+  EXPECT_EQ(counts["asg_fit_error"], 0);
+  EXPECT_EQ(metadata["parameters"]["visibility"]["fit_error_section"], false);
+  EXPECT_GT(metadata["parameters"]["visibility"]["max_fit_error"].get<double>(), 0.0);
+  // The feature maps at reduced precision (payload version 2) make the asset format 1.4.
+  EXPECT_EQ(metadata["format_version"], "1.4");
+  r = run({"validate", "@default.cbk"});
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  r = run({"verify", "@default.cbk", "--fabric", "@c.toml", "--json"});
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  r = run({"query", "@default.cbk", "visibility", "--texel", "3,4", "--dir", "0,0,1", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["fit_error"].is_null()) << r.out;
 
   r = run({"bake", "@c.toml", "-o", "@both.cbk", "--keep-raw", "--json", "--quiet"});
   ASSERT_EQ(r.code, 0) << r.err;
   counts = section_counts(nlohmann::json::parse(r.out));
   EXPECT_GT(counts["radiance_compressed"], 0);
   EXPECT_GT(counts["radiance_tables"], 0);
+  EXPECT_EQ(counts["asg_fit_error"], 1);  // --keep-raw keeps them
 
   r = run({"bake", "@c.toml", "-o", "@raw.cbk", "--no-compress", "--json", "--quiet"});
   ASSERT_EQ(r.code, 0) << r.err;
   counts = section_counts(nlohmann::json::parse(r.out));
   EXPECT_EQ(counts["radiance_compressed"], 0);
   EXPECT_GT(counts["radiance_tables"], 0);
+  EXPECT_EQ(counts["asg_fit_error"], 1);  // an uncompressed bake keeps all raw data
 
   // --stages without compress: the raw tables, as before compression existed.
   r = run({"bake", "@c.toml", "-o", "@tables.cbk", "--stages", "tables", "--json", "--quiet"});

@@ -12,6 +12,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/stages.hpp"
+#include "compress/compress_settings.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "tests/support/run_cli.hpp"
@@ -42,10 +43,15 @@ class QueryCli : public ::testing::Test {
     request.fabric = fabric;
     request.output_path = asset();
     request.stages = {"parallax", "visibility"};
+    compress::CompressRequest keep_raw;  // --keep-raw: with asg_fit_error (not written by default)
+    keep_raw.keep_raw = true;
+    request.seeds.put(stages::kCompressSettingsArtifact, keep_raw);
     pipeline::bake(request, stages::bake_stages());
-    request.output_path = bare();
-    request.stages = {"feature_maps"};
-    pipeline::bake(request, stages::bake_stages());
+    pipeline::BakeRequest bare_request;
+    bare_request.fabric = fabric;
+    bare_request.output_path = bare();
+    bare_request.stages = {"feature_maps"};
+    pipeline::bake(bare_request, stages::bake_stages());
     fs::copy_file(asset(), corrupt());
     // Flip a byte in the last section's payload (its checksum no longer matches).
     std::fstream f(corrupt(), std::ios::in | std::ios::out | std::ios::binary);

@@ -60,7 +60,7 @@ TEST_F(Bake, WritesAValidAssetWithTheFabric) {
   reader::Asset asset;
   ASSERT_TRUE(asset.open_file((dir_ / "a.cbk").c_str()).ok());
   EXPECT_EQ(reader::validate_asset(asset, nullptr, nullptr).errors, 0u);
-  reader::FeatureMapsView maps;
+  reader::FeatureMaps maps;
   ASSERT_TRUE(reader::read_feature_maps(asset, &maps).ok());
   EXPECT_EQ(maps.resolution, 64u);
   const Fabric fabric = test_support::make_test_fabric(64);

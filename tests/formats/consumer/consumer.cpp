@@ -12,7 +12,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s %s\n", status.check_id(), status.message());
     return 2;
   }
-  clothbake::reader::FeatureMapsView maps;
+  clothbake::reader::FeatureMaps maps;
   const clothbake::reader::FabricInfoRecord* info = nullptr;
   if (!clothbake::reader::read_feature_maps(asset, &maps).ok() ||
       !clothbake::reader::read_fabric_info(asset, &info).ok())
