@@ -114,7 +114,8 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   const nlohmann::json report = nlohmann::json::parse(run.out);
   EXPECT_EQ(report["scene_plan"]["half_vector_bins_kept"], used);
   const nlohmann::json info = info_of(out);
-  EXPECT_EQ(info["format"]["minor"], 3);  // the planned entropy-coded parallax (format 1.3)
+  // The planned entropy-coded parallax (format 1.3) beside the reduced-precision maps (1.4).
+  EXPECT_EQ(info["format"]["minor"], 4);
   EXPECT_TRUE(info["scene_plan"]["transmission_left_out"].get<bool>());
   EXPECT_EQ(info["scene_plan"]["half_vector_bins_kept"], used);
   std::map<std::string, int> count;
