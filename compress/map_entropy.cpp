@@ -12,19 +12,6 @@
 namespace clothbake::compress {
 namespace {
 
-double entropy_bits(const std::vector<uint64_t>& counts) {
-  double bits = 0.0;
-  for (int c = 0; c < reader::kEntropyContexts; ++c) {
-    uint64_t total = 0;
-    for (int s = 0; s < 256; ++s)
-      total += counts[std::size_t(c) * 256 + s];
-    for (int s = 0; s < 256; ++s)
-      if (const uint64_t k = counts[std::size_t(c) * 256 + s])
-        bits -= double(k) * std::log2(double(k) / double(total));
-  }
-  return bits;
-}
-
 void put(std::vector<std::byte>& out, const void* p, std::size_t n) {
   const auto* b = static_cast<const std::byte*>(p);
   out.insert(out.end(), b, b + n);
@@ -56,14 +43,14 @@ formats::Section entropy_code_map(const formats::Section& packed, const ShiftLis
       plane[t] = std::to_integer<uint8_t>(bytes[(t * channels + c) * 2 + byte]);  // little-endian
     uint32_t best_sx = 0, best_sy = 0;
     std::vector<uint64_t> best = parallax_residual_counts(plane.data(), n, 0, 0);
-    double best_bits = entropy_bits(best);
+    double best_bits = residual_entropy_bits(best);
     if (p == 0) {
       candidates = shifts ? *shifts : parallax_shift_candidates(plane.data(), n);
       if (found) *found = candidates;
     }
     for (const auto& [sx, sy] : candidates) {
       std::vector<uint64_t> counts = parallax_residual_counts(plane.data(), n, sx, sy);
-      const double bits = entropy_bits(counts);
+      const double bits = residual_entropy_bits(counts);
       if (bits < best_bits) {
         best_bits = bits;
         best = std::move(counts);

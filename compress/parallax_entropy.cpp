@@ -178,18 +178,6 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
     std::vector<uint64_t> counts;
   };
   std::vector<Choice> choice(d_count);
-  auto entropy_bits = [](const std::vector<uint64_t>& counts) {
-    double bits = 0.0;
-    for (int c = 0; c < kEntropyContexts; ++c) {
-      uint64_t total = 0;
-      for (int s = 0; s < 256; ++s)
-        total += counts[std::size_t(c) * 256 + s];
-      for (int s = 0; s < 256; ++s)
-        if (const uint64_t k = counts[std::size_t(c) * 256 + s])
-          bits -= double(k) * std::log2(double(k) / double(total));
-    }
-    return bits;
-  };
   tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
     if (!kept(d)) {  // an empty block: no counts
       choice[d].counts.assign(std::size_t(kEntropyContexts) * 256, 0);
@@ -197,10 +185,10 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
     }
     const uint8_t* codes = packed.codes.data() + d * plane;
     Choice best{0, 0, parallax_residual_counts(codes, n, 0, 0)};
-    double best_bits = entropy_bits(best.counts);
+    double best_bits = residual_entropy_bits(best.counts);
     for (const auto& [sx, sy] : out.candidates) {
       std::vector<uint64_t> c = parallax_residual_counts(codes, n, sx, sy);
-      const double bits = entropy_bits(c);
+      const double bits = residual_entropy_bits(c);
       if (bits < best_bits) {
         best_bits = bits;
         best = {sx, sy, std::move(c)};
@@ -263,6 +251,19 @@ std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax&
       reader::SectionType::ParallaxEntropy, reader::kEntropyParallaxTablesInstance, coded.tables,
       {coded.groups, uint32_t(reader::kEntropyContexts), 256u}));
   return out;
+}
+
+double residual_entropy_bits(const std::vector<uint64_t>& counts) {
+  double bits = 0.0;
+  for (int c = 0; c < kEntropyContexts; ++c) {
+    uint64_t total = 0;
+    for (int s = 0; s < 256; ++s)
+      total += counts[std::size_t(c) * 256 + s];
+    for (int s = 0; s < 256; ++s)
+      if (const uint64_t k = counts[std::size_t(c) * 256 + s])
+        bits -= double(k) * std::log2(double(k) / double(total));
+  }
+  return bits;
 }
 
 std::size_t kept_direction_count(const std::vector<uint8_t>& keep) {

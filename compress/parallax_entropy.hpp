@@ -60,6 +60,10 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
 std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& packed,
                                                         const EntropyParallax& coded);
 
+// Shannon estimate, in bits, of coding residuals with these counts (kEntropyContexts rows of 256,
+// as parallax_residual_counts returns): the sum over contexts of −k log2(k / row total).
+double residual_entropy_bits(const std::vector<uint64_t>& counts);
+
 // Directions a plan's keep mask keeps (its non-zero entries; one entry per view bin).
 std::size_t kept_direction_count(const std::vector<uint8_t>& keep);
 
