@@ -28,11 +28,14 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
   return buf;
 }
 
-// Estimates. Sizes: the sections' shapes (docs/format.md); the compressed Integral-Radiance tables
-// from a mean C-PCA rank of kMeanRank per texel (the 256^2 twill measured 15.1: 991149
-// coefficients over 65536 texels) capped at the kept bins, plus one basis image per rank and
-// cluster. Times: per-stage rates of the 256^2 twill (2 threads, `clothbake bake --report`, load
-// ~1.5; docs/scene-plans.md): a fixed part per texel plus a part per texel and direction.
+// Estimates. Sizes: the sections' shapes (docs/format.md), upper bounds where the bake
+// entropy-codes (the feature maps at their format 1.4 codes, 20 bytes per texel, and the parallax
+// at one byte per texel and direction, before coding: the coded forms depend on the pattern); the
+// compressed Integral-Radiance tables from a mean C-PCA rank of kMeanRank per texel (the 256^2
+// twill measured 15.1: 991149 coefficients over 65536 texels) capped at the kept bins, plus one
+// basis image per rank and cluster. Times: per-stage rates of the 256^2 twill (2 threads,
+// `clothbake bake --report`, load ~1.5; docs/scene-plans.md): a fixed part per texel plus a part
+// per texel and direction.
 constexpr double kMeanRank = 15.1;
 constexpr double kParallaxPerTexel = 1.8e-5, kParallaxPerRay = 9.0e-8;
 constexpr double kVisibilityPerSample = 8.1e-8;  // per texel and visibility direction
@@ -45,8 +48,8 @@ PlanEstimate estimate_bake(const Fabric& fabric, double view_dirs, double bins, 
   const double vis = double(fabric.bake.visibility_dirs) * fabric.bake.visibility_dirs;
   const double clusters = fabric.bake.clusters;
   const double rank = std::min(kMeanRank, bins);
-  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + n2 * 46  // records, maps
-                       + 64 + n2 * 12 + n2 * 4                             // visibility
+  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + n2 * 20  // records, maps
+                       + 64 + n2 * 12                                      // visibility
                        + n2 + clusters * vis * 4                           // clusters
                        + 10000;                                            // metadata
   const double parallax = 64 + 8 * view_dirs + n2 * view_dirs;
