@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
+#include <utility>
 
 #include "common/error.hpp"
 
@@ -52,7 +54,118 @@ std::string toml_location(const std::string& file, const toml::source_region& so
   return fmt::format("{}:{}:{}", file, source.begin.line, source.begin.column);
 }
 
+namespace {
+
+// Code point of the UTF-8 sequence at text[i] (U+FFFD for a malformed one) and its length.
+std::pair<char32_t, std::size_t> decode_utf8(std::string_view text, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned lead = byte(i);
+  const std::size_t length = lead >= 0xF0 ? 4 : lead >= 0xE0 ? 3 : lead >= 0xC0 ? 2 : 1;
+  if (length == 1 || i + length > text.size()) return {U'\uFFFD', 1};
+  char32_t c = lead & (0x3Fu >> (length - 1));
+  for (std::size_t k = 1; k < length; ++k) {
+    if ((byte(i + k) & 0xC0) != 0x80) return {U'\uFFFD', 1};
+    c = (c << 6) | (byte(i + k) & 0x3F);
+  }
+  return {c, length};
+}
+
+bool ascii_blank(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r';
+}
+
+}  // namespace
+
+void check_toml_characters(std::string_view text, const std::string& file) {
+  // toml++ 3.3's whitespace test (is_non_ascii_horizontal_whitespace) reaches
+  // __builtin_unreachable for every code point in U+00A1-U+0499, U+2C5E-U+3057 (but
+  // U+3000) and U+FB26-U+FEFE (docs/hardening.md, "Fuzzing"). It asks that question of every
+  // character outside strings and comments, and inside a multi-line basic string of the characters
+  // after a line-ending backslash. TOML 1.0 allows non-ASCII text only inside strings and comments,
+  // so refusing it everywhere else first costs valid files nothing.
+  enum class In { Code, Comment, Basic, MultiBasic, Literal, MultiLiteral };
+  In in = In::Code;
+  const auto refuse = [&](std::size_t at, const char* where) {
+    std::size_t line = 1, column = 1;  // columns count characters, as toml++'s do
+    for (std::size_t k = 0; k < at; ++k) {
+      if (text[k] == '\n')
+        line += 1, column = 1;
+      else if ((static_cast<unsigned char>(text[k]) & 0xC0) != 0x80)
+        ++column;
+    }
+    const char32_t c = decode_utf8(text, at).first;
+    throw Error(ExitCode::Input,
+                fmt::format("{}:{}:{}: character U+{:04X} {}: TOML allows characters outside "
+                            "ASCII only inside strings and comments",
+                            file, line, column, static_cast<std::uint32_t>(c), where));
+  };
+  const auto starts = [&](std::size_t i, std::string_view s) {
+    return text.substr(i, s.size()) == s;
+  };
+  const auto quote_run = [&](std::size_t i, char quote) {
+    std::size_t k = i;
+    while (k < text.size() && k - i < 5 && text[k] == quote)
+      ++k;
+    return k - i;
+  };
+  for (std::size_t i = 0; i < text.size();) {
+    const char c = text[i];
+    std::size_t step = 1;
+    switch (in) {
+      case In::Code:
+        if (static_cast<unsigned char>(c) >= 0x80) refuse(i, "outside a string or comment");
+        if (c == '#')
+          in = In::Comment;
+        else if (starts(i, "\"\"\""))
+          in = In::MultiBasic, step = 3;
+        else if (c == '"')
+          in = In::Basic;
+        else if (starts(i, "'''"))
+          in = In::MultiLiteral, step = 3;
+        else if (c == '\'')
+          in = In::Literal;
+        break;
+      case In::Comment:
+        if (c == '\n') in = In::Code;
+        break;
+      case In::Basic:
+        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n')
+          step = 2;
+        else if (c == '"' || c == '\n')
+          in = In::Code;  // a newline ends it (toml++ reports it)
+        break;
+      case In::MultiBasic:
+        if (c == '\\' && i + 1 < text.size()) {
+          const char next = text[i + 1];
+          if (static_cast<unsigned char>(next) >= 0x80)
+            refuse(i + 1, "after a backslash in a multi-line string");
+          if (ascii_blank(next)) {  // a line-ending backslash: toml++ skips the blanks after it
+            std::size_t j = i + 1;
+            while (j < text.size() && ascii_blank(text[j]))
+              ++j;
+            if (j < text.size() && static_cast<unsigned char>(text[j]) >= 0x80)
+              refuse(j, "after a line-ending backslash in a multi-line string");
+            i = j;
+            continue;
+          }
+          step = 2;
+        } else if (starts(i, "\"\"\"")) {
+          in = In::Code, step = quote_run(i, '"');  // up to two quotes before the closing three
+        }
+        break;
+      case In::Literal:
+        if (c == '\'' || c == '\n') in = In::Code;
+        break;
+      case In::MultiLiteral:
+        if (starts(i, "'''")) in = In::Code, step = quote_run(i, '\'');
+        break;
+    }
+    i += step;
+  }
+}
+
 toml::table parse_toml_text(std::string_view text, const std::string& file) {
+  check_toml_characters(text, file);
   try {
     return toml::parse(text, file);
   } catch (const toml::parse_error& e) {

@@ -24,8 +24,13 @@ std::size_t edit_distance(std::string_view a, std::string_view b);
 // (distance <= 2, or <= a third of the word's length for longer words); empty otherwise.
 std::string closest_match(std::string_view word, const std::vector<std::string>& candidates);
 
-// Parses TOML text. `file` is used in messages only. Syntax errors throw Error(Input) with
-// "FILE:LINE:COLUMN: TOML syntax error: ...".
+// Refuses characters outside ASCII where TOML 1.0 does not allow them (outside strings and
+// comments, and after a line-ending backslash in a multi-line basic string), naming
+// FILE:LINE:COLUMN and the code point. Safe on any bytes; throws Error(Input).
+void check_toml_characters(std::string_view text, const std::string& file);
+
+// Parses TOML text after check_toml_characters. `file` is used in messages only. Syntax errors
+// throw Error(Input) with "FILE:LINE:COLUMN: TOML syntax error: ...".
 toml::table parse_toml_text(std::string_view text, const std::string& file);
 
 // An interval of valid values, printed in messages as "(0, 1]", "[1, 64]" or "> 0".

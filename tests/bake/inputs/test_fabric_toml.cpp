@@ -52,6 +52,44 @@ TEST(ParseToml, SyntaxErrorNamesLineAndColumn) {
   EXPECT_THAT(msg, HasSubstr("TOML syntax error"));
 }
 
+// toml++ 3.3 reaches __builtin_unreachable when it asks whether U+021A (and most code points in
+// U+00A1-U+0499) is whitespace; the 4-byte input below was found by the fabric TOML fuzzer.
+TEST(ParseToml, NonAsciiOutsideStringsIsRefusedBeforeTomlppSeesIt) {
+  std::string msg = error_message([] { parse_toml_text("5\xC8\x9A ", "f.toml"); });
+  EXPECT_THAT(msg, HasSubstr("f.toml:1:2: character U+021A outside a string or comment"));
+  msg = error_message([] { parse_toml_text("a = 1\n[b]\nk\xC3\xA9 = 2\n", "f.toml"); });
+  EXPECT_THAT(msg, HasSubstr("f.toml:3:2: character U+00E9"));
+  // After a line-ending backslash toml++ asks the same question of the next character.
+  msg = error_message([] {
+    parse_toml_text(
+        "s = \"\"\"a\\  \n  \xC8\x9A"
+        "b\"\"\"\n",
+        "f.toml");
+  });
+  EXPECT_THAT(msg, HasSubstr("f.toml:2:3: character U+021A after a line-ending backslash"));
+  msg = error_message([] { parse_toml_text("s = \"\"\"a\\\xC8\x9A\"\"\"\n", "f.toml"); });
+  EXPECT_THAT(msg, HasSubstr("f.toml:1:10: character U+021A after a backslash"));
+}
+
+TEST(ParseToml, NonAsciiInsideStringsAndCommentsIsKept) {
+  const std::string text =
+      "# caf\xC3\xA9 \"quoted\" \xC8\x9A\n"
+      "a = \"\xC8\x9A \\\" \xC8\x9A\"  # \xC8\x9A\n"
+      "b = 'x \xC8\x9A'\n"
+      "c = \"\"\"\n\xC8\x9A \"\" \xC8\x9A\"\"\"\"  # a quote before the closing three: \"\xC8\x9A\n"
+      "d = '''\xC8\x9A'' \xC8\x9A'''''\n"
+      "e = \"\"\"x\\\n   y \xC8\x9A\"\"\"\n"
+      "[\"k\xC3\xA9y\"]\n"
+      "f = 1\n";
+  toml::table t = parse_toml_text(text, "f.toml");
+  EXPECT_EQ(t["a"].value_or(std::string()), "\xC8\x9A \" \xC8\x9A");
+  EXPECT_EQ(t["b"].value_or(std::string()), "x \xC8\x9A");
+  EXPECT_EQ(t["c"].value_or(std::string()), "\xC8\x9A \"\" \xC8\x9A\"");
+  EXPECT_EQ(t["d"].value_or(std::string()), "\xC8\x9A'' \xC8\x9A''");
+  EXPECT_EQ(t["e"].value_or(std::string()), "xy \xC8\x9A");
+  EXPECT_EQ(t["k\xC3\xA9y"]["f"].value_or(0), 1);
+}
+
 struct Doc {
   toml::table table;
   TomlSection root;
