@@ -92,8 +92,10 @@ int automatic_rings(double height_range) {
 }
 
 PeriodicHeightField::PeriodicHeightField(const std::vector<float>& heights, int resolution,
-                                         int rings)
-    : resolution_(resolution), rings_(rings), heights_(heights) {
+                                         int rings, double max_sideways_tiles)
+    : resolution_(resolution), rings_(rings), max_sideways_(max_sideways_tiles), heights_(heights) {
+  if (!(max_sideways_tiles > 0))
+    throw_internal_error("PeriodicHeightField: the sideways budget must be positive");
   if (resolution < 1 || heights.size() != std::size_t(resolution) * std::size_t(resolution))
     throw_internal_error("PeriodicHeightField: height map size does not match the resolution");
   if (rings < 0 || rings > 64) throw_internal_error("PeriodicHeightField: rings out of range");
@@ -182,6 +184,14 @@ float PeriodicHeightField::height(long x, long y) const {
   return heights_[std::size_t(wrap_index(y, n) * n + wrap_index(x, n))];
 }
 
+double PeriodicHeightField::budget_t_max(double dx, double dy, double t_max, bool* cut) const {
+  // |d_xy| t <= budget; a vertical ray (|d_xy| = 0) goes nowhere sideways.
+  const double sideways = std::sqrt(dx * dx + dy * dy);
+  const double limit = sideways > 0 ? max_sideways_ / sideways : kInf;
+  *cut = limit < t_max;
+  return *cut ? limit : t_max;
+}
+
 Vec3d PeriodicHeightField::lifted_surface_point(long x, long y, double offset) const {
   const double n = resolution_;
   double dhdx = (double(height(x + 1, y)) - double(height(x - 1, y))) * n / 2;
@@ -201,17 +211,26 @@ void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
   std::array<Segment, W> seg{};
   std::array<bool, W> active{};
   std::array<int, W> segments_cast{};
+  std::array<double, W> t_end{};
+  std::array<bool, W> cut{};
   int live = 0;
   for (int i = 0; i < W; ++i) {
     t_hit[i] = kInf;
     active[i] = i < rays.count && rays.t_max[i] > 0;
+    if (active[i]) t_end[i] = budget_t_max(rays.dx[i], rays.dy[i], rays.t_max[i], &cut[i]);
     live += active[i];
   }
+  uint64_t unresolved = 0;
   if (counters)
     counters->rays.fetch_add(uint64_t(std::max(rays.count, 0)), std::memory_order_relaxed);
+  // The default (incoherent) context, not RTC_INTERSECT_CONTEXT_FLAG_COHERENT: with the coherent
+  // flag, Embree 3.13.5's AVX-512 packet kernel never returned from rtcOccluded16 on an instanced
+  // scene once the process had cast coherent packets into a scene without instances (rings = 0),
+  // e.g. a flat fabric baked before a tall one (docs/hardening.md, "The Embree hang"; test
+  // Bake.AFlatThenATallFabricInOneProcessBothFinish). The incoherent kernel reports the same
+  // occlusion and measured 13-38 % more rays per second here (bench_raycast BM_Visibility).
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   uint64_t casts = 0, packets = 0;
   while (live > 0) {
     for (int i = 0; i < W; ++i) {
@@ -229,8 +248,8 @@ void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
         rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
         continue;
       }
-      seg[i] = make_segment(rays.ox[i], rays.oy[i], rays.dx[i], rays.dy[i], t_start[i],
-                            rays.t_max[i], rings_, margin());
+      seg[i] = make_segment(rays.ox[i], rays.oy[i], rays.dx[i], rays.dy[i], t_start[i], t_end[i],
+                            rings_, margin());
       rh.ray.org_x[i] = float(seg[i].x);
       rh.ray.org_y[i] = float(seg[i].y);
       rh.ray.org_z[i] = float(rays.oz[i] + t_start[i] * rays.dz[i]);
@@ -258,6 +277,7 @@ void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
       } else if (seg[i].ends_at_border && ++segments_cast[i] < kMaxSegments) {
         t_start[i] += advance_after(seg[i]);
       } else {
+        unresolved += cut[i];
         active[i] = false;
         --live;
       }
@@ -266,6 +286,7 @@ void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
   if (counters) {
     counters->segments.fetch_add(casts, std::memory_order_relaxed);
     counters->packets.fetch_add(packets, std::memory_order_relaxed);
+    counters->unresolved.fetch_add(unresolved, std::memory_order_relaxed);
   }
 }
 
@@ -278,14 +299,16 @@ void PeriodicHeightField::first_hits(const RayPacket& rays,
   // "Performance"), and it reports the same hits bit for bit (same triangle test).
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  uint64_t casts = 0;
+  uint64_t casts = 0, unresolved = 0;
   for (int i = 0; i < RayPacket::kWidth; ++i) {
     t_hit[i] = kInf;
     if (i >= rays.count || !(rays.t_max[i] > 0)) continue;
+    bool cut = false;
+    const double t_end = budget_t_max(rays.dx[i], rays.dy[i], rays.t_max[i], &cut);
     double t_start = 0.0;
     for (int count = 0; count < kMaxSegments; ++count) {
-      const Segment s = make_segment(rays.ox[i], rays.oy[i], rays.dx[i], rays.dy[i], t_start,
-                                     rays.t_max[i], rings_, margin());
+      const Segment s = make_segment(rays.ox[i], rays.oy[i], rays.dx[i], rays.dy[i], t_start, t_end,
+                                     rings_, margin());
       RTCRayHit rh;
       rh.ray.org_x = float(s.x);
       rh.ray.org_y = float(s.y);
@@ -310,10 +333,12 @@ void PeriodicHeightField::first_hits(const RayPacket& rays,
       if (!s.ends_at_border) break;
       t_start += advance_after(s);
     }
+    unresolved += cut && !(t_hit[i] < kInf);
   }
   if (counters) {
     counters->rays.fetch_add(uint64_t(std::max(rays.count, 0)), std::memory_order_relaxed);
     counters->segments.fetch_add(casts, std::memory_order_relaxed);
+    counters->unresolved.fetch_add(unresolved, std::memory_order_relaxed);
   }
 }
 
@@ -331,9 +356,12 @@ SurfaceHit PeriodicHeightField::first_hit(const Vec3d& origin, const Vec3d& dire
   SurfaceHit result;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
+  bool cut = false;
+  const double t_end = t_max > 0 ? budget_t_max(direction.x, direction.y, t_max, &cut) : t_max;
+  result.budget_cut = cut;
   double t_start = 0.0;
   for (int count = 0; count < kMaxSegments && t_max > 0; ++count) {
-    Segment s = make_segment(origin.x, origin.y, direction.x, direction.y, t_start, t_max, rings_,
+    Segment s = make_segment(origin.x, origin.y, direction.x, direction.y, t_start, t_end, rings_,
                              margin());
     RTCRayHit rh{};
     rh.ray.org_x = float(s.x);
@@ -350,6 +378,7 @@ SurfaceHit PeriodicHeightField::first_hit(const Vec3d& origin, const Vec3d& dire
     rtcIntersect1(scene_, &context, &rh);
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
       result.hit = true;
+      result.budget_cut = false;
       result.t = t_start + double(rh.ray.tfar);
       const long n = resolution_, qside = n + 2;
       long q = long(rh.hit.primID) / 2;

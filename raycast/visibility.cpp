@@ -44,6 +44,8 @@ void validate_visibility_settings(const VisibilitySettings& settings) {
                       " is out of range: expected -1 (automatic) or 0 to 64");
   if (!(settings.fit_warn_rms > 0.0))
     throw_input_error("visibility fit warning threshold must be > 0");
+  if (!(settings.max_sideways_tiles > 0.0))
+    throw_input_error("visibility sideways budget must be > 0 tile widths");
 }
 
 VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings,
@@ -92,7 +94,7 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
       light[std::size_t(grid.bin_index(i, j))] = grid.bin_center(i, j);
     }
   const int rings = settings.rings >= 0 ? settings.rings : automatic_rings(range);
-  PeriodicHeightField field(maps.height, n, rings);
+  PeriodicHeightField field(maps.height, n, rings, settings.max_sideways_tiles);
   samples.rings = rings;
 
   // Ray origins: texel-centre vertex + offset along the central-difference normal.
@@ -140,12 +142,22 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
           const int done = tiles_done.fetch_add(1, std::memory_order_relaxed) + 1;
           if (progress) progress(double(done) / double(blocks.tile_count()));
         }
-        counters.rays.fetch_add(local.rays.load(), std::memory_order_relaxed);
-        counters.segments.fetch_add(local.segments.load(), std::memory_order_relaxed);
-        counters.packets.fetch_add(local.packets.load(), std::memory_order_relaxed);
+        counters.add(local);
       });
   samples.rays = counters.rays.load();
   samples.segments = counters.segments.load();
+  samples.unresolved_rays = counters.unresolved.load();
+  samples.max_sideways_tiles = field.max_sideways_tiles();
+  if (samples.unresolved_rays > 0) {
+    char budget[32], range[32];
+    std::snprintf(budget, sizeof budget, "%g", field.max_sideways_tiles());
+    std::snprintf(range, sizeof range, "%g", z_max - z_min);
+    warn("visibility: " + std::to_string(samples.unresolved_rays) + " of " +
+         std::to_string(samples.rays) + " rays skimmed the relief for " + budget +
+         " tile widths sideways without being blocked and were counted as visible (the sideways "
+         "budget, docs/raycast.md): the relief is very tall for its tile (height range " +
+         range + " tiles)");
+  }
   return samples;
 }
 

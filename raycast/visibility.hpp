@@ -15,6 +15,7 @@
 
 #include "fabric/fabric.hpp"
 #include "model/asg.hpp"
+#include "raycast/heightfield_scene.hpp"
 
 namespace clothbake::raycast {
 
@@ -29,6 +30,9 @@ struct VisibilitySettings {
   // at their 90th percentile (one lobe cannot follow a binary horizon; docs/raycast.md), so only
   // texels beyond what a single lobe normally gets are reported.
   double fit_warn_rms = 0.4;
+  // How far sideways a ray is followed, tile widths, > 0 (raycast/heightfield_scene.hpp): a ray
+  // that gets this far unblocked counts as visible and in VisibilitySamples::unresolved_rays.
+  double max_sideways_tiles = kMaxSidewaysTiles;
 };
 
 // Binary samples, one bit per (texel, direction): bit (dir % 64) of word texel * words + dir / 64.
@@ -38,6 +42,8 @@ struct VisibilitySamples {
   int words_per_texel = 0;
   std::vector<uint64_t> bits;
   uint64_t rays = 0, segments = 0;
+  uint64_t unresolved_rays = 0;     // cut by the sideways budget unblocked: counted as visible
+  double max_sideways_tiles = 0.0;  // that budget (raycast/heightfield_scene.hpp)
   int rings = 0;
 
   bool visible(std::size_t texel, int dir) const {

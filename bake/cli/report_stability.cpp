@@ -562,8 +562,8 @@ std::string case_path(const BakedCase& c, const std::string& scratch) {
 }
 
 // Bakes `c` in a child process (fork) with a time limit, so that a stage that never returns
-// (docs/hardening.md, "Open problems": an Embree occlusion call that hangs) becomes a failed row
-// instead of a hung report. The child writes the asset, its warnings (PATH.warnings, one a line)
+// becomes a failed row instead of a hung report (it once did: docs/hardening.md, "The Embree
+// hang"), and so that every case starts from a fresh process. The child writes the asset, its warnings (PATH.warnings, one a line)
 // and any error (PATH.error), and leaves with _exit. Call before this process starts TBB threads.
 BakeOutcome bake_in_child(const BakedCase& c, const std::string& scratch, int timeout_seconds) {
   BakeOutcome out;

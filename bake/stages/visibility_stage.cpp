@@ -39,6 +39,8 @@ void run_visibility(pipeline::StageContext& ctx) {
       {"texels_above_warning", asgs.texels_above_warning},
       {"rays", samples.rays},
       {"segments", samples.segments},
+      {"unresolved_rays", samples.unresolved_rays},
+      {"max_sideways_tiles", samples.max_sideways_tiles},
       {"rings", samples.rings},
   };
   ctx.output("visibility/asg_params", decoded_lobes(asgs));

@@ -3,6 +3,8 @@
 // force; rays that cross many tiles (segments) for several neighbourhood sizes.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <random>
 
 #include "common/error.hpp"
@@ -173,4 +175,56 @@ TEST(HeightFieldScene, RejectsNonFiniteHeightsNamingTheTexel) {
     EXPECT_EQ(e.code(), ExitCode::Input);
     EXPECT_NE(std::string(e.what()).find("texel (3, 2)"), std::string::npos) << e.what();
   }
+}
+
+// The sideways budget: a ray whose first hit lies beyond the budget answers "no hit" and counts
+// as unresolved; one whose hit lies within is unchanged. Rays run along the ridges of a tall
+// 1-D sine relief, drifting slowly across them, so that they meet a flank only after 32 to 223
+// tiles sideways; budgets around each hit's own sideways distance are tried.
+TEST(HeightFieldScene, TheSidewaysBudgetCutsExactlyTheRaysThatGoFurther) {
+  const int n = 16;
+  std::vector<float> h(std::size_t(n) * n);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x)
+      h[std::size_t(y) * n + x] = float(std::sin(2 * M_PI * (x + 0.5) / n));
+  const PeriodicHeightField unlimited(h, n, 1, 1e9);
+  EXPECT_EQ(PeriodicHeightField(h, n, 1).max_sideways_tiles(), kMaxSidewaysTiles);
+  int checked = 0;
+  for (double drift : {0.004, 0.01, 0.03}) {
+    // From just above the valley floor (x = 0.75), rising 1/1000 per tile along y.
+    const Vec3d origin{0.75, 0.3, -1.0 + 0.01};
+    const Vec3d d = model::normalize(Vec3d{drift, 1.0, 0.001});
+    const double t_max = 1e4;
+    const SurfaceHit hit = unlimited.first_hit(origin, d, t_max);
+    ASSERT_TRUE(hit.hit) << drift;
+    const double sideways = hit.t * std::hypot(d.x, d.y);
+    ASSERT_GT(sideways, 10.0) << "the ray should travel many tiles before the flank";
+    for (double budget : {0.5 * sideways, 0.99 * sideways, 1.01 * sideways, 2 * sideways}) {
+      const PeriodicHeightField field(h, n, 1, budget);
+      const SurfaceHit one = field.first_hit(origin, d, t_max);
+      RayPacket packet;
+      packet.count = 1;
+      packet.ox[0] = origin.x, packet.oy[0] = origin.y, packet.oz[0] = origin.z;
+      packet.dx[0] = d.x, packet.dy[0] = d.y, packet.dz[0] = d.z;
+      packet.t_max[0] = t_max;
+      RayCounters first_counters, occlusion_counters;
+      std::array<double, RayPacket::kWidth> t_hit;
+      field.first_hits(packet, t_hit, &first_counters);
+      std::array<bool, RayPacket::kWidth> occluded;
+      field.occluded(packet, occluded, &occlusion_counters);
+      const bool within = budget > sideways;
+      EXPECT_EQ(one.hit, within) << drift << " " << budget;
+      EXPECT_EQ(one.budget_cut, !within);
+      EXPECT_EQ(t_hit[0] < 1e300, within);
+      EXPECT_EQ(occluded[0], within);
+      EXPECT_EQ(first_counters.unresolved.load(), within ? 0u : 1u);
+      EXPECT_EQ(occlusion_counters.unresolved.load(), within ? 0u : 1u);
+      if (within) {
+        EXPECT_NEAR(one.t, hit.t, 1e-9 * hit.t);
+      }
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 12);
+  EXPECT_THROW(PeriodicHeightField(h, n, 1, 0.0), Error);
 }

@@ -301,3 +301,34 @@ TEST(CgalCrossCheck, EmbreeAgreesOnRoughAndTallFields) {
                 r.rays, r.agreements, r.near_edge_disagreements, r.skipped, r.max_difference);
   }
 }
+
+// The sideways budget in the visibility stage: with a budget shorter than the relief needs, rays
+// that would be blocked beyond it count as visible, the count is reported and warned about, and
+// nothing else changes (every bit that differs from the unlimited samples is such a ray).
+TEST(Visibility, RaysCutByTheSidewaysBudgetCountAsVisibleAndAreReported) {
+  FabricMaps maps = rctest::plain_weave_maps(16, 4, 0.5, 0.2);  // a tall weave: long shadows
+  VisibilitySettings settings;
+  settings.dirs = 12;
+  take_warnings();
+  const VisibilitySamples full = sample_visibility(maps, settings);
+  EXPECT_EQ(full.unresolved_rays, 0u);
+  EXPECT_EQ(full.max_sideways_tiles, kMaxSidewaysTiles);
+  EXPECT_TRUE(take_warnings().empty());
+  settings.max_sideways_tiles = 0.05;
+  const VisibilitySamples cut = sample_visibility(maps, settings);
+  const auto warnings = take_warnings();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find(std::to_string(cut.unresolved_rays) + " of "), std::string::npos)
+      << warnings[0];
+  EXPECT_GT(cut.unresolved_rays, 0u);
+  uint64_t gained = 0;
+  for (std::size_t t = 0; t < maps.texel_count(); ++t)
+    for (int dir = 0; dir < 144; ++dir) {
+      EXPECT_TRUE(cut.visible(t, dir) || !full.visible(t, dir)) << "lost a visible ray";
+      gained += cut.visible(t, dir) && !full.visible(t, dir);
+    }
+  EXPECT_GT(gained, 0u);
+  EXPECT_LE(gained, cut.unresolved_rays);
+  settings.max_sideways_tiles = 0;
+  EXPECT_THROW(sample_visibility(maps, settings), Error);
+}

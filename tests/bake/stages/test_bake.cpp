@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/stages.hpp"
+#include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -172,3 +175,41 @@ TEST_F(Bake, BadOutputFailsBeforeAnyWork) {
 }
 
 }  // namespace
+
+namespace {
+
+// A 16^2 test fabric whose relief is amplitude * sin(2 pi u) (tile units), with small direction
+// grids, as `report stability` bakes its relief cases.
+Fabric sine_relief_fabric(double amplitude) {
+  Fabric f = test_support::make_test_fabric(16, "sine-relief");
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x)
+      f.maps.height[f.maps.index(x, y)] = float(amplitude * std::sin(2 * M_PI * (x + 0.5) / 16));
+  f.bake.parallax_dirs = f.bake.visibility_dirs = f.bake.radiance_dirs = 8;
+  f.bake.clusters = 2;
+  return f;
+}
+
+// The child of the test below: two whole bakes in one process, a flat fabric then a tall one.
+[[noreturn]] void bake_flat_then_tall(const std::string& dir) {
+  ::alarm(60);
+  set_quiet(true);
+  for (double amplitude : {0.0, 1.0}) {
+    pipeline::BakeRequest request;
+    request.fabric = sine_relief_fabric(amplitude);
+    request.output_path = dir + "/relief-" + std::to_string(amplitude) + ".cbk";
+    pipeline::bake(request, stages::bake_stages());
+  }
+  std::exit(0);
+}
+
+}  // namespace
+
+// Several bakes in one process (`report stability`, scenes that bake fabrics on the fly, tests):
+// after a fabric whose height field needs no neighbour tiles, the visibility stage of a tall one
+// never returned on AVX-512 machines, inside Embree's coherent packet kernel (docs/hardening.md,
+// "The Embree hang"). In a fresh child process under a 60 s alarm, so that a hang fails the test.
+TEST_F(Bake, AFlatThenATallFabricInOneProcessBothFinish) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(bake_flat_then_tall(dir_.string()), ::testing::ExitedWithCode(0), "");
+}
