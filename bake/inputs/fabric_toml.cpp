@@ -74,30 +74,75 @@ bool ascii_blank(char c) {
   return c == ' ' || c == '\t' || c == '\n' || c == '\r';
 }
 
+// toml++ never sees a character outside ASCII (docs/hardening.md, "Fuzzing"): every code point
+// U+0080-U+FFFF of the text is replaced by its placeholder U+100000 + (c - 0x80) in Supplementary
+// Private Use Area-B, beyond U+FEFF, where toml++'s Unicode tests answer at their first comparison.
+// Line and column numbers stay those of the file (one code point for one). Parsed keys, string
+// values and error messages get the original characters back. A file holding a placeholder code
+// point itself is refused (the mapping would not be one to one).
+constexpr char32_t kPlaceholderBase = 0x100000;
+constexpr char32_t kFirstMapped = 0x80, kLastMapped = 0xFFFF;
+
+void append_utf8(std::string& out, char32_t c) {
+  if (c < 0x80) {
+    out += char(c);
+  } else if (c < 0x800) {
+    out += char(0xC0 | (c >> 6));
+    out += char(0x80 | (c & 0x3F));
+  } else if (c < 0x10000) {
+    out += char(0xE0 | (c >> 12));
+    out += char(0x80 | ((c >> 6) & 0x3F));
+    out += char(0x80 | (c & 0x3F));
+  } else {
+    out += char(0xF0 | (c >> 18));
+    out += char(0x80 | ((c >> 12) & 0x3F));
+    out += char(0x80 | ((c >> 6) & 0x3F));
+    out += char(0x80 | (c & 0x3F));
+  }
+}
+
+// The well-formed UTF-8 sequence at text[i] (shortest form, no surrogate, at most U+10FFFF): its
+// code point and length; length 0 when it is not one.
+std::pair<char32_t, std::size_t> decode_utf8_strict(std::string_view text, std::size_t i) {
+  const auto [c, length] = decode_utf8(text, i);
+  const unsigned lead = static_cast<unsigned char>(text[i]);
+  if (lead < 0x80) return {char32_t(lead), 1};
+  const std::size_t shortest = c < 0x80 ? 1 : c < 0x800 ? 2 : c < 0x10000 ? 3 : 4;
+  const bool ok = length > 1 && lead < 0xF8 && length == shortest &&
+                  !(c >= 0xD800 && c <= 0xDFFF) && c <= 0x10FFFF;
+  return {c, ok ? length : 0};
+}
+
+// FILE:LINE:COLUMN of byte offset `at` (columns count characters, as toml++'s do).
+std::string text_location(std::string_view text, std::size_t at, const std::string& file) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t k = 0; k < at; ++k) {
+    if (text[k] == '\n')
+      line += 1, column = 1;
+    else if ((static_cast<unsigned char>(text[k]) & 0xC0) != 0x80)
+      ++column;
+  }
+  return fmt::format("{}:{}:{}", file, line, column);
+}
+
+constexpr bool is_placeholder(char32_t c) {
+  return c >= kPlaceholderBase && c <= kPlaceholderBase + (kLastMapped - kFirstMapped);
+}
+
 }  // namespace
 
 void check_toml_characters(std::string_view text, const std::string& file) {
-  // toml++ 3.3's whitespace test (is_non_ascii_horizontal_whitespace) reaches
-  // __builtin_unreachable for every code point in U+00A1-U+0499, U+2C5E-U+3057 (but
-  // U+3000) and U+FB26-U+FEFE (docs/hardening.md, "Fuzzing"). It asks that question of every
-  // character outside strings and comments, and inside a multi-line basic string of the characters
-  // after a line-ending backslash. TOML 1.0 allows non-ASCII text only inside strings and comments,
-  // so refusing it everywhere else first costs valid files nothing.
+  // TOML 1.0 allows characters outside ASCII only inside strings and comments; refusing them
+  // elsewhere here gives the message a person can act on (toml++ itself would only ever see their
+  // placeholders, see parse_toml_text).
   enum class In { Code, Comment, Basic, MultiBasic, Literal, MultiLiteral };
   In in = In::Code;
   const auto refuse = [&](std::size_t at, const char* where) {
-    std::size_t line = 1, column = 1;  // columns count characters, as toml++'s do
-    for (std::size_t k = 0; k < at; ++k) {
-      if (text[k] == '\n')
-        line += 1, column = 1;
-      else if ((static_cast<unsigned char>(text[k]) & 0xC0) != 0x80)
-        ++column;
-    }
     const char32_t c = decode_utf8(text, at).first;
     throw Error(ExitCode::Input,
-                fmt::format("{}:{}:{}: character U+{:04X} {}: TOML allows characters outside "
-                            "ASCII only inside strings and comments",
-                            file, line, column, static_cast<std::uint32_t>(c), where));
+                fmt::format("{}: character U+{:04X} {}: TOML allows characters outside ASCII only "
+                            "inside strings and comments",
+                            text_location(text, at, file), static_cast<std::uint32_t>(c), where));
   };
   const auto starts = [&](std::size_t i, std::string_view s) {
     return text.substr(i, s.size()) == s;
@@ -164,13 +209,99 @@ void check_toml_characters(std::string_view text, const std::string& file) {
   }
 }
 
+namespace {
+
+// The text toml++ is given: every code point U+0080-U+FFFF replaced by its placeholder. Refuses
+// (Error(Input), naming FILE:LINE:COLUMN) bytes that are not well-formed UTF-8 (TOML files must
+// be) and placeholder code points in the file itself.
+std::string placeholders_for(std::string_view text, const std::string& file) {
+  std::string out;
+  out.reserve(text.size() + text.size() / 4);
+  for (std::size_t i = 0; i < text.size();) {
+    const auto [c, length] = decode_utf8_strict(text, i);
+    if (length == 0)
+      throw Error(ExitCode::Input,
+                  fmt::format("{}: byte 0x{:02X} is not well-formed UTF-8 (TOML "
+                              "files are UTF-8)",
+                              text_location(text, i, file), static_cast<unsigned char>(text[i])));
+    if (is_placeholder(c))
+      throw Error(ExitCode::Input,
+                  fmt::format("{}: character U+{:04X} is not accepted (clothbake's TOML reader "
+                              "uses U+100000-U+10FF7F internally)",
+                              text_location(text, i, file), static_cast<std::uint32_t>(c)));
+    if (c >= kFirstMapped && c <= kLastMapped)
+      append_utf8(out, kPlaceholderBase + (c - kFirstMapped));
+    else
+      out.append(text.substr(i, length));
+    i += length;
+  }
+  return out;
+}
+
+// The inverse of placeholders_for on text that toml++ produced (keys, strings, messages).
+std::string original_characters(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size();) {
+    const auto [c, length] = decode_utf8_strict(text, i);
+    if (length > 0 && is_placeholder(c)) {
+      append_utf8(out, kFirstMapped + (c - kPlaceholderBase));
+      i += length;
+    } else {
+      const std::size_t n = length > 0 ? length : 1;
+      out.append(text.substr(i, n));
+      i += n;
+    }
+  }
+  return out;
+}
+
+bool has_placeholder(std::string_view s) {
+  // Every placeholder's UTF-8 form starts with the byte 0xF4 (U+100000-U+10FFFF).
+  return s.find('\xF4') != std::string_view::npos;
+}
+
+void restore_characters(toml::node& node);
+
+void restore_characters(toml::table& table) {
+  std::vector<std::string> renamed;
+  for (auto&& [key, value] : table) {
+    restore_characters(value);
+    if (has_placeholder(key.str())) renamed.emplace_back(key.str());
+  }
+  for (const std::string& old_name : renamed) {
+    const auto it = table.find(old_name);
+    toml::key restored(original_characters(old_name), it->first.source());
+    toml::node& value = it->second;
+    table.insert_or_assign(std::move(restored), std::move(value));
+    table.erase(old_name);
+  }
+}
+
+void restore_characters(toml::node& node) {
+  if (toml::table* t = node.as_table()) {
+    restore_characters(*t);
+  } else if (toml::array* a = node.as_array()) {
+    for (toml::node& element : *a)
+      restore_characters(element);
+  } else if (toml::value<std::string>* s = node.as_string()) {
+    if (has_placeholder(s->get())) s->get() = original_characters(s->get());
+  }
+}
+
+}  // namespace
+
 toml::table parse_toml_text(std::string_view text, const std::string& file) {
   check_toml_characters(text, file);
+  const std::string mapped = placeholders_for(text, file);
   try {
-    return toml::parse(text, file);
+    toml::table table = toml::parse(mapped, file);
+    restore_characters(table);
+    return table;
   } catch (const toml::parse_error& e) {
-    throw Error(ExitCode::Input, fmt::format("{}: TOML syntax error: {}",
-                                             toml_location(file, e.source()), e.description()));
+    throw Error(ExitCode::Input,
+                fmt::format("{}: TOML syntax error: {}", toml_location(file, e.source()),
+                            original_characters(e.description())));
   }
 }
 
