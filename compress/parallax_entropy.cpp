@@ -21,8 +21,14 @@ using reader::kRansLow;
 using reader::kRansScale;
 using reader::kRansScaleBits;
 
-// Counts scaled to sum to 4096, every present symbol at least 1 (deterministic).
-void normalise(const uint64_t* counts, uint16_t* freq) {
+void put16(std::vector<uint8_t>& out, uint32_t v) {
+  out.push_back(uint8_t(v));
+  out.push_back(uint8_t(v >> 8));
+}
+
+}  // namespace
+
+void normalise_frequencies(const uint64_t* counts, uint16_t* freq) {
   uint64_t total = 0;
   for (int s = 0; s < 256; ++s)
     total += counts[s];
@@ -50,12 +56,42 @@ void normalise(const uint64_t* counts, uint16_t* freq) {
   }
 }
 
-void put16(std::vector<uint8_t>& out, uint32_t v) {
-  out.push_back(uint8_t(v));
-  out.push_back(uint8_t(v >> 8));
+void rans_encode_block(uint32_t sx, uint32_t sy, uint32_t group, const uint8_t* ctx,
+                       const uint8_t* sym, std::size_t count, const uint16_t* freq,
+                       std::vector<uint8_t>& out) {
+  const int contexts = 1 + *std::max_element(ctx, ctx + std::max<std::size_t>(count, 1));
+  std::vector<uint16_t> start(std::size_t(std::max(contexts, 1)) * 256);
+  for (int c = 0; c < contexts; ++c) {
+    uint32_t total = 0;
+    for (int s = 0; s < 256; ++s) {
+      start[std::size_t(c) * 256 + s] = uint16_t(total);
+      total += freq[c * 256 + s];
+    }
+  }
+  out.reserve(out.size() + 12 + count / 4);
+  put16(out, sx);
+  put16(out, sy);
+  put16(out, group);
+  put16(out, 0);  // flags
+  // rANS, symbols in reverse; the decoder reads the final state, then the bytes backwards.
+  std::vector<uint8_t> emitted;
+  emitted.reserve(count / 4);
+  uint32_t x = kRansLow;
+  for (std::size_t i = count; i-- > 0;) {
+    const std::size_t k = std::size_t(ctx[i]) * 256 + sym[i];
+    const uint32_t f = freq[k], st = start[k];
+    if (f == 0) throw_internal_error("rans_encode_block: a symbol without a frequency");
+    const uint32_t x_max = ((kRansLow >> kRansScaleBits) << 8) * f;
+    while (x >= x_max) {
+      emitted.push_back(uint8_t(x));
+      x >>= 8;
+    }
+    x = ((x / f) << kRansScaleBits) + (x % f) + st;
+  }
+  for (int k = 0; k < 4; ++k)
+    out.push_back(uint8_t(x >> (8 * k)));
+  out.insert(out.end(), emitted.rbegin(), emitted.rend());
 }
-
-}  // namespace
 
 std::vector<uint64_t> parallax_residual_counts(const uint8_t* plane, uint32_t n, uint32_t sx,
                                                uint32_t sy) {
@@ -71,7 +107,7 @@ std::vector<uint64_t> parallax_residual_counts(const uint8_t* plane, uint32_t n,
 std::vector<uint16_t> parallax_frequencies(const std::vector<uint64_t>& counts) {
   std::vector<uint16_t> freq(std::size_t(kEntropyContexts) * 256, 0);
   for (int c = 0; c < kEntropyContexts; ++c)
-    normalise(counts.data() + std::size_t(c) * 256, freq.data() + std::size_t(c) * 256);
+    normalise_frequencies(counts.data() + std::size_t(c) * 256, freq.data() + std::size_t(c) * 256);
   return freq;
 }
 
@@ -86,37 +122,8 @@ std::vector<uint8_t> encode_parallax_block(const uint8_t* plane, uint32_t n, uin
       ctx[i] = uint8_t(p.context);
       sym[i] = uint8_t(plane[i] - p.value);
     }
-  uint16_t start[kEntropyContexts][256];
-  for (int c = 0; c < kEntropyContexts; ++c) {
-    uint32_t total = 0;
-    for (int s = 0; s < 256; ++s) {
-      start[c][s] = uint16_t(total);
-      total += freq[c * 256 + s];
-    }
-  }
   std::vector<uint8_t> out;
-  out.reserve(64 + count / 4);
-  put16(out, sx);
-  put16(out, sy);
-  put16(out, group);
-  put16(out, 0);  // flags
-  // rANS, symbols in reverse; the decoder reads the final state, then the bytes backwards.
-  std::vector<uint8_t> emitted;
-  emitted.reserve(count / 4);
-  uint32_t x = kRansLow;
-  for (uint64_t i = count; i-- > 0;) {
-    const uint32_t f = freq[ctx[i] * 256 + sym[i]], st = start[ctx[i]][sym[i]];
-    if (f == 0) throw_internal_error("encode_parallax_block: a residual without a frequency");
-    const uint32_t x_max = ((kRansLow >> kRansScaleBits) << 8) * f;
-    while (x >= x_max) {
-      emitted.push_back(uint8_t(x));
-      x >>= 8;
-    }
-    x = ((x / f) << kRansScaleBits) + (x % f) + st;
-  }
-  for (int k = 0; k < 4; ++k)
-    out.push_back(uint8_t(x >> (8 * k)));
-  out.insert(out.end(), emitted.rbegin(), emitted.rend());
+  rans_encode_block(sx, sy, group, ctx.data(), sym.data(), count, freq, out);
   return out;
 }
 
@@ -255,7 +262,7 @@ std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax&
 
 double residual_entropy_bits(const std::vector<uint64_t>& counts) {
   double bits = 0.0;
-  for (int c = 0; c < kEntropyContexts; ++c) {
+  for (std::size_t c = 0; c < counts.size() / 256; ++c) {
     uint64_t total = 0;
     for (int s = 0; s < 256; ++s)
       total += counts[std::size_t(c) * 256 + s];

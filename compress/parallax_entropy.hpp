@@ -15,6 +15,7 @@
 // and the candidate list, which is computed serially. C++20.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -33,6 +34,16 @@ struct EntropyParallax {
   double seconds = 0.0;
 };
 
+// Counts of 256 symbols scaled to frequencies summing to 4096 (reader::kRansScale), every present
+// symbol at least 1 (all 0 when no symbol is present). Deterministic.
+void normalise_frequencies(const uint64_t* counts, uint16_t* freq);
+// Appends one block in the format of reader::decode_parallax_block and its hierarchical sibling:
+// the 8-byte header (sx, sy, group, flags 0), then the rANS coding of the `count` symbols sym[i]
+// in contexts ctx[i] with the frequency tables `freq` (256 per context; every coded symbol must
+// have a non-zero frequency, else Error(Internal)).
+void rans_encode_block(uint32_t sx, uint32_t sy, uint32_t group, const uint8_t* ctx,
+                       const uint8_t* sym, std::size_t count, const uint16_t* freq,
+                       std::vector<uint8_t>& out);
 // Residual counts of a plane with shift (sx, sy): 5 x 256 values.
 std::vector<uint64_t> parallax_residual_counts(const uint8_t* plane, uint32_t n, uint32_t sx,
                                                uint32_t sy);
@@ -60,7 +71,7 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
 std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& packed,
                                                         const EntropyParallax& coded);
 
-// Shannon estimate, in bits, of coding residuals with these counts (kEntropyContexts rows of 256,
+// Shannon estimate, in bits, of coding residuals with these counts (rows of 256, one per context,
 // as parallax_residual_counts returns): the sum over contexts of −k log2(k / row total).
 double residual_entropy_bits(const std::vector<uint64_t>& counts);
 

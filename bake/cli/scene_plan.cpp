@@ -11,6 +11,7 @@
 #include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "compress/compress_settings.hpp"
+#include "formats/reader/parallax_hierarchy.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tables/half_vector_bins.hpp"
@@ -69,6 +70,11 @@ PlanEstimate estimate_bake(const Fabric& fabric, double view_dirs, double bins, 
 FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, double max_error) {
   FabricPlan p;
   p.usage = u;
+  // The stored parallax directions: those the views touch and the directions they are predicted
+  // from in the hierarchical form (formats/reader/parallax_hierarchy.hpp); rays are cast for all.
+  if (!p.usage.view_bins.empty())
+    reader::close_under_parallax_references(p.usage.view_bins.data(),
+                                            uint32_t(fabric.bake.parallax_dirs));
   p.resolution = fabric.maps.resolution;
   p.radiance_dirs = fabric.bake.radiance_dirs;
   p.half_vector_bins_total = p.radiance_dirs * p.radiance_dirs;
@@ -112,12 +118,14 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
              double(u.lit_opposite_side), double(u.lit_opposite_side + u.lit_same_side))});
   // Parallax view directions: those whose bilinear support some pixel's view touches.
   p.parallax_dirs = fabric.bake.parallax_dirs;
-  const double views = double(u.view_bins_used()), view_total = double(u.view_bins.size());
-  if (!u.view_bins.empty() && views < view_total)
+  const double views = double(p.usage.view_bins_used()),
+               view_total = double(p.usage.view_bins.size());
+  if (!p.usage.view_bins.empty() && views < view_total)
     p.decisions.push_back({"parallax view directions", "reduced",
-                           fmt("views from cos %.3g up: %.0f of %.0f parallax directions kept "
-                               "(rays cast for those only)",
-                               u.min_view_cos, views, view_total)});
+                           fmt("views from cos %.3g up: %.0f of %.0f parallax directions kept, "
+                               "%.0f of them for the views and the rest for predicting them (rays "
+                               "cast for those only)",
+                               u.min_view_cos, views, view_total, double(u.view_bins_used()))});
   else
     p.decisions.push_back({"parallax view directions", "kept",
                            fmt("the views reach all %.0f parallax directions", view_total)});
@@ -177,7 +185,8 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
     const double bins = double(p.half_vector_bins_total);
     const PlanEstimate full = estimate_bake(fabric, dirs, bins, gaps);
     const PlanEstimate planned = estimate_bake(
-        fabric, u.view_bins.empty() ? dirs : double(std::max<uint64_t>(u.view_bins_used(), 1)),
+        fabric,
+        p.usage.view_bins.empty() ? dirs : double(std::max<uint64_t>(p.usage.view_bins_used(), 1)),
         double(std::max<uint64_t>(u.half_vector_bins_used(), 1)), gaps && u.back_lit());
     p.estimate = {full.planned_bytes, planned.planned_bytes, full.planned_seconds,
                   planned.planned_seconds};

@@ -25,6 +25,7 @@
 #include "compress/compress_settings.hpp"
 #include "compress/parallax_codes.hpp"
 #include "compress/parallax_entropy.hpp"
+#include "compress/parallax_hierarchy.hpp"
 #include "fabric/fabric.hpp"
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
@@ -35,37 +36,6 @@ namespace clothbake::stages {
 namespace {
 
 using namespace raycast;  // the algorithm library this stage drives
-
-// The planned form (format 1.2): the compressed sections restricted to the kept directions, as
-// ParallaxPlanned. The steps (instance 1) and codes (instance 2) keep the slices of the kept bins
-// in bin order; the info record's RMS offset error, measured over every bin, is rescaled to the
-// kept ones (the left-out bins cast no rays: code 0, error exactly 0).
-std::vector<formats::Section> planned_parallax_sections(std::vector<formats::Section> packed,
-                                                        const std::vector<uint8_t>& keep) {
-  const std::size_t kept = compress::kept_direction_count(keep);
-  for (formats::Section& s : packed) {
-    s.type = reader::SectionType::ParallaxPlanned;
-    if (s.instance == reader::kCompressedParallaxInfoInstance) {
-      reader::CompressedParallaxInfoRecord info;
-      std::memcpy(&info, s.payload.data(), sizeof info);
-      info.rms_offset_error *= std::sqrt(double(keep.size()) / double(kept));
-      std::memcpy(s.payload.data(), &info, sizeof info);
-      continue;
-    }
-    if (s.dims.empty() || s.dims[0] != keep.size())
-      throw_internal_error("planned parallax: a section without one slice per direction");
-    const std::size_t slice = s.payload.size() / keep.size();
-    std::vector<std::byte> out;
-    out.reserve(slice * kept);
-    for (std::size_t d = 0; d < keep.size(); ++d)
-      if (keep[d])
-        out.insert(out.end(), s.payload.begin() + std::ptrdiff_t(d * slice),
-                   s.payload.begin() + std::ptrdiff_t((d + 1) * slice));
-    s.payload = std::move(out);
-    s.dims[0] = uint32_t(kept);
-  }
-  return packed;
-}
 
 void run_parallax(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
@@ -105,59 +75,45 @@ void run_parallax(pipeline::StageContext& ctx) {
                                       table.min_cos,      table.depth_scale, table.reference_height,
                                       stats.max_sideways};
     const double max_error = fabric.bake.parallax_max_error;
-    compress::QuantisedParallax packed = compress::quantise_parallax(raw, max_error);
-    ctx.progress(0.99);
     compressed = true;
-    if (packed.bits == 16)
-      warn("parallax: 8-bit codes would reach an RMS offset error of " +
-           std::to_string(packed.rms_offset_error_8bit) + " texels, above parallax_max_error " +
-           std::to_string(max_error) +
-           ": the compressed table keeps 16-bit codes (2 bytes per "
-           "texel and direction)");
+    // Format 1.5: 16-bit codes with steps from the error target, each direction predicted from up
+    // to four others and entropy-coded (compress/parallax_hierarchy.hpp). A scene-planned bake
+    // stores the plan's view directions (closed under the references by the plan) with the same
+    // codes as the full bake, the others as empty blocks.
+    const compress::HierarchicalParallax coded =
+        compress::hierarchical_parallax(raw, max_error, settings.keep);
+    ctx.progress(0.99);
+    if (coded.rms_offset_error > max_error)
+      warn("parallax: the finest 16-bit codes reach an RMS offset error of " +
+           std::to_string(coded.rms_offset_error) + " texels, above parallax_max_error " +
+           std::to_string(max_error));
+    sections = compress::hierarchical_parallax_sections(coded);
+    nlohmann::json shifts = nlohmann::json::array();
+    for (const auto& [sx, sy] : coded.candidates)
+      shifts.push_back({sx, sy});
+    const bool timings = ctx.options().record_timings;
     meta["compressed"] = {{"max_error", max_error},
-                          {"bits", packed.bits},
-                          {"rms_offset_error_8bit_texels", packed.rms_offset_error_8bit},
-                          {"rms_offset_error_texels", packed.rms_offset_error},
-                          {"max_offset_error_texels", packed.max_offset_error},
-                          {"share_above_quarter_texel", packed.share_above_quarter},
-                          {"max_depth_error", packed.max_depth_error},
-                          {"compressed_bytes", packed.payload_bytes()},
+                          {"section", "parallax_entropy"},
+                          {"form", "hierarchical"},
+                          {"bits", 16},
+                          {"max_code", coded.max_code},
+                          {"quantisation_rounds", coded.quantisation_rounds},
+                          {"rms_offset_error_texels", coded.rms_offset_error},
+                          {"max_offset_error_texels", coded.max_offset_error},
+                          {"share_above_quarter_texel", coded.share_above_quarter},
+                          {"max_depth_error", coded.max_depth_error},
+                          {"compressed_bytes", coded.payload_bytes()},
+                          {"entropy_coded_bytes", coded.stream.size()},
                           {"raw_bytes", uint64_t(table.depth.size()) * 6},
-                          {"seconds", ctx.options().record_timings ? packed.seconds : 0.0}};
+                          {"shift_candidates", shifts},
+                          {"shifted_blocks", coded.shifted_blocks},
+                          {"groups", coded.groups},
+                          {"seconds", timings ? coded.seconds_quantise : 0.0},
+                          {"entropy_seconds", timings ? coded.seconds_code : 0.0}};
     meta["keep_raw"] = form.keep_raw;
-    if (!settings.keep.empty() && packed.bits == 8) {
-      // Scene-planned, 8-bit (format 1.3): entropy-coded like the full asset, the left-out
-      // directions as empty blocks, flagged planned (coverage: bin_map instance 1).
-      const compress::EntropyParallax coded =
-          compress::entropy_code_parallax(packed, settings.keep);
-      sections = compress::planned_entropy_parallax_sections(packed, coded, settings.keep);
-      const std::size_t kept = compress::kept_direction_count(settings.keep);
-      meta["compressed"]["section"] = "parallax_entropy";
-      meta["compressed"]["entropy_coded_bytes"] = coded.stream.size();
-      meta["compressed"]["shifted_blocks"] = coded.shifted_blocks;
-      meta["compressed"]["entropy_seconds"] = ctx.options().record_timings ? coded.seconds : 0.0;
-      meta["planned"] = {{"view_bins_kept", kept}, {"view_bins_total", settings.keep.size()}};
-    } else if (!settings.keep.empty()) {  // scene-planned, 16-bit: the kept directions' codes
-      sections =
-          planned_parallax_sections(compress::compressed_parallax_sections(packed), settings.keep);
-      meta["compressed"]["section"] = "parallax_planned";
-      meta["planned"] = {{"view_bins_kept", sections.back().dims[0]},
+    if (!settings.keep.empty())
+      meta["planned"] = {{"view_bins_kept", compress::kept_direction_count(settings.keep)},
                          {"view_bins_total", settings.keep.size()}};
-    } else if (packed.bits == 8) {  // format 1.2: the 8-bit codes entropy-coded per direction
-      const compress::EntropyParallax coded = compress::entropy_code_parallax(packed);
-      sections = compress::entropy_parallax_sections(packed, coded);
-      nlohmann::json shifts = nlohmann::json::array();
-      for (const auto& [sx, sy] : coded.candidates)
-        shifts.push_back({sx, sy});
-      meta["compressed"]["section"] = "parallax_entropy";
-      meta["compressed"]["entropy_coded_bytes"] = coded.stream.size();
-      meta["compressed"]["shift_candidates"] = shifts;
-      meta["compressed"]["shifted_blocks"] = coded.shifted_blocks;
-      meta["compressed"]["entropy_seconds"] = ctx.options().record_timings ? coded.seconds : 0.0;
-    } else {
-      meta["compressed"]["section"] = "parallax_compressed";
-      sections = compress::compressed_parallax_sections(packed);
-    }
   }
   if (!settings.keep.empty() && (!compressed || form.keep_raw))
     throw_internal_error("parallax: a scene-planned bake writes the compressed form only");

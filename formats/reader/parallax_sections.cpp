@@ -6,6 +6,7 @@
 
 #include "formats/reader/detail/open_sections.hpp"
 #include "formats/reader/parallax_entropy.hpp"
+#include "formats/reader/parallax_hierarchy.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "model/directions.hpp"
 
@@ -30,11 +31,13 @@ struct ParallaxView::Packed {
         sats(new (std::nothrow) std::atomic<uint32_t*>[dirs]),
         plane_flags(new (std::nothrow) std::once_flag[dirs]),
         planes(new (std::nothrow) std::atomic<uint8_t*>[dirs]),
+        planes16(new (std::nothrow) std::atomic<uint16_t*>[dirs]),
         plane(new (std::nothrow) int32_t[dirs]) {
-    if (!flags || !sats || !plane_flags || !planes || !plane) return;
+    if (!flags || !sats || !plane_flags || !planes || !planes16 || !plane) return;
     for (uint64_t d = 0; d < dirs; ++d) {
       sats[d].store(nullptr, std::memory_order_relaxed);
       planes[d].store(nullptr, std::memory_order_relaxed);
+      planes16[d].store(nullptr, std::memory_order_relaxed);
     }
     count = dirs;
   }
@@ -42,6 +45,7 @@ struct ParallaxView::Packed {
     for (uint64_t d = 0; d < count; ++d) {
       delete[] sats[d].load(std::memory_order_relaxed);
       delete[] planes[d].load(std::memory_order_relaxed);
+      delete[] planes16[d].load(std::memory_order_relaxed);
     }
   }
   Packed(const Packed&) = delete;
@@ -51,6 +55,7 @@ struct ParallaxView::Packed {
   std::unique_ptr<std::atomic<uint32_t*>[]> sats;
   std::unique_ptr<std::once_flag[]> plane_flags;
   std::unique_ptr<std::atomic<uint8_t*>[]> planes;
+  std::unique_ptr<std::atomic<uint16_t*>[]> planes16;  // hierarchical form
   std::unique_ptr<int32_t[]> plane;  // planned form: bin -> stored plane, -1 = left out
   std::atomic<uint64_t> bytes{0};
 };
@@ -154,14 +159,21 @@ constexpr uint64_t kMaxEntropyDecodedBytes = uint64_t(1) << 32;
 
 Status ParallaxView::open_entropy(const Asset& asset) noexcept {
   const char* name = "parallax_entropy";
+  {
+    SectionInfo first;
+    if (asset.find(SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance, &first).ok() &&
+        first.version == kHierParallaxVersion)
+      return open_hierarchical(asset);
+  }
   ArrayView<uint8_t> info_bytes;
   ArrayView<double> steps;
   Status s = detail::view_required_pair(
       asset, {SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance},
       {SectionType::ParallaxEntropy, kEntropyParallaxStepsInstance},
       "this asset has no entropy-coded parallax table (parallax_entropy instances 0 to 3)",
-      "parallax_entropy: payload version must be 1 (this reader knows version 1)", &info_bytes,
-      &steps);
+      "parallax_entropy: payload version must be 1 or 2 (this reader knows versions 1 and 2, "
+      "the same for every instance)",
+      &info_bytes, &steps);
   if (!s.ok()) return s;
   if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
       info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
@@ -277,7 +289,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
 bool ParallaxView::ensure_plane(uint32_t bin) const noexcept {
   if (stream_ == nullptr) return true;
   if (!covers(bin)) return false;  // planned: the direction was left out
-  return plane8(bin) != nullptr;
+  return weights_ ? plane16(bin) != nullptr : plane8(bin) != nullptr;
 }
 
 const uint8_t* ParallaxView::plane8(uint32_t bin) const noexcept {
@@ -302,8 +314,226 @@ const uint8_t* ParallaxView::plane8(uint32_t bin) const noexcept {
   return p.planes[bin].load(std::memory_order_acquire);
 }
 
+// Largest total of decoded hierarchical planes (D * N^2 u16): 4 GiB.
+constexpr uint64_t kMaxHierDecodedBytes = uint64_t(1) << 32;
+
+Status ParallaxView::open_hierarchical(const Asset& asset) noexcept {
+  const char* name = "parallax_entropy (hierarchical)";
+  const char* version_message =
+      "parallax_entropy: every instance must have payload version 2 in the hierarchical form";
+  const char* missing =
+      "this asset has no hierarchical parallax table (parallax_entropy instances 0 to 5)";
+  ArrayView<uint8_t> info_bytes;
+  ArrayView<double> steps;
+  Status s = detail::view_required_pair(
+      asset, {SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance},
+      {SectionType::ParallaxEntropy, kEntropyParallaxStepsInstance}, missing, version_message,
+      &info_bytes, &steps, kHierParallaxVersion);
+  if (!s.ok()) return s;
+  if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
+      info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_entropy instance 0 must be u8 {1, 64} (one "
+                         "CompressedParallaxInfoRecord)");
+  CompressedParallaxInfoRecord info;
+  std::memcpy(&info, info_bytes.data, sizeof info);
+  if ((info.flags & ~kEntropyPlannedFlag) != 0 || info.bits != 16)
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "parallax_entropy (hierarchical): bits %u / flags %u unknown to this "
+                         "reader (version 2 has 16 / 0 or 1)",
+                         unsigned(info.bits), unsigned(info.flags));
+  const bool planned = (info.flags & kEntropyPlannedFlag) != 0;
+  s = check_compressed_record(info, name);
+  if (!s.ok()) return s;
+  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
+  s = check_steps(steps, d, name);
+  if (!s.ok()) return s;
+  ArrayView<uint64_t> offsets;
+  ArrayView<uint8_t> stream;
+  s = detail::view_required_pair(asset,
+                                 {SectionType::ParallaxEntropy, kEntropyParallaxOffsetsInstance},
+                                 {SectionType::ParallaxEntropy, kEntropyParallaxStreamInstance},
+                                 missing, version_message, &offsets, &stream, kHierParallaxVersion);
+  if (!s.ok()) return s;
+  if (offsets.rank != 1 || offsets.dims[0] != d + 1 || stream.rank != 1)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_entropy instance 2 must be u64 {%llu} (block offsets) and "
+                         "instance 3 u8 {bytes}",
+                         static_cast<unsigned long long>(d + 1));
+  if (offsets.data[0] != 0 || offsets.data[d] != stream.dims[0])
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "parallax_entropy: block offsets must run from 0 to the stream's size "
+                         "%llu",
+                         static_cast<unsigned long long>(stream.dims[0]));
+  for (uint64_t i = 0; i < d; ++i)
+    if (offsets.data[i + 1] < offsets.data[i])
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "parallax_entropy: block offsets decrease at direction %llu",
+                           static_cast<unsigned long long>(i));
+  // Which directions are stored: all, or (planned) those of bin map 1, which must include every
+  // direction a stored one references; a block is empty exactly when its direction is not stored.
+  BinMapView map;
+  if (planned) {
+    s = read_view_bin_map(asset, info.dirs, "parallax_entropy", &map);
+    if (!s.ok()) return s;
+  }
+  for (uint64_t i = 0; i < d; ++i) {
+    const bool stored = !planned || map.covers(uint32_t(i));
+    const bool empty = offsets.data[i + 1] == offsets.data[i];
+    if (empty == stored)
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "parallax_entropy: direction %llu is %s but its block is %s",
+                           static_cast<unsigned long long>(i),
+                           stored ? "stored" : "left out of bin_map instance 1",
+                           empty ? "empty" : "not empty");
+    if (!stored) continue;
+    const ParallaxReferences refs =
+        parallax_references(uint32_t(i % info.dirs), uint32_t(i / info.dirs), info.dirs);
+    for (int e = 0; e < refs.count; ++e)
+      if (planned && !map.covers(refs.bin[e]))
+        return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                             "parallax_entropy: direction %llu is stored but direction %u, which "
+                             "it is predicted from, is left out of bin_map instance 1",
+                             static_cast<unsigned long long>(i), unsigned(refs.bin[e]));
+  }
+  ArrayView<uint16_t> tables;
+  ArrayView<uint32_t> weights;
+  s = detail::view_required_pair(asset,
+                                 {SectionType::ParallaxEntropy, kEntropyParallaxTablesInstance},
+                                 {SectionType::ParallaxEntropy, kHierParallaxWeightsInstance},
+                                 missing, version_message, &tables, &weights, kHierParallaxVersion);
+  if (!s.ok()) return s;
+  if (tables.rank != 3 || tables.dims[0] < 1 || tables.dims[0] > kMaxEntropyGroups ||
+      tables.dims[1] != uint32_t(kHierContexts) || tables.dims[2] != 256)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_entropy instance 4 must be u16 {groups, 23, 256} with 1 to "
+                         "65536 groups in the hierarchical form");
+  if (weights.rank != 1 || weights.dims[0] != d)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "parallax_entropy instance 5 must be u32 {%llu} (one prediction weight "
+                         "per direction)",
+                         static_cast<unsigned long long>(d));
+  for (uint64_t i = 0; i < d; ++i)
+    if (weights.data[i] < 1 || weights.data[i] > kMaxHierWeight)
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "parallax_entropy: prediction weight of direction %llu is not in [1, "
+                           "2^24]",
+                           static_cast<unsigned long long>(i));
+  for (uint32_t g = 0; g < tables.dims[0]; ++g) {
+    const Status t = check_hierarchical_tables(tables.data + uint64_t(g) * kHierContexts * 256);
+    if (!t.ok())
+      return Status::error(ErrorCode::Malformed, Check::ValueRange, "group %u: %s", unsigned(g),
+                           t.message());
+  }
+  if (d * n * n * 2 > kMaxHierDecodedBytes)
+    return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
+                         "parallax_entropy: %llu directions of %llu^2 16-bit codes would decode "
+                         "to more than 4 GiB",
+                         static_cast<unsigned long long>(d), static_cast<unsigned long long>(n));
+  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
+  if (!packed || packed->count != d)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "parallax_entropy: cannot allocate the block directory");
+  if (planned) {  // bin b is block b; a left-out bin has no plane
+    for (uint64_t b = 0; b < d; ++b)
+      packed->plane[b] = map.covers(uint32_t(b)) ? int32_t(b) : -1;
+    plane_ = packed->plane.get();
+  }
+  info_ = ParallaxInfoRecord{};
+  info_.resolution = info.resolution;
+  info_.dirs = info.dirs;
+  info_.min_cos = info.min_cos;
+  info_.reference_height = info.reference_height;
+  info_.max_quantization_error = info.max_depth_error;
+  info_.max_offset = info.max_offset;
+  packed_info_ = info;
+  steps_ = steps.data;
+  offsets_ = offsets.data;
+  tables_ = tables.data;
+  groups_ = tables.dims[0];
+  weights_ = weights.data;
+  stream_ = stream.data;
+  packed_ = std::move(packed);
+  return {};
+}
+
+namespace {
+// Decodes the hierarchical block of `bin` into `plane` with its references' decoded planes (the
+// caller decoded them; a null one is read as zeros through `zeros`).
+Status decode_hierarchical_bin(const uint8_t* stream, const uint64_t* offsets,
+                               const uint16_t* tables, uint32_t groups, const uint32_t* weights,
+                               uint32_t dirs, uint32_t n, uint32_t bin,
+                               const uint16_t* const ref_planes[4], uint16_t* plane, int32_t* diff,
+                               ParallaxHierScratch* scratch) noexcept {
+  const ParallaxReferences refs = parallax_references(bin % dirs, bin / dirs, dirs);
+  uint32_t ref_m[4] = {1, 1, 1, 1};
+  for (int e = 0; e < refs.count; ++e)
+    ref_m[e] = weights[refs.bin[e]];
+  return decode_hierarchical_block(stream + offsets[bin], offsets[bin + 1] - offsets[bin], tables,
+                                   groups, n, weights[bin], ref_planes, ref_m, refs.count, plane,
+                                   diff, scratch);
+}
+}  // namespace
+
+const uint16_t* ParallaxView::plane16(uint32_t bin) const noexcept {
+  Packed& p = *packed_;
+  const uint16_t* ready = p.planes16[bin].load(std::memory_order_acquire);
+  if (ready) return ready;
+  std::call_once(p.plane_flags[bin], [&] {
+    const uint32_t dirs = info_.dirs;
+    const ParallaxReferences refs = parallax_references(bin % dirs, bin / dirs, dirs);
+    const uint16_t* ref_planes[4] = {nullptr, nullptr, nullptr, nullptr};
+    for (int e = 0; e < refs.count; ++e)  // lower levels first (at most two deep)
+      if ((ref_planes[e] = plane16(refs.bin[e])) == nullptr) return;
+    const uint64_t n = info_.resolution;
+    uint16_t* plane = new (std::nothrow) uint16_t[n * n];
+    std::unique_ptr<int32_t[]> diff(new (std::nothrow) int32_t[n * n]);
+    std::unique_ptr<ParallaxHierScratch> scratch(new (std::nothrow) ParallaxHierScratch);
+    if (!plane || !diff || !scratch) {
+      delete[] plane;
+      return;
+    }
+    // A block that does not decode exactly is zero-filled by the decoder (decode_all says so).
+    (void)decode_hierarchical_bin(stream_, offsets_, tables_, groups_, weights_, dirs, uint32_t(n),
+                                  bin, ref_planes, plane, diff.get(), scratch.get());
+    p.bytes.fetch_add(n * n * 2, std::memory_order_relaxed);
+    p.planes16[bin].store(plane, std::memory_order_release);
+  });
+  return p.planes16[bin].load(std::memory_order_acquire);
+}
+
+Status ParallaxView::decode_all_hierarchical() const noexcept {
+  const uint64_t n = info_.resolution, d = uint64_t(info_.dirs) * info_.dirs;
+  std::unique_ptr<uint16_t[]> plane(new (std::nothrow) uint16_t[n * n]);
+  std::unique_ptr<int32_t[]> diff(new (std::nothrow) int32_t[n * n]);
+  std::unique_ptr<ParallaxHierScratch> scratch(new (std::nothrow) ParallaxHierScratch);
+  if (!plane || !diff || !scratch)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "parallax_entropy: cannot allocate a plane to decode");
+  for (uint64_t i = 0; i < d; ++i) {
+    if (!covers(uint32_t(i))) continue;  // planned: an empty block (open checked it)
+    const ParallaxReferences refs =
+        parallax_references(uint32_t(i % info_.dirs), uint32_t(i / info_.dirs), info_.dirs);
+    const uint16_t* ref_planes[4] = {nullptr, nullptr, nullptr, nullptr};
+    for (int e = 0; e < refs.count; ++e)
+      if ((ref_planes[e] = plane16(refs.bin[e])) == nullptr)
+        return Status::error(ErrorCode::Unsupported, Check::None,
+                             "parallax_entropy: cannot allocate the planes direction %llu "
+                             "references",
+                             static_cast<unsigned long long>(i));
+    const Status s = decode_hierarchical_bin(stream_, offsets_, tables_, groups_, weights_,
+                                             info_.dirs, uint32_t(n), uint32_t(i), ref_planes,
+                                             plane.get(), diff.get(), scratch.get());
+    if (!s.ok())
+      return Status::error(ErrorCode::Malformed, Check::ValueRange, "direction %llu: %s",
+                           static_cast<unsigned long long>(i), s.message());
+  }
+  return {};
+}
+
 Status ParallaxView::decode_all() const noexcept {
   if (stream_ == nullptr) return {};
+  if (weights_) return decode_all_hierarchical();
   const uint64_t n = info_.resolution, d = uint64_t(info_.dirs) * info_.dirs;
   std::unique_ptr<uint8_t[]> plane(new (std::nothrow) uint8_t[n * n]);
   std::unique_ptr<ParallaxEntropyScratch> scratch(new (std::nothrow) ParallaxEntropyScratch);
@@ -441,7 +671,9 @@ bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
   if (!packed_) return true;
   if (!covers(bin)) return false;  // planned form: the direction was left out
   const uint8_t* decoded = nullptr;
-  if (stream_ && (decoded = plane8(bin)) == nullptr) return false;
+  const uint16_t* decoded16 = nullptr;
+  if (stream_ && weights_ && (decoded16 = plane16(bin)) == nullptr) return false;
+  if (stream_ && !weights_ && (decoded = plane8(bin)) == nullptr) return false;
   Packed& p = *packed_;
   std::call_once(p.flags[bin], [&] {
     const uint64_t n = info_.resolution;
@@ -450,7 +682,9 @@ bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
     for (uint64_t y = 0; y < n; ++y) {
       uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
       for (uint64_t x = 0; x < n; ++x) {
-        row += decoded ? uint32_t(decoded[y * n + x]) : code(bin, y * n + x);
+        row += decoded     ? uint32_t(decoded[y * n + x])
+               : decoded16 ? uint32_t(decoded16[y * n + x])
+                           : code(bin, y * n + x);
         sat[y * n + x] = row + (y > 0 ? sat[(y - 1) * n + x] : 0u);
       }
     }
@@ -564,6 +798,14 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
   const uint64_t n = info_.resolution;
   const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
   double r = 0.0;
+  if (weights_) {
+    for (int k = 0; k < 4; ++k)
+      if (weight[k] > 0.0 && covers(uint32_t(bin[k]))) {  // uncovered bins count 0
+        const uint16_t* p = plane16(uint32_t(bin[k]));
+        if (p) r += weight[k] * (-double(p[texel]) * steps_[bin[k]]);
+      }
+    return r;
+  }
   if (stream_) {
     for (int k = 0; k < 4; ++k)
       if (weight[k] > 0.0 && covers(uint32_t(bin[k]))) {  // uncovered bins count 0

@@ -39,6 +39,14 @@
 //   ParallaxEntropy instance 4: u16 {G, 5, 256} frequency tables of G block groups
 // The view decodes a direction's block the first time a query needs that direction (thread-safe,
 // once per direction, N^2 bytes owned), so that opening costs a check of the offsets only.
+// Hierarchical form (format 1.5: the same instances at payload version 2, plus instance 5;
+// parallax_hierarchy.hpp): 16-bit codes with per-direction steps from the bake's error target,
+// each block predicted from up to four other directions:
+//   ParallaxEntropy instances 0-3 as above (info bits = 16, flags = 0; steps f64 {D})
+//   ParallaxEntropy instance 4: u16 {G, 23, 256} frequency tables
+//   ParallaxEntropy instance 5: u32 {D}          prediction weights m[d] in [1, 2^24]
+// A direction's plane (N^2 u16 owned) is decoded after the planes it references (at most two
+// levels; those stay decoded too).
 // Planned form (format 1.2, scene_plan_sections.hpp): ParallaxPlanned, the compressed layout for
 // the K view directions that bin map 1 covers (steps f64 {K}, codes {K, N, N}, in bin order). A
 // query whose bilinear bins (weight > 0) include a direction that was left out answers OutOfPlan,
@@ -148,8 +156,10 @@ class ParallaxView {
   bool is_open() const noexcept { return codes_ != nullptr || packed_ != nullptr; }
   bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
   bool is_compressed() const noexcept { return packed_ != nullptr; }
-  // True for the entropy-coded form (format 1.2).
+  // True for the entropy-coded forms (format 1.2, and the hierarchical one of 1.5).
   bool is_entropy_coded() const noexcept { return stream_ != nullptr; }
+  // True for the hierarchical form (format 1.5).
+  bool is_hierarchical() const noexcept { return weights_ != nullptr; }
   // The planned form (ParallaxPlanned): only the directions of its bin map are stored.
   bool is_planned() const noexcept { return plane_ != nullptr; }
   // Whether direction bin `bin` (< dirs^2) is stored (always, except in the planned form).
@@ -224,15 +234,22 @@ class ParallaxView {
     const uint64_t plane_size = uint64_t(info_.resolution) * info_.resolution;
     if (codes_) return uint32_t(codes_[plane(bin) * plane_size + t]);
     if (codes8_) return uint32_t(codes8_[plane(bin) * plane_size + t]);
+    if (weights_) {
+      const uint16_t* p = plane16(bin);
+      return p ? uint32_t(p[t]) : 0u;
+    }
     const uint8_t* p = plane8(bin);
     return p ? uint32_t(p[t]) : 0u;
   }
-  const uint8_t* plane8(uint32_t bin) const noexcept;  // entropy form: the decoded plane
+  const uint8_t* plane8(uint32_t bin) const noexcept;    // entropy form: the decoded plane
+  const uint16_t* plane16(uint32_t bin) const noexcept;  // hierarchical form: the decoded plane
 
   struct Packed;  // the compressed form's steps and on-demand SATs
   Status open_raw(const Asset& asset) noexcept;
   Status open_compressed(const Asset& asset, SectionType type) noexcept;
   Status open_entropy(const Asset& asset) noexcept;
+  Status open_hierarchical(const Asset& asset) noexcept;
+  Status decode_all_hierarchical() const noexcept;
 
   ParallaxInfoRecord info_{};
   const uint16_t* codes_ = nullptr;
@@ -241,7 +258,8 @@ class ParallaxView {
   const double* steps_ = nullptr;    // compressed form, D values in the asset
   const uint8_t* stream_ = nullptr;  // entropy form: the blocks
   const uint64_t* offsets_ = nullptr;
-  const uint16_t* tables_ = nullptr;  // entropy form: groups_ x 5 x 256
+  const uint16_t* tables_ = nullptr;   // entropy form: groups_ x 5 (or 23) x 256
+  const uint32_t* weights_ = nullptr;  // hierarchical form: m[d]
   uint32_t groups_ = 0;
   CompressedParallaxInfoRecord packed_info_{};
   std::shared_ptr<Packed> packed_;

@@ -114,8 +114,8 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   const nlohmann::json report = nlohmann::json::parse(run.out);
   EXPECT_EQ(report["scene_plan"]["half_vector_bins_kept"], used);
   const nlohmann::json info = info_of(out);
-  // The planned entropy-coded parallax (format 1.3) beside the reduced-precision maps (1.4).
-  EXPECT_EQ(info["format"]["minor"], 4);
+  // The planned hierarchical parallax (format 1.5).
+  EXPECT_EQ(info["format"]["minor"], 5);
   EXPECT_TRUE(info["scene_plan"]["transmission_left_out"].get<bool>());
   EXPECT_EQ(info["scene_plan"]["half_vector_bins_kept"], used);
   std::map<std::string, int> count;
@@ -133,7 +133,7 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   EXPECT_EQ(count["scene_plan"], 1);
   EXPECT_EQ(count["parallax_compressed"], 0);
   EXPECT_EQ(count["parallax_planned"], 0);
-  EXPECT_EQ(count["parallax_entropy"], 5);
+  EXPECT_EQ(count["parallax_entropy"], 6);
   // `info` in words says what was left out.
   const auto text = run_clothbake({"info", out});
   EXPECT_NE(text.out.find("left out: transmission and gap tables"), std::string::npos) << text.out;
@@ -254,10 +254,20 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       for (const char* key :
            {"full_bytes", "planned_bytes", "full_bake_seconds", "planned_bake_seconds", "budget"})
         EXPECT_TRUE(f.contains(key)) << name << ": " << key;
-      // Both assets entropy-code their parallax (the planned one leaves out directions as empty
-      // blocks, format 1.3), so a plan is never larger than the full bake.
+      // The planned parallax holds the views' directions (and those they are predicted from) with
+      // the full bake's codes, the rest as empty blocks, so its stream is never larger. The whole
+      // asset may be on this 64^2 fixture: the planned radiance tables are compressed to a quarter
+      // of the budget, which here can cost more than the left-out bins save (docs/scene-plans.md).
       EXPECT_GT(f["planned_bytes"].get<double>(), 0.0) << name;
-      EXPECT_LE(f["planned_bytes"].get<double>(), f["full_bytes"].get<double>()) << name;
+      auto stream_bytes = [](const std::string& asset) {
+        const nlohmann::json info = info_of(asset);
+        for (const auto& s : info["sections"])
+          if (s["name"] == "parallax_entropy" && s["instance"] == 3) return s["bytes"].get<double>();
+        return -1.0;
+      };
+      const double planned_stream = stream_bytes(f["planned_asset"].get<std::string>());
+      EXPECT_GE(planned_stream, 0.0) << name;
+      EXPECT_LE(planned_stream, stream_bytes(f["full_asset"].get<std::string>())) << name;
       EXPECT_LE(f["relmse"]["planned_vs_full"].get<double>(), f["budget"].get<double>())
           << name << ": " << f.dump();
       // The plan does not make the picture worse: the planned render is as far from the reference

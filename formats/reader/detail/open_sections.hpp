@@ -17,20 +17,20 @@ struct SectionKey {
 
 // Finds the two sections a view needs and views them as A and B. Errors: NotFound
 // (CBK-E019, Check::MissingSection) with `missing` when either is absent; Unsupported (CBK-E015,
-// Check::SectionLayout) with `wrong_version` when either has a payload version other than 1 (the
-// only one these readers know); the view_of errors (WrongType, ...) otherwise. The caller checks
-// ranks, dimensions and values.
+// Check::SectionLayout) with `wrong_version` when either has a payload version other than
+// `version` (the one the caller knows); the view_of errors (WrongType, ...) otherwise. The caller
+// checks ranks, dimensions and values.
 template <class A, class B>
 Status view_required_pair(const Asset& asset, SectionKey a, SectionKey b, const char* missing,
-                          const char* wrong_version, ArrayView<A>* view_a,
-                          ArrayView<B>* view_b) noexcept {
+                          const char* wrong_version, ArrayView<A>* view_a, ArrayView<B>* view_b,
+                          uint16_t version = 1) noexcept {
   SectionInfo info_a, info_b;
   Status s = asset.find(a.type, a.instance, &info_a);
   if (s.ok()) s = asset.find(b.type, b.instance, &info_b);
   if (s.code() == ErrorCode::NotFound)
     return Status::error(ErrorCode::NotFound, Check::MissingSection, "%s", missing);
   if (!s.ok()) return s;
-  if (info_a.version != 1 || info_b.version != 1)
+  if (info_a.version != version || info_b.version != version)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout, "%s", wrong_version);
   s = asset.view_of(info_a, view_a);
   if (s.ok()) s = asset.view_of(info_b, view_b);
@@ -38,17 +38,17 @@ Status view_required_pair(const Asset& asset, SectionKey a, SectionKey b, const 
 }
 
 // Views an optional section as T. An absent section is not an error: *present is false and the
-// Status ok. Unsupported (CBK-E015) with `wrong_version` for a payload version other than 1; the
-// view_of errors otherwise.
+// Status ok. Unsupported (CBK-E015) with `wrong_version` for a payload version other than
+// `version`; the view_of errors otherwise.
 template <class T>
 Status view_optional(const Asset& asset, SectionKey key, const char* wrong_version,
-                     ArrayView<T>* view, bool* present) noexcept {
+                     ArrayView<T>* view, bool* present, uint16_t version = 1) noexcept {
   *present = false;
   SectionInfo info;
   Status s = asset.find(key.type, key.instance, &info);
   if (s.code() == ErrorCode::NotFound) return {};
   if (!s.ok()) return s;
-  if (info.version != 1)
+  if (info.version != version)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout, "%s", wrong_version);
   s = asset.view_of(info, view);
   *present = s.ok();

@@ -408,8 +408,9 @@ TEST_F(Cli, CompressionOptionsDecideWhichTablesAreWritten) {
   EXPECT_EQ(counts["asg_fit_error"], 0);
   EXPECT_EQ(metadata["parameters"]["visibility"]["fit_error_section"], false);
   EXPECT_GT(metadata["parameters"]["visibility"]["max_fit_error"].get<double>(), 0.0);
-  // The feature maps at reduced precision (payload version 2) make the asset format 1.4.
-  EXPECT_EQ(metadata["format_version"], "1.4");
+  // The hierarchical parallax (payload version 2 of parallax_entropy) makes the asset format 1.5
+  // (beside the feature maps at reduced precision of 1.4).
+  EXPECT_EQ(metadata["format_version"], "1.5");
   r = run({"validate", "@default.cbk"});
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   r = run({"verify", "@default.cbk", "--fabric", "@c.toml", "--json"});
