@@ -128,7 +128,8 @@ std::vector<uint8_t> encode_parallax_block(const uint8_t* plane, uint32_t n, uin
 }
 
 std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8_t* plane,
-                                                                     uint32_t n, int count) {
+                                                                     uint32_t n, int count,
+                                                                     uint32_t min_length) {
   const uint32_t samples = std::min<uint32_t>(n, 64), sample_step = std::max<uint32_t>(1, n / 64);
   const uint32_t shift_step = std::max<uint32_t>(1, n / 256);
   struct Scored {
@@ -139,6 +140,7 @@ std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8
   for (uint32_t sy = 0; sy < n; sy += shift_step)
     for (uint32_t sx = 0; sx < n; sx += shift_step) {
       if (sx == 0 && sy == 0) continue;
+      if (std::max(std::min(sx, n - sx), std::min(sy, n - sy)) < min_length) continue;
       uint32_t match = 0;
       for (uint32_t j = 0; j < samples; ++j)
         for (uint32_t i = 0; i < samples; ++i) {

@@ -57,8 +57,11 @@ std::vector<uint8_t> encode_parallax_block(const uint8_t* plane, uint32_t n, uin
 
 // The candidate shifts of a plane: up to `count` shifts (sx, sy), sy in [1, N) or sy = 0 and sx
 // in [1, N), whose exact-repeat share over a 1/4 x 1/4 subsample is at least 1/2, best first.
+// Shifts whose toroidal length max(min(sx, N - sx), min(sy, N - sy)) is below `min_length` are
+// not considered (a piecewise-constant map repeats almost everywhere at a shift of one texel).
 std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8_t* plane,
-                                                                     uint32_t n, int count = 3);
+                                                                     uint32_t n, int count = 3,
+                                                                     uint32_t min_length = 1);
 
 // Codes every direction of an 8-bit table. Precondition: packed.bits == 8. With `keep` (one entry
 // per direction, a scene plan's view bins; empty: all), a direction whose entry is 0 gets an

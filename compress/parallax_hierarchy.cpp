@@ -268,11 +268,7 @@ HierarchicalParallax hierarchical_parallax(const ParallaxCodes& raw, double max_
       low[t] = uint8_t(p.codes[mid * texels + t]);
     // Shifts shorter than a sixteenth of the tile (at least 4 texels) only repeat what the
     // median predictor already sees; the tile's real repeats are longer.
-    const uint32_t shortest = std::max<uint32_t>(4, n / 16);
-    for (const auto& [sx, sy] : parallax_shift_candidates(low.data(), n, 16)) {
-      const uint32_t lx = std::min(sx, n - sx), ly = std::min(sy, n - sy);
-      if (std::max(lx, ly) >= shortest && p.candidates.size() < 3) p.candidates.push_back({sx, sy});
-    }
+    p.candidates = parallax_shift_candidates(low.data(), n, 3, std::max<uint32_t>(4, n / 16));
   }
   struct Choice {
     uint32_t sx = 0, sy = 0;

@@ -17,6 +17,7 @@
 #include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
+#include "compress/coefficient_coding.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/compressed_set.hpp"
 #include "compress/directional_texels.hpp"
@@ -77,7 +78,10 @@ void run_compress(pipeline::StageContext& ctx) {
     ctx.progress(0.5 * i + 0.1);
     CompressionStats stats;
     const CompressedTableSet set = compress_tables(data, settings.cpca(), &stats);
-    for (auto& s : compressed_sections(set)) {
+    std::vector<formats::Section> sections = compressed_sections(set);
+    // Format 1.5: the coefficients entropy-coded (part 6 instead of part 5, lossless).
+    code_coefficient_sections(sections, set);
+    for (auto& s : sections) {
       if (reduce) s.version = 2;  // radiance_compressed v2: the bins of bin_map instance 0 only
       out.push_back(std::move(s));
     }

@@ -28,6 +28,8 @@
 //   part 4 Basis  : f16 {I, B}   per image: the directional vector, max |value| = 1 (or all 0)
 //   part 5 Coeffs : i16 {M}      for every texel in row-major order, the r_{g(x)} quantised
 //                                coefficients of its cell (none for kNoCell); M = their total
+//   part 6 Coded  : u8 {bytes}   (format 1.5, instead of part 5) the same coefficients entropy-
+//                                coded (compressed_coefficients.hpp); same payload version
 //
 // C++17, standard library only (part of the reader library).
 #pragma once
@@ -45,8 +47,10 @@ enum class CompressedPart : uint32_t {
   CellMap = 2,
   Scales = 3,
   Basis = 4,
-  Coefficients = 5
+  Coefficients = 5,
+  CodedCoefficients = 6  // format 1.5: part 5 entropy-coded (compressed_coefficients.hpp)
 };
+// Parts 0-5 (a kind holds part 5 or part 6, not both).
 inline constexpr uint32_t kCompressedPartCount = 6;
 
 constexpr uint32_t compressed_instance(RadianceTableKind kind, CompressedPart part) {

@@ -2,6 +2,7 @@
 // queries (compressed_tables.hpp).
 #include "formats/reader/compressed_tables.hpp"
 
+#include "formats/reader/compressed_coefficients.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 
 #include <cinttypes>
@@ -87,9 +88,25 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   if (uint32_t(kind) >= kRadianceKindCount)
     return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown radiance table kind %u",
                          unsigned(kind));
+  // Parts 0-4, and the coefficients as part 5 (raw) or part 6 (entropy-coded, format 1.5).
   SectionInfo parts[kCompressedPartCount];
+  bool coded = false;
   for (uint32_t p = 0; p < kCompressedPartCount; ++p) {
     Status s = find_part(asset, kind, CompressedPart(p), &parts[p]);
+    if (p == uint32_t(CompressedPart::Coefficients)) {
+      SectionInfo other;
+      const Status c = find_part(asset, kind, CompressedPart::CodedCoefficients, &other);
+      if (c.ok() && s.ok())
+        return layout_error(kind, "coefficients",
+                            "both part 5 (raw) and part 6 (coded) are present");
+      if (c.ok()) {
+        parts[p] = other;
+        coded = true;
+        s = c;
+      } else if (c.code() != ErrorCode::NotFound) {
+        return c;
+      }
+    }
     if (!s.ok()) return s;
     if (parts[p].version != parts[0].version)
       return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
@@ -231,19 +248,57 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
                            kind_name(kind), t / bins, t % bins);
   }
 
-  // Coefficients.
+  // Coefficients: viewed in place (part 5) or decoded into the copy the tables keep (part 6).
+  const uint64_t texel_count = uint64_t(n) * n;
+  auto coefficient_copy = allocate<int16_t>(info.coefficient_count ? info.coefficient_count : 1);
+  auto first_coefficient = allocate<uint32_t>(texel_count);
+  if (!coefficient_copy || !first_coefficient)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "compressed_tables %s: cannot allocate the coefficients", kind_name(kind));
+  {  // Each texel's first coefficient (the order: texel by texel, r_g values per texel with a
+     // cell).
+    uint64_t next = 0;
+    for (uint64_t t = 0; t < texel_count; ++t) {
+      first_coefficient[t] = uint32_t(next);
+      const uint8_t g = map.data[t];
+      if (g != kNoCell) next += cells[g].rank;
+    }
+  }
   ArrayView<int16_t> coefficients;
-  s = asset.view_of(parts[5], &coefficients);
-  if (!s.ok()) return s;
-  if (info.coefficient_count == 0
-          ? !(coefficients.rank == 1 && coefficients.dims[0] == 0)
-          : !(coefficients.rank == 1 && coefficients.dims[0] == info.coefficient_count))
-    return layout_error(kind, "coefficients", "must be i16 {coefficient_count}");
-  for (uint64_t t = 0; t < coefficients.size; ++t)
-    if (coefficients[t] == INT16_MIN)
-      return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "compressed_tables %s: coefficient %" PRIu64 " is -32768",
-                           kind_name(kind), t);
+  if (coded) {
+    ArrayView<uint8_t> stream;
+    s = asset.view_of(parts[5], &stream);
+    if (!s.ok()) return s;
+    if (stream.rank != 1) return layout_error(kind, "coded coefficients", "must be u8 {bytes}");
+    std::unique_ptr<uint32_t[]> ranks = allocate<uint32_t>(cells_n ? cells_n : 1);
+    if (!ranks) return Status::error(ErrorCode::Unsupported, Check::None, "out of memory");
+    for (uint32_t g = 0; g < cells_n; ++g)
+      ranks[g] = cells[g].rank;
+    s = decode_compressed_coefficients(stream.data, stream.dims[0], n, map.data, ranks.get(),
+                                       first_coefficient.get(), info.coefficient_count,
+                                       coefficient_copy.get());
+    if (!s.ok())
+      return Status::error(ErrorCode::Malformed, Check::ValueRange, "compressed_tables %s: %s",
+                           kind_name(kind), s.message());
+    coefficients.data = coefficient_copy.get();
+    coefficients.size = info.coefficient_count;
+    coefficients.rank = 1;
+    coefficients.dims[0] = info.coefficient_count;
+  } else {
+    s = asset.view_of(parts[5], &coefficients);
+    if (!s.ok()) return s;
+    if (info.coefficient_count == 0
+            ? !(coefficients.rank == 1 && coefficients.dims[0] == 0)
+            : !(coefficients.rank == 1 && coefficients.dims[0] == info.coefficient_count))
+      return layout_error(kind, "coefficients", "must be i16 {coefficient_count}");
+    for (uint64_t t = 0; t < coefficients.size; ++t)
+      if (coefficients[t] == INT16_MIN)
+        return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                             "compressed_tables %s: coefficient %" PRIu64 " is -32768",
+                             kind_name(kind), t);
+    if (coefficients.size > 0)
+      std::memcpy(coefficient_copy.get(), coefficients.data, sizeof(int16_t) * coefficients.size);
+  }
 
   // Decode.
   const bool wide = uint64_t(n) > 256;  // N^2 * 32767 must stay below 2^31 for int32 sums
@@ -266,15 +321,12 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   auto map_copy = allocate<uint8_t>(uint64_t(n) * n);
   auto cell_cluster = allocate<uint32_t>(cells_n ? cells_n : 1);
   auto cell_images = allocate<uint32_t>(2 * (cells_n ? cells_n : 1));
-  auto coefficient_copy = allocate<int16_t>(coefficients.size ? coefficients.size : 1);
-  auto first_coefficient = allocate<uint32_t>(uint64_t(n) * n);
   std::unique_ptr<uint8_t[]> covered;
   if (bin_map.present() && kind != RadianceTableKind::Gap) {
     covered = allocate<uint8_t>(bins);
     if (covered) std::memcpy(covered.get(), bin_map.mask, bins);
   }
   if ((wide ? !sat64 : !sat32) || !row || !scaled || !map_copy || !cell_cluster || !cell_images ||
-      !coefficient_copy || !first_coefficient ||
       (bin_map.present() && kind != RadianceTableKind::Gap && !covered))
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "compressed_tables %s: cannot allocate %" PRIu64
@@ -295,19 +347,6 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     cell_images[2 * g] = cells[g].first_image;
     cell_images[2 * g + 1] = cells[g].rank;
   }
-  // Each texel's first coefficient (the coefficient order: texel by texel, r_g values per texel
-  // with a cell), so that a texel's value reads its own weights instead of SAT differences.
-  if (coefficients.size > 0)
-    std::memcpy(coefficient_copy.get(), coefficients.data, sizeof(int16_t) * coefficients.size);
-  {
-    uint64_t next = 0;
-    for (uint64_t t = 0; t < uint64_t(n) * n; ++t) {
-      first_coefficient[t] = uint32_t(next);
-      const uint8_t g = map.data[t];
-      if (g != kNoCell) next += cells[g].rank;
-    }
-  }
-
   info_ = info;
   n_ = n;
   bins_per_side_ = info.bins_per_side;

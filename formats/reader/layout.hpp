@@ -21,7 +21,8 @@ namespace clothbake::reader {
 inline constexpr uint16_t kFormatMajor = 1;
 // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans; 1.3: planned ParallaxEntropy;
 // 1.4: feature maps at reduced precision (payload versions 2 and 3 of 0x0100-0x0103 and 0x0105);
-// 1.5: hierarchical parallax (payload version 2 of ParallaxEntropy, parallax_hierarchy.hpp).
+// 1.5: hierarchical parallax (payload version 2 of ParallaxEntropy, parallax_hierarchy.hpp) and
+// entropy-coded C-PCA coefficients (part 6 of radiance_compressed, compressed_coefficients.hpp).
 inline constexpr uint16_t kFormatMinor = 5;
 
 // The minor version that introduced a section type: writers stamp an asset with the largest minor
@@ -39,10 +40,11 @@ constexpr uint16_t format_minor_of(uint32_t section_type) {
 // ParallaxEntropy info record (instance 0) with the planned flag (bit 0 of its u32 flags at byte
 // 12; parallax_entropy.hpp, kEntropyPlannedFlag) needs 1.3, since a 1.2 reader would not know that
 // its empty blocks are left-out directions; a ParallaxEntropy section of payload version 2 (the
-// hierarchical form) needs 1.5.
+// hierarchical form) and part 6 of radiance_compressed (coded coefficients) need 1.5.
 inline uint16_t format_minor_of_section(uint32_t section_type, uint16_t version, uint32_t instance,
                                         const void* payload, uint64_t size) {
   if (section_type == 0x0203 && version >= 2) return 5;
+  if (section_type == 0x0501 && instance % 16 == 6) return 5;  // coded C-PCA coefficients
   if (section_type >= 0x0100 && section_type <= 0x0105 && section_type != 0x0104 && version >= 2)
     return 4;
   if (section_type == 0x0203 && instance == 0 && size >= 16) {

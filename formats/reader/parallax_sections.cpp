@@ -94,6 +94,7 @@ Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
       s = open_packed();
   }
   if (!s.ok()) *this = ParallaxView();
+  exact_sums_ = s.ok() && 65535u * uint64_t(info_.resolution) * info_.resolution < kTwo32;
   return s;
 }
 
@@ -670,6 +671,7 @@ Status ParallaxView::open_compressed(const Asset& asset, SectionType type) noexc
 bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
   if (!packed_) return true;
   if (!covers(bin)) return false;  // planned form: the direction was left out
+  if (packed_->sats[bin].load(std::memory_order_acquire) != nullptr) return true;  // built
   const uint8_t* decoded = nullptr;
   const uint16_t* decoded16 = nullptr;
   if (stream_ && weights_ && (decoded16 = plane16(bin)) == nullptr) return false;
@@ -846,9 +848,8 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
   const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
   for (int k = 0; k < 4; ++k)
     if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
-  double r = 0.0;
-  for (int k = 0; k < 4; ++k)
-    if (w.weight[k] > 0.0) r += w.weight[k] * bin_depth(uint32_t(w.index[k]), x, y);
+  // One wrap of (x, y) for the four bins (weighted_depth).
+  const double r = weighted_depth(w.index, w.weight, x, y);
   out->r = r;
   out->offset[0] = r / o[2] * o[0];
   out->offset[1] = r / o[2] * o[1];
@@ -858,15 +859,17 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
 }
 
 uint64_t ParallaxView::code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
-  if (x == 0 || y == 0) return 0;
+  return prefix_sum_of(bin_sat(bin), x, y);
+}
+
+uint64_t ParallaxView::prefix_sum_of(const uint32_t* table, uint32_t x, uint32_t y) const noexcept {
+  if (x == 0 || y == 0 || table == nullptr) return 0;
   const uint64_t n = info_.resolution;
-  const uint32_t* table = bin_sat(bin);
-  if (table == nullptr) return 0;
   auto s = [&](uint64_t i, uint64_t j) -> uint32_t {  // exclusive prefix, modulo 2^32
     return (i == 0 || j == 0) ? 0u : table[(j - 1) * n + (i - 1)];
   };
   // A rectangle of x * rows texels sums to at most 65535 * x * rows: below 2^32 it is exact (the
-  // common case, N <= 256, tested without a division).
+  // common case: always for N <= 256).
   if (65535u * uint64_t(x) * y < kTwo32) return s(x, y);
   const uint64_t rows = (kTwo32 - 1) / (65535u * uint64_t(x));
   uint64_t sum = 0;
@@ -879,17 +882,31 @@ uint64_t ParallaxView::code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) con
 
 // Integral of the (piecewise-constant) codes over [0, x) x [0, y), real 0 <= x, y <= N: bilinear
 // between the exact integer prefix sums at the surrounding texel corners.
-double ParallaxView::prefix_integral(uint32_t bin, double x, double y) const noexcept {
+double ParallaxView::prefix_integral(uint32_t bin, const uint32_t* table, double x,
+                                     double y) const noexcept {
   const uint32_t n = info_.resolution;
   uint32_t i = uint32_t(x), j = uint32_t(y);
   if (i > n) i = n;
   if (j > n) j = n;
   const double fx = i < n ? x - double(i) : 0.0, fy = j < n ? y - double(j) : 0.0;
   const uint32_t i1 = i < n ? i + 1 : n, j1 = j < n ? j + 1 : n;
-  const uint64_t e00 = code_prefix_sum(bin, i, j);
+  if (exact_sums_ && table != nullptr) {
+    // N <= 256: every prefix sum is one table entry, exact modulo 2^32 (the differences below
+    // are of nested rectangles, so exact too).
+    auto at = [&](uint32_t a, uint32_t b) -> uint32_t {
+      return (a == 0 || b == 0) ? 0u : table[uint64_t(b - 1) * n + (a - 1)];
+    };
+    const uint32_t e00 = at(i, j);
+    double value = double(e00);
+    if (fx > 0.0) value += fx * double(at(i1, j) - e00);
+    if (fy > 0.0) value += fy * double(at(i, j1) - e00);
+    if (fx > 0.0 && fy > 0.0) value += fx * fy * double(code(bin, uint64_t(j) * n + i));
+    return value;
+  }
+  const uint64_t e00 = prefix_sum_of(table, i, j);
   double value = double(e00);
-  if (fx > 0.0) value += fx * double(code_prefix_sum(bin, i1, j) - e00);
-  if (fy > 0.0) value += fy * double(code_prefix_sum(bin, i, j1) - e00);
+  if (fx > 0.0) value += fx * double(prefix_sum_of(table, i1, j) - e00);
+  if (fy > 0.0) value += fy * double(prefix_sum_of(table, i, j1) - e00);
   if (fx > 0.0 && fy > 0.0) {
     // The texel (i, j) itself: its code times the covered fraction fx * fy.
     value += fx * fy * double(code(bin, uint64_t(j) * n + i));
@@ -899,7 +916,8 @@ double ParallaxView::prefix_integral(uint32_t bin, double x, double y) const noe
 
 double ParallaxView::footprint_code_sum(uint32_t bin, const FootprintPlan& p) const noexcept {
   const double n = double(info_.resolution);
-  auto in = [&](double x, double y) { return prefix_integral(bin, x, y); };
+  const uint32_t* table = bin_sat(bin);
+  auto in = [&](double x, double y) { return prefix_integral(bin, table, x, y); };
   double f = in(p.rx1, p.ry1) - in(p.x0, p.ry1) - in(p.rx1, p.y0) + in(p.x0, p.y0);
   if (p.qx > 0) f += p.qx * (in(n, p.ry1) - in(n, p.y0));
   if (p.qy > 0) f += p.qy * (in(p.rx1, n) - in(p.x0, n));

@@ -223,7 +223,8 @@ class ParallaxView {
 
  private:
   double footprint_code_sum(uint32_t bin, const FootprintPlan& plan) const noexcept;
-  double prefix_integral(uint32_t bin, double x, double y) const noexcept;
+  double prefix_integral(uint32_t bin, const uint32_t* table, double x, double y) const noexcept;
+  uint64_t prefix_sum_of(const uint32_t* table, uint32_t x, uint32_t y) const noexcept;
   const uint32_t* bin_sat(uint32_t bin) const noexcept;
   // Stored plane of a covered bin (the bin itself unless planned).
   uint64_t plane(uint32_t bin) const noexcept { return plane_ ? uint64_t(plane_[bin]) : bin; }
@@ -264,6 +265,7 @@ class ParallaxView {
   CompressedParallaxInfoRecord packed_info_{};
   std::shared_ptr<Packed> packed_;
   const int32_t* plane_ = nullptr;  // planned form: stored plane of each bin, -1 = left out
+  bool exact_sums_ = false;  // 65535 N^2 < 2^32: every prefix sum is one exact u32 (N <= 256)
 };
 
 }  // namespace clothbake::reader
