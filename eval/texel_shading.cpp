@@ -51,7 +51,7 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   f.offset_per_depth[1] = on * f.view.y / f.view.z;
   const model::DirectionGrid<double> parallax_grid{int(data.parallax.dirs()),
                                                    data.parallax.info().min_cos};
-  f.parallax_bins = parallax_grid.bilinear(f.view);
+  f.parallax_bins = parallax_grid.bilinear_fast(f.view);
   // A scene-planned asset answers only what its scene can ask (never a number for the rest).
   for (int k = 0; k < 4; ++k)
     if (data.options.parallax && f.parallax_bins.weight[k] > 0.0 &&

@@ -120,7 +120,7 @@ SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& sha
                                0);
           const model::DirectionGrid<double> grid{shape.parallax_dirs, shape.parallax_min_cos};
           const model::BinBilinear<double> b =
-              grid.bilinear(parallax_view(wo, shape.parallax_min_cos));
+              grid.bilinear_fast(parallax_view(wo, shape.parallax_min_cos));
           for (int j = 0; j < 4; ++j)
             if (b.weight[j] > 0.0) p.view_bins[std::size_t(b.index[j])] = 1;
         }

@@ -845,7 +845,7 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
   Status s = view_direction(view, o);
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
-  const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  const model::BinBilinear<double> w = grid.bilinear_fast(model::Vec3d(o[0], o[1], o[2]));
   for (int k = 0; k < 4; ++k)
     if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
   // One wrap of (x, y) for the four bins (weighted_depth).
@@ -896,11 +896,12 @@ double ParallaxView::prefix_integral(uint32_t bin, const uint32_t* table, double
     auto at = [&](uint32_t a, uint32_t b) -> uint32_t {
       return (a == 0 || b == 0) ? 0u : table[uint64_t(b - 1) * n + (a - 1)];
     };
-    const uint32_t e00 = at(i, j);
+    const uint32_t e00 = at(i, j), e10 = at(i1, j), e01 = at(i, j1);
     double value = double(e00);
-    if (fx > 0.0) value += fx * double(at(i1, j) - e00);
-    if (fy > 0.0) value += fy * double(at(i, j1) - e00);
-    if (fx > 0.0 && fy > 0.0) value += fx * fy * double(code(bin, uint64_t(j) * n + i));
+    if (fx > 0.0) value += fx * double(e10 - e00);
+    if (fy > 0.0) value += fy * double(e01 - e00);
+    // The texel (i, j) itself from the table (its neighbours in memory), not from the codes.
+    if (fx > 0.0 && fy > 0.0) value += fx * fy * double(uint32_t(at(i1, j1) - e10 - e01 + e00));
     return value;
   }
   const uint64_t e00 = prefix_sum_of(table, i, j);
@@ -943,7 +944,7 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
   s = view_direction(view, o);
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
-  const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  const model::BinBilinear<double> w = grid.bilinear_fast(model::Vec3d(o[0], o[1], o[2]));
   for (int k = 0; k < 4; ++k)
     if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
   double sum = 0.0;

@@ -54,8 +54,10 @@
 //
 // Queries take the view direction as any finite non-zero vector; it is normalised and, below the
 // cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
-// direction is used both for the table lookup (bilinear between the 4 nearest bin centres) and in
-// Eq. 2, so offsets stay bounded by range * tan(theta_cut).
+// direction is used both for the table lookup (bilinear between the 4 nearest bin centres,
+// model::DirectionGrid::bilinear_fast: the concentric map without atan2, equal to bilinear within
+// n * 1e-8 in the weights; the evaluator and the scene plans use the same lookup) and in Eq. 2,
+// so offsets stay bounded by range * tan(theta_cut).
 //
 // C++17, standard library only, noexcept, no allocation; safe on untrusted assets that
 // Asset::open accepted (shapes and parameter ranges are checked by ParallaxView::open).

@@ -179,7 +179,7 @@ TEST(CompressedParallax, FootprintMeansAreExactMeansOfTheDecodedTexels) {
     ASSERT_TRUE(raw.footprint_depth({x0, y0, x1, y1}, view_dir, &r).ok());
     // Direct: the area-weighted mean of the decoded per-texel values over the covered texels.
     const model::BinBilinear<double> w =
-        grid.bilinear(model::Vec3d(s.direction[0], s.direction[1], s.direction[2]));
+        grid.bilinear_fast(model::Vec3d(s.direction[0], s.direction[1], s.direction[2]));
     double sum = 0;
     for (long ty = long(std::floor(y0)); ty < long(std::ceil(y1)); ++ty) {
       const double hy = std::min(y1, double(ty + 1)) - std::max(y0, double(ty));
@@ -202,7 +202,7 @@ TEST(CompressedParallax, FootprintMeansAreExactMeansOfTheDecodedTexels) {
   const double v[3] = {0.2, -0.4, 0.8};
   double o[3];
   ASSERT_TRUE(view.view_direction(v, o).ok());
-  const model::BinBilinear<double> w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+  const model::BinBilinear<double> w = grid.bilinear_fast(model::Vec3d(o[0], o[1], o[2]));
   reader::ParallaxSample s;
   ASSERT_TRUE(view.depth(-3, 21, v, &s).ok());
   EXPECT_NEAR(view.weighted_depth(w.index, w.weight, -3, 21), s.r, 1e-15);

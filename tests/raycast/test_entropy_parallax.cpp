@@ -335,7 +335,7 @@ TEST(EntropyParallax, APlannedTableCoversExactlyItsBinMap) {
       reader::ParallaxSample s, s_full;
       double o[3];
       ASSERT_TRUE(view.view_direction(v, o).ok());
-      const auto w = grid.bilinear(model::Vec3d(o[0], o[1], o[2]));
+      const auto w = grid.bilinear_fast(model::Vec3d(o[0], o[1], o[2]));
       bool covered = true;
       for (int k = 0; k < 4; ++k)
         covered = covered && (w.weight[k] <= 0.0 || keep[uint32_t(w.index[k])]);
