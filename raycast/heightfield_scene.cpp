@@ -201,9 +201,9 @@ Vec3d PeriodicHeightField::lifted_surface_point(long x, long y, double offset) c
          normal * offset;
 }
 
-void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
-                                                std::array<double, RayPacket::kWidth>& t_hit,
-                                                RayCounters* counters) const {
+void PeriodicHeightField::cast_packet(const RayPacket& rays,
+                                      std::array<double, RayPacket::kWidth>& t_hit,
+                                      RayCounters* counters, bool first_hit) const {
   constexpr int W = RayPacket::kWidth;
   alignas(64) RTCRayHit16 rh;
   alignas(64) int valid[W];
@@ -228,7 +228,9 @@ void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
   // scene once the process had cast coherent packets into a scene without instances (rings = 0),
   // e.g. a flat fabric baked before a tall one (docs/hardening.md, "The Embree hang"; test
   // Bake.AFlatThenATallFabricInOneProcessBothFinish). The incoherent kernel reports the same
-  // occlusion and measured 13-38 % more rays per second here (bench_raycast BM_Visibility).
+  // hits and measured 13-38 % more occlusion rays per second here (bench_raycast BM_Visibility);
+  // first hits as 16-wide packets measured 28-73 % more rays per second than one rtcIntersect1
+  // per ray (BM_Parallax), with the same hits bit for bit (docs/raycast.md, "Performance").
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   uint64_t casts = 0, packets = 0;
@@ -267,11 +269,17 @@ void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
       ++casts;
     }
     ++packets;
-    rtcOccluded16(valid, scene_, &context, &rh.ray);
+    if (first_hit)
+      rtcIntersect16(valid, scene_, &context, &rh);
+    else
+      rtcOccluded16(valid, scene_, &context, &rh.ray);
     for (int i = 0; i < W; ++i) {
       if (!active[i]) continue;
-      if (rh.ray.tfar[i] == -std::numeric_limits<float>::infinity()) {  // Embree's "occluded"
-        t_hit[i] = t_start[i];
+      if (first_hit ? rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID
+                    : rh.ray.tfar[i] == -std::numeric_limits<float>::infinity()) {
+        // A hit: its parameter (first hits), or the start of the blocked segment (occlusion:
+        // Embree marks it with tfar = -inf).
+        t_hit[i] = first_hit ? t_start[i] + double(rh.ray.tfar[i]) : t_start[i];
         active[i] = false;
         --live;
       } else if (seg[i].ends_at_border && ++segments_cast[i] < kMaxSegments) {
@@ -293,60 +301,14 @@ void PeriodicHeightField::cast_occlusion_packet(const RayPacket& rays,
 void PeriodicHeightField::first_hits(const RayPacket& rays,
                                      std::array<double, RayPacket::kWidth>& t_hit,
                                      RayCounters* counters) const {
-  // One ray at a time (rtcIntersect1), not a 16-wide packet: for these rays, which descend at a
-  // slant through the thin shell of the height field, Embree's single-ray traversal costs ~20 %
-  // fewer cycles per ray than rtcIntersect16 or two rtcIntersect8 (docs/raycast.md,
-  // "Performance"), and it reports the same hits bit for bit (same triangle test).
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  uint64_t casts = 0, unresolved = 0;
-  for (int i = 0; i < RayPacket::kWidth; ++i) {
-    t_hit[i] = kInf;
-    if (i >= rays.count || !(rays.t_max[i] > 0)) continue;
-    bool cut = false;
-    const double t_end = budget_t_max(rays.dx[i], rays.dy[i], rays.t_max[i], &cut);
-    double t_start = 0.0;
-    for (int count = 0; count < kMaxSegments; ++count) {
-      const Segment s = make_segment(rays.ox[i], rays.oy[i], rays.dx[i], rays.dy[i], t_start, t_end,
-                                     rings_, margin());
-      RTCRayHit rh;
-      rh.ray.org_x = float(s.x);
-      rh.ray.org_y = float(s.y);
-      rh.ray.org_z = float(rays.oz[i] + t_start * rays.dz[i]);
-      rh.ray.dir_x = float(rays.dx[i]);
-      rh.ray.dir_y = float(rays.dy[i]);
-      rh.ray.dir_z = float(rays.dz[i]);
-      rh.ray.tnear = 0.f;
-      rh.ray.tfar = float(s.length);
-      rh.ray.mask = ~0u;
-      rh.ray.flags = 0;
-      rh.ray.time = 0.f;
-      rh.ray.id = unsigned(i);
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(scene_, &context, &rh);
-      ++casts;
-      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-        t_hit[i] = t_start + double(rh.ray.tfar);
-        break;
-      }
-      if (!s.ends_at_border) break;
-      t_start += advance_after(s);
-    }
-    unresolved += cut && !(t_hit[i] < kInf);
-  }
-  if (counters) {
-    counters->rays.fetch_add(uint64_t(std::max(rays.count, 0)), std::memory_order_relaxed);
-    counters->segments.fetch_add(casts, std::memory_order_relaxed);
-    counters->unresolved.fetch_add(unresolved, std::memory_order_relaxed);
-  }
+  cast_packet(rays, t_hit, counters, true);
 }
 
 void PeriodicHeightField::occluded(const RayPacket& rays,
                                    std::array<bool, RayPacket::kWidth>& occluded,
                                    RayCounters* counters) const {
   std::array<double, RayPacket::kWidth> t_hit;
-  cast_occlusion_packet(rays, t_hit, counters);
+  cast_packet(rays, t_hit, counters, false);
   for (int i = 0; i < RayPacket::kWidth; ++i)
     occluded[i] = t_hit[i] < kInf;
 }

@@ -72,9 +72,8 @@ void validate_parallax_settings(const ParallaxSettings& settings);
 using ProgressCallback = std::function<void(double)>;
 
 // Casts resolution^2 x dirs^2 rays (4 x 4 blocks of neighbouring texels sharing one direction,
-// each ray cast on its own with rtcIntersect1, which measured faster than 16-wide packets for
-// these first hits, docs/raycast.md; TBB over texel blocks; the result does not depend on the
-// thread count).
+// cast as one 16-wide packet, docs/raycast.md; TBB over texel blocks; the result does not depend
+// on the thread count).
 // Throws Error(Input) for bad settings, a table larger than kMaxParallaxBytes (naming the keys) or
 // a non-finite height (naming the texel). Warns (common/
 // diagnostics) when rays never hit (Embree edge leaks that survived a re-cast) and when the heights
