@@ -133,11 +133,11 @@ Difference difference_plane(const HierarchicalParallax& p, uint32_t d) {
   return out;
 }
 
-BlockSymbols block_symbols(const Difference& plane, uint32_t n, uint32_t sx, uint32_t sy) {
-  BlockSymbols out;
-  const uint64_t texels = uint64_t(n) * n;
-  out.ctx.reserve(texels + texels / 16);
-  out.sym.reserve(texels + texels / 16);
+// Calls emit(context, symbol) for every coded symbol of the block with shift (sx, sy), in decoding
+// order (the file comment of formats/reader/parallax_hierarchy.hpp: one symbol, or an escape and
+// the residual's two bytes).
+template <class Emit>
+void for_each_symbol(const Difference& plane, uint32_t n, uint32_t sx, uint32_t sy, Emit&& emit) {
   for (uint32_t y = 0; y < n; ++y)
     for (uint32_t x = 0; x < n; ++x) {
       const uint64_t t = uint64_t(y) * n + x;
@@ -146,25 +146,32 @@ BlockSymbols block_symbols(const Difference& plane, uint32_t n, uint32_t sx, uin
       // R modulo 65536 into [-32768, 32767].
       const int32_t residual = int32_t(int16_t(uint16_t(uint32_t(plane.diff[t] - pr.value))));
       if (residual >= -reader::kHierDirectMax && residual <= reader::kHierDirectMax) {
-        out.ctx.push_back(uint8_t(pr.context));
-        out.sym.push_back(uint8_t(residual + reader::kHierDirectMax));
+        emit(pr.context, residual + reader::kHierDirectMax);
       } else {
         const uint16_t r16 = uint16_t(residual);
-        out.ctx.push_back(uint8_t(pr.context));
-        out.sym.push_back(uint8_t(reader::kHierEscape));
-        out.ctx.push_back(uint8_t(reader::kHierEscapeHighContext));
-        out.sym.push_back(uint8_t(r16 >> 8));
-        out.ctx.push_back(uint8_t(reader::kHierEscapeLowContext));
-        out.sym.push_back(uint8_t(r16 & 0xFF));
+        emit(pr.context, reader::kHierEscape);
+        emit(reader::kHierEscapeHighContext, r16 >> 8);
+        emit(reader::kHierEscapeLowContext, r16 & 0xFF);
       }
     }
+}
+
+BlockSymbols block_symbols(const Difference& plane, uint32_t n, uint32_t sx, uint32_t sy) {
+  BlockSymbols out;
+  const uint64_t texels = uint64_t(n) * n;
+  out.ctx.reserve(texels + texels / 16);
+  out.sym.reserve(texels + texels / 16);
+  for_each_symbol(plane, n, sx, sy, [&](int context, int symbol) {
+    out.ctx.push_back(uint8_t(context));
+    out.sym.push_back(uint8_t(symbol));
+  });
   return out;
 }
 
-std::vector<uint64_t> symbol_counts(const BlockSymbols& s) {
+std::vector<uint64_t> symbol_counts(const Difference& plane, uint32_t n, uint32_t sx, uint32_t sy) {
   std::vector<uint64_t> counts(std::size_t(kHierContexts) * 256, 0);
-  for (std::size_t i = 0; i < s.ctx.size(); ++i)
-    ++counts[std::size_t(s.ctx[i]) * 256 + s.sym[i]];
+  for_each_symbol(plane, n, sx, sy,
+                  [&](int context, int symbol) { ++counts[std::size_t(context) * 256 + symbol]; });
   return counts;
 }
 
@@ -281,10 +288,10 @@ HierarchicalParallax hierarchical_parallax(const ParallaxCodes& raw, double max_
       return;
     }
     const Difference plane = difference_plane(p, uint32_t(d));
-    Choice best{0, 0, symbol_counts(block_symbols(plane, n, 0, 0))};
+    Choice best{0, 0, symbol_counts(plane, n, 0, 0)};
     double best_bits = residual_entropy_bits(best.counts);
     for (const auto& [sx, sy] : p.candidates) {
-      std::vector<uint64_t> c = symbol_counts(block_symbols(plane, n, sx, sy));
+      std::vector<uint64_t> c = symbol_counts(plane, n, sx, sy);
       const double bits = residual_entropy_bits(c);
       if (bits < best_bits) {
         best_bits = bits;

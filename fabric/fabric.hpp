@@ -62,7 +62,7 @@ struct BakeSettings {
   double parallax_min_cos = 0.6;     // parallax cap: directions with cos(theta) > this
   double parallax_max_error = 0.05;  // compressed parallax: RMS Eq. 2 offset error, texels
                                      // (= compress::kDefaultParallaxMaxError)
-  int visibility_dirs = 32;          // visibility sampling: dirs x dirs light directions
+  int visibility_dirs = 20;          // visibility sampling: dirs x dirs light directions
   int radiance_dirs = 32;            // Integral-Radiance half-vector bins: dirs x dirs
   int clusters = 8;                  // N_c visibility clusters
   bool compress = true;              // C-PCA compress the Integral-Radiance tables

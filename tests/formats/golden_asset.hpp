@@ -15,7 +15,10 @@
 namespace clothbake::test_support {
 
 inline std::vector<formats::Section> golden_sections(MapEncoding encoding = MapEncoding::Float32) {
-  const Fabric fabric = make_test_fabric(4, "golden");
+  Fabric fabric = make_test_fabric(4, "golden");
+  // The settings the checked-in files were written with (the metadata records them), whatever
+  // today's defaults: the golden bytes test the writer, not the defaults.
+  fabric.bake.visibility_dirs = 32;
   std::vector<formats::Section> sections = fabric_record_sections(fabric);
   for (auto& s : feature_map_sections(fabric.maps, encoding))
     sections.push_back(std::move(s));
