@@ -3,6 +3,8 @@
 
 #include <cstring>
 
+#include "formats/reader/detail/rans_block.hpp"
+
 namespace clothbake::reader {
 namespace {
 
@@ -14,17 +16,7 @@ Status bad(const char* what) noexcept {
 }  // namespace
 
 Status check_hierarchical_tables(const uint16_t* group_tables) noexcept {
-  for (int c = 0; c < kHierContexts; ++c) {
-    uint32_t total = 0;
-    for (int s = 0; s < 256; ++s)
-      total += group_tables[c * 256 + s];
-    if (total != 0 && total != kRansScale)
-      return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "parallax_entropy: the frequencies of context %d sum to %u, not 4096 "
-                           "(or 0)",
-                           c, unsigned(total));
-  }
-  return {};
+  return detail::check_rans_tables<kHierContexts>(group_tables, "parallax_entropy");
 }
 
 Status decode_hierarchical_block(const uint8_t* block, uint64_t size, const uint16_t* tables,
@@ -39,36 +31,17 @@ Status decode_hierarchical_block(const uint8_t* block, uint64_t size, const uint
   };
   if (block == nullptr || tables == nullptr) return fail("no bytes");
   if (k < 0 || k > 4) return fail("more than four references");
-  if (size < kEntropyBlockHeader + 4) return fail("shorter than its header");
-  uint16_t sx16, sy16, group, flags;
-  std::memcpy(&sx16, block, 2);
-  std::memcpy(&sy16, block + 2, 2);
-  std::memcpy(&group, block + 4, 2);
-  std::memcpy(&flags, block + 6, 2);
-  const uint32_t sx = sx16, sy = sy16;
-  if (flags != 0) return fail("header flags are not 0");
-  if (sx >= n || sy >= n) return fail("shift outside the tile");
-  if (group >= groups) return fail("group without frequency tables");
-  const uint16_t* freq = tables + uint64_t(group) * kHierContexts * 256;
+  detail::RansBlockStart start;
+  if (const char* what = detail::read_rans_block_start(block, size, n, groups, &start))
+    return fail(what);
+  const uint32_t sx = start.sx, sy = start.sy;
   bool has_table[kHierContexts] = {};
-  for (int c = 0; c < kHierContexts; ++c) {
-    uint32_t total = 0;
-    for (int s = 0; s < 256; ++s) {
-      const uint32_t f = freq[c * 256 + s];
-      if (total + f > kRansScale) return fail("frequencies do not sum to 4096");
-      scratch->freq[c][s] = uint16_t(f);
-      scratch->start[c][s] = uint16_t(total);
-      if (f > 0) std::memset(scratch->symbol[c] + total, s, f);
-      total += f;
-    }
-    if (total != 0 && total != kRansScale) return fail("frequencies do not sum to 4096");
-    has_table[c] = total == kRansScale;
-  }
-  uint64_t pos = kEntropyBlockHeader;
-  uint32_t x;
-  std::memcpy(&x, block + pos, 4);
-  pos += 4;
-  if (x < kRansLow || x >= (kRansLow << 8)) return fail("rANS state out of range");
+  if (const char* what = detail::build_rans_tables<kHierContexts>(
+          tables + uint64_t(start.group) * kHierContexts * 256, scratch->symbol, scratch->freq,
+          scratch->start, has_table))
+    return fail(what);
+  uint64_t pos = kEntropyBlockHeader + 4;
+  uint32_t x = start.state;
   // One symbol of context `c`; false when the context has no table or the stream runs out.
   auto next = [&](int c, uint32_t* symbol) {
     if (!has_table[c]) return false;

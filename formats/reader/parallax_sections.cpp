@@ -159,22 +159,32 @@ Status check_steps(const ArrayView<double>& steps, uint64_t d, const char* name)
 constexpr uint64_t kMaxEntropyDecodedBytes = uint64_t(1) << 32;
 
 Status ParallaxView::open_entropy(const Asset& asset) noexcept {
-  const char* name = "parallax_entropy";
+  // Payload version 1 (format 1.2: 8-bit codes, 5 contexts) or 2 (1.5: the hierarchical form,
+  // 16-bit codes, 23 contexts, prediction weights); every instance has the same version.
+  uint16_t version = 1;
   {
     SectionInfo first;
     if (asset.find(SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance, &first).ok() &&
         first.version == kHierParallaxVersion)
-      return open_hierarchical(asset);
+      version = kHierParallaxVersion;
   }
+  const bool hierarchical = version == kHierParallaxVersion;
+  const char* name = hierarchical ? "parallax_entropy (hierarchical)" : "parallax_entropy";
+  const char* missing = hierarchical ? "this asset has no hierarchical parallax table "
+                                       "(parallax_entropy instances 0 to 5)"
+                                     : "this asset has no entropy-coded parallax table "
+                                       "(parallax_entropy instances 0 to 4)";
+  const char* version_message =
+      "parallax_entropy: payload version must be 1 or 2 (this reader knows versions 1 and 2, "
+      "the same for every instance)";
+  const uint32_t bits = hierarchical ? 16 : 8;
+  const uint32_t contexts = hierarchical ? uint32_t(kHierContexts) : uint32_t(kEntropyContexts);
   ArrayView<uint8_t> info_bytes;
   ArrayView<double> steps;
   Status s = detail::view_required_pair(
       asset, {SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance},
-      {SectionType::ParallaxEntropy, kEntropyParallaxStepsInstance},
-      "this asset has no entropy-coded parallax table (parallax_entropy instances 0 to 3)",
-      "parallax_entropy: payload version must be 1 or 2 (this reader knows versions 1 and 2, "
-      "the same for every instance)",
-      &info_bytes, &steps);
+      {SectionType::ParallaxEntropy, kEntropyParallaxStepsInstance}, missing, version_message,
+      &info_bytes, &steps, version);
   if (!s.ok()) return s;
   if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
       info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
@@ -183,12 +193,14 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
                          "CompressedParallaxInfoRecord)");
   CompressedParallaxInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
-  // flags: 0, or kEntropyPlannedFlag (format 1.3: a scene-planned asset, coverage in bin map 1).
-  if ((info.flags & ~kEntropyPlannedFlag) != 0 || info.bits != 8)
+  // flags: 0, or kEntropyPlannedFlag (a scene-planned asset, coverage in bin map 1: format 1.3
+  // for version 1).
+  if ((info.flags & ~kEntropyPlannedFlag) != 0 || info.bits != bits)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "parallax_entropy: bits %u / flags %u unknown to this reader (version "
-                         "1 has 8 / 0 or 1)",
-                         unsigned(info.bits), unsigned(info.flags));
+                         "%s: bits %u / flags %u unknown to this reader (version %u has %u / 0 "
+                         "or 1)",
+                         name, unsigned(info.bits), unsigned(info.flags), unsigned(version),
+                         unsigned(bits));
   const bool planned = (info.flags & kEntropyPlannedFlag) != 0;
   s = check_compressed_record(info, name);
   if (!s.ok()) return s;
@@ -197,13 +209,10 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
   if (!s.ok()) return s;
   ArrayView<uint64_t> offsets;
   ArrayView<uint8_t> stream;
-  s = detail::view_required_pair(
-      asset, {SectionType::ParallaxEntropy, kEntropyParallaxOffsetsInstance},
-      {SectionType::ParallaxEntropy, kEntropyParallaxStreamInstance},
-      "this asset has no entropy-coded parallax table (parallax_entropy instance 2, the block "
-      "offsets, or 3, the blocks, is missing)",
-      "parallax_entropy: payload version must be 1 (this reader knows version 1)", &offsets,
-      &stream);
+  s = detail::view_required_pair(asset,
+                                 {SectionType::ParallaxEntropy, kEntropyParallaxOffsetsInstance},
+                                 {SectionType::ParallaxEntropy, kEntropyParallaxStreamInstance},
+                                 missing, version_message, &offsets, &stream, version);
   if (!s.ok()) return s;
   if (offsets.rank != 1 || offsets.dims[0] != d + 1 || stream.rank != 1)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
@@ -223,43 +232,74 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
   ArrayView<uint16_t> tables;
   bool have_tables = false;
   s = detail::view_optional(asset, {SectionType::ParallaxEntropy, kEntropyParallaxTablesInstance},
-                            "parallax_entropy: payload version must be 1", &tables, &have_tables);
+                            version_message, &tables, &have_tables, version);
   if (!s.ok()) return s;
-  if (!have_tables)
-    return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "this asset has no entropy-coded parallax table (parallax_entropy "
-                         "instance 4, the frequency tables, is missing)");
+  if (!have_tables) return Status::error(ErrorCode::NotFound, Check::MissingSection, "%s", missing);
   if (tables.rank != 3 || tables.dims[0] < 1 || tables.dims[0] > kMaxEntropyGroups ||
-      tables.dims[1] != uint32_t(kEntropyContexts) || tables.dims[2] != 256)
+      tables.dims[1] != contexts || tables.dims[2] != 256)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_entropy instance 4 must be u16 {groups, 5, 256} with 1 to "
-                         "65536 groups");
+                         "parallax_entropy instance 4 must be u16 {groups, %u, 256} with 1 to "
+                         "65536 groups (payload version %u)",
+                         unsigned(contexts), unsigned(version));
   for (uint32_t g = 0; g < tables.dims[0]; ++g) {
-    const Status t = check_parallax_tables(tables.data + uint64_t(g) * kEntropyContexts * 256);
+    const uint16_t* group_tables = tables.data + uint64_t(g) * contexts * 256;
+    const Status t = hierarchical ? check_hierarchical_tables(group_tables)
+                                  : check_parallax_tables(group_tables);
     if (!t.ok())
       return Status::error(ErrorCode::Malformed, Check::ValueRange, "group %u: %s", unsigned(g),
                            t.message());
   }
-  if (d * n * n > kMaxEntropyDecodedBytes)
+  ArrayView<uint32_t> weights;
+  if (hierarchical) {
+    bool have_weights = false;
+    s = detail::view_optional(asset, {SectionType::ParallaxEntropy, kHierParallaxWeightsInstance},
+                              version_message, &weights, &have_weights, version);
+    if (!s.ok()) return s;
+    if (!have_weights)
+      return Status::error(ErrorCode::NotFound, Check::MissingSection, "%s", missing);
+    if (weights.rank != 1 || weights.dims[0] != d)
+      return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                           "parallax_entropy instance 5 must be u32 {%llu} (one prediction "
+                           "weight per direction)",
+                           static_cast<unsigned long long>(d));
+    for (uint64_t i = 0; i < d; ++i)
+      if (weights.data[i] < 1 || weights.data[i] > kMaxHierWeight)
+        return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                             "parallax_entropy: prediction weight of direction %llu is not in "
+                             "[1, 2^24]",
+                             static_cast<unsigned long long>(i));
+  }
+  const uint64_t code_bytes = hierarchical ? 2 : 1;
+  if (d * n * n * code_bytes > kMaxEntropyDecodedBytes)
     return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
                          "parallax_entropy: %llu directions of %llu^2 codes would decode to more "
                          "than 4 GiB",
                          static_cast<unsigned long long>(d), static_cast<unsigned long long>(n));
-  // Planned (1.3): the directions bin map 1 leaves out have empty blocks and answer OutOfPlan;
-  // every kept one has a block (an empty kept block or a non-empty left-out one is malformed).
+  // Which directions are stored: all, or (planned) those of bin map 1; a block is empty exactly
+  // when its direction is not stored. Hierarchical: a stored direction's references are stored.
   BinMapView map;
   if (planned) {
     s = read_view_bin_map(asset, info.dirs, "parallax_entropy", &map);
     if (!s.ok()) return s;
-    for (uint64_t i = 0; i < d; ++i) {
-      const bool empty = offsets.data[i + 1] == offsets.data[i];
-      if (empty == map.covers(uint32_t(i)))
+  }
+  for (uint64_t i = 0; i < d; ++i) {
+    const bool stored = !planned || map.covers(uint32_t(i));
+    const bool empty = offsets.data[i + 1] == offsets.data[i];
+    if (empty == stored)
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "parallax_entropy: direction %llu is %s but its block is %s",
+                           static_cast<unsigned long long>(i),
+                           stored ? "stored" : "left out of bin_map instance 1",
+                           empty ? "empty" : "not empty");
+    if (!hierarchical || !planned || !stored) continue;
+    const ParallaxReferences refs =
+        parallax_references(uint32_t(i % info.dirs), uint32_t(i / info.dirs), info.dirs);
+    for (int e = 0; e < refs.count; ++e)
+      if (!map.covers(refs.bin[e]))
         return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                             "parallax_entropy: direction %llu is %s bin_map instance 1 but its "
-                             "block is %s",
-                             static_cast<unsigned long long>(i),
-                             empty ? "covered by" : "left out of", empty ? "empty" : "not empty");
-    }
+                             "parallax_entropy: direction %llu is stored but direction %u, which "
+                             "it is predicted from, is left out of bin_map instance 1",
+                             static_cast<unsigned long long>(i), unsigned(refs.bin[e]));
   }
   auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
   if (!packed || packed->count != d)
@@ -282,6 +322,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
   offsets_ = offsets.data;
   tables_ = tables.data;
   groups_ = tables.dims[0];
+  weights_ = hierarchical ? weights.data : nullptr;
   stream_ = stream.data != nullptr ? stream.data : reinterpret_cast<const uint8_t*>("");
   packed_ = std::move(packed);
   return {};
@@ -313,149 +354,6 @@ const uint8_t* ParallaxView::plane8(uint32_t bin) const noexcept {
     delete scratch;
   });
   return p.planes[bin].load(std::memory_order_acquire);
-}
-
-// Largest total of decoded hierarchical planes (D * N^2 u16): 4 GiB.
-constexpr uint64_t kMaxHierDecodedBytes = uint64_t(1) << 32;
-
-Status ParallaxView::open_hierarchical(const Asset& asset) noexcept {
-  const char* name = "parallax_entropy (hierarchical)";
-  const char* version_message =
-      "parallax_entropy: every instance must have payload version 2 in the hierarchical form";
-  const char* missing =
-      "this asset has no hierarchical parallax table (parallax_entropy instances 0 to 5)";
-  ArrayView<uint8_t> info_bytes;
-  ArrayView<double> steps;
-  Status s = detail::view_required_pair(
-      asset, {SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance},
-      {SectionType::ParallaxEntropy, kEntropyParallaxStepsInstance}, missing, version_message,
-      &info_bytes, &steps, kHierParallaxVersion);
-  if (!s.ok()) return s;
-  if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
-      info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
-    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_entropy instance 0 must be u8 {1, 64} (one "
-                         "CompressedParallaxInfoRecord)");
-  CompressedParallaxInfoRecord info;
-  std::memcpy(&info, info_bytes.data, sizeof info);
-  if ((info.flags & ~kEntropyPlannedFlag) != 0 || info.bits != 16)
-    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "parallax_entropy (hierarchical): bits %u / flags %u unknown to this "
-                         "reader (version 2 has 16 / 0 or 1)",
-                         unsigned(info.bits), unsigned(info.flags));
-  const bool planned = (info.flags & kEntropyPlannedFlag) != 0;
-  s = check_compressed_record(info, name);
-  if (!s.ok()) return s;
-  const uint64_t n = info.resolution, d = uint64_t(info.dirs) * info.dirs;
-  s = check_steps(steps, d, name);
-  if (!s.ok()) return s;
-  ArrayView<uint64_t> offsets;
-  ArrayView<uint8_t> stream;
-  s = detail::view_required_pair(asset,
-                                 {SectionType::ParallaxEntropy, kEntropyParallaxOffsetsInstance},
-                                 {SectionType::ParallaxEntropy, kEntropyParallaxStreamInstance},
-                                 missing, version_message, &offsets, &stream, kHierParallaxVersion);
-  if (!s.ok()) return s;
-  if (offsets.rank != 1 || offsets.dims[0] != d + 1 || stream.rank != 1)
-    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_entropy instance 2 must be u64 {%llu} (block offsets) and "
-                         "instance 3 u8 {bytes}",
-                         static_cast<unsigned long long>(d + 1));
-  if (offsets.data[0] != 0 || offsets.data[d] != stream.dims[0])
-    return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                         "parallax_entropy: block offsets must run from 0 to the stream's size "
-                         "%llu",
-                         static_cast<unsigned long long>(stream.dims[0]));
-  for (uint64_t i = 0; i < d; ++i)
-    if (offsets.data[i + 1] < offsets.data[i])
-      return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "parallax_entropy: block offsets decrease at direction %llu",
-                           static_cast<unsigned long long>(i));
-  // Which directions are stored: all, or (planned) those of bin map 1, which must include every
-  // direction a stored one references; a block is empty exactly when its direction is not stored.
-  BinMapView map;
-  if (planned) {
-    s = read_view_bin_map(asset, info.dirs, "parallax_entropy", &map);
-    if (!s.ok()) return s;
-  }
-  for (uint64_t i = 0; i < d; ++i) {
-    const bool stored = !planned || map.covers(uint32_t(i));
-    const bool empty = offsets.data[i + 1] == offsets.data[i];
-    if (empty == stored)
-      return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "parallax_entropy: direction %llu is %s but its block is %s",
-                           static_cast<unsigned long long>(i),
-                           stored ? "stored" : "left out of bin_map instance 1",
-                           empty ? "empty" : "not empty");
-    if (!stored) continue;
-    const ParallaxReferences refs =
-        parallax_references(uint32_t(i % info.dirs), uint32_t(i / info.dirs), info.dirs);
-    for (int e = 0; e < refs.count; ++e)
-      if (planned && !map.covers(refs.bin[e]))
-        return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                             "parallax_entropy: direction %llu is stored but direction %u, which "
-                             "it is predicted from, is left out of bin_map instance 1",
-                             static_cast<unsigned long long>(i), unsigned(refs.bin[e]));
-  }
-  ArrayView<uint16_t> tables;
-  ArrayView<uint32_t> weights;
-  s = detail::view_required_pair(asset,
-                                 {SectionType::ParallaxEntropy, kEntropyParallaxTablesInstance},
-                                 {SectionType::ParallaxEntropy, kHierParallaxWeightsInstance},
-                                 missing, version_message, &tables, &weights, kHierParallaxVersion);
-  if (!s.ok()) return s;
-  if (tables.rank != 3 || tables.dims[0] < 1 || tables.dims[0] > kMaxEntropyGroups ||
-      tables.dims[1] != uint32_t(kHierContexts) || tables.dims[2] != 256)
-    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_entropy instance 4 must be u16 {groups, 23, 256} with 1 to "
-                         "65536 groups in the hierarchical form");
-  if (weights.rank != 1 || weights.dims[0] != d)
-    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_entropy instance 5 must be u32 {%llu} (one prediction weight "
-                         "per direction)",
-                         static_cast<unsigned long long>(d));
-  for (uint64_t i = 0; i < d; ++i)
-    if (weights.data[i] < 1 || weights.data[i] > kMaxHierWeight)
-      return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "parallax_entropy: prediction weight of direction %llu is not in [1, "
-                           "2^24]",
-                           static_cast<unsigned long long>(i));
-  for (uint32_t g = 0; g < tables.dims[0]; ++g) {
-    const Status t = check_hierarchical_tables(tables.data + uint64_t(g) * kHierContexts * 256);
-    if (!t.ok())
-      return Status::error(ErrorCode::Malformed, Check::ValueRange, "group %u: %s", unsigned(g),
-                           t.message());
-  }
-  if (d * n * n * 2 > kMaxHierDecodedBytes)
-    return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
-                         "parallax_entropy: %llu directions of %llu^2 16-bit codes would decode "
-                         "to more than 4 GiB",
-                         static_cast<unsigned long long>(d), static_cast<unsigned long long>(n));
-  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
-  if (!packed || packed->count != d)
-    return Status::error(ErrorCode::Unsupported, Check::None,
-                         "parallax_entropy: cannot allocate the block directory");
-  if (planned) {  // bin b is block b; a left-out bin has no plane
-    for (uint64_t b = 0; b < d; ++b)
-      packed->plane[b] = map.covers(uint32_t(b)) ? int32_t(b) : -1;
-    plane_ = packed->plane.get();
-  }
-  info_ = ParallaxInfoRecord{};
-  info_.resolution = info.resolution;
-  info_.dirs = info.dirs;
-  info_.min_cos = info.min_cos;
-  info_.reference_height = info.reference_height;
-  info_.max_quantization_error = info.max_depth_error;
-  info_.max_offset = info.max_offset;
-  packed_info_ = info;
-  steps_ = steps.data;
-  offsets_ = offsets.data;
-  tables_ = tables.data;
-  groups_ = tables.dims[0];
-  weights_ = weights.data;
-  stream_ = stream.data;
-  packed_ = std::move(packed);
-  return {};
 }
 
 namespace {

@@ -251,7 +251,6 @@ class ParallaxView {
   Status open_raw(const Asset& asset) noexcept;
   Status open_compressed(const Asset& asset, SectionType type) noexcept;
   Status open_entropy(const Asset& asset) noexcept;
-  Status open_hierarchical(const Asset& asset) noexcept;
   Status decode_all_hierarchical() const noexcept;
 
   ParallaxInfoRecord info_{};
