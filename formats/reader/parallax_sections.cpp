@@ -824,6 +824,84 @@ double ParallaxView::footprint_code_sum(uint32_t bin, const FootprintPlan& p) co
   return f;
 }
 
+namespace {
+
+// One point (x, y) of a footprint's prefix integrals on the exact-u32 path (N <= 256), reduced
+// once per query to the table indices it reads, so that the (up to 4) bins of a lookup only load
+// and combine: the same arithmetic as prefix_integral, in the same order (bit for bit the same
+// result).
+struct ExactCorner {
+  int64_t e00 = -1, e10 = -1, e01 = -1, e11 = -1;  // table indices; -1 reads as 0
+  double fx = 0.0, fy = 0.0;
+};
+
+ExactCorner exact_corner(uint32_t n, double x, double y) noexcept {
+  uint32_t i = uint32_t(x), j = uint32_t(y);
+  if (i > n) i = n;
+  if (j > n) j = n;
+  ExactCorner c;
+  c.fx = i < n ? x - double(i) : 0.0;
+  c.fy = j < n ? y - double(j) : 0.0;
+  const uint32_t i1 = i < n ? i + 1 : n, j1 = j < n ? j + 1 : n;
+  auto index = [n](uint32_t a, uint32_t b) -> int64_t {
+    return (a == 0 || b == 0) ? -1 : int64_t(b - 1) * n + (a - 1);
+  };
+  c.e00 = index(i, j);
+  c.e10 = index(i1, j);
+  c.e01 = index(i, j1);
+  c.e11 = index(i1, j1);
+  return c;
+}
+
+double exact_prefix_integral(const uint32_t* table, const ExactCorner& c) noexcept {
+  auto at = [table](int64_t t) -> uint32_t { return t < 0 ? 0u : table[t]; };
+  const uint32_t e00 = at(c.e00), e10 = at(c.e10), e01 = at(c.e01);
+  double value = double(e00);
+  if (c.fx > 0.0) value += c.fx * double(e10 - e00);
+  if (c.fy > 0.0) value += c.fy * double(e01 - e00);
+  if (c.fx > 0.0 && c.fy > 0.0)
+    value += c.fx * c.fy * double(uint32_t(at(c.e11) - e10 - e01 + e00));
+  return value;
+}
+
+// The up to nine points of footprint_code_sum, reduced once per query.
+struct ExactFootprint {
+  ExactCorner c[9];
+  double qx = 0.0, qy = 0.0;
+};
+
+ExactFootprint exact_footprint(uint32_t n, const FootprintPlan& p) noexcept {
+  const double nn = double(n);
+  ExactFootprint f;
+  f.qx = p.qx;
+  f.qy = p.qy;
+  f.c[0] = exact_corner(n, p.rx1, p.ry1);
+  f.c[1] = exact_corner(n, p.x0, p.ry1);
+  f.c[2] = exact_corner(n, p.rx1, p.y0);
+  f.c[3] = exact_corner(n, p.x0, p.y0);
+  if (p.qx > 0) {
+    f.c[4] = exact_corner(n, nn, p.ry1);
+    f.c[5] = exact_corner(n, nn, p.y0);
+  }
+  if (p.qy > 0) {
+    f.c[6] = exact_corner(n, p.rx1, nn);
+    f.c[7] = exact_corner(n, p.x0, nn);
+  }
+  if (p.qx > 0 && p.qy > 0) f.c[8] = exact_corner(n, nn, nn);
+  return f;
+}
+
+double exact_footprint_sum(const uint32_t* table, const ExactFootprint& f) noexcept {
+  auto in = [&](int k) { return exact_prefix_integral(table, f.c[k]); };
+  double s = in(0) - in(1) - in(2) + in(3);
+  if (f.qx > 0) s += f.qx * (in(4) - in(5));
+  if (f.qy > 0) s += f.qy * (in(6) - in(7));
+  if (f.qx > 0 && f.qy > 0) s += f.qx * f.qy * in(8);
+  return s;
+}
+
+}  // namespace
+
 Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3],
                                      ParallaxSample* out) const noexcept {
   if (!is_open() || out == nullptr)
@@ -833,22 +911,30 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
                          "this asset has no parallax_sat section (footprint queries need it)");
 
   FootprintPlan plan;
-  Status s = plan_footprint(rect, info_.resolution, &plan);
-  if (!s.ok()) return s;
+  if (!make_footprint_plan(rect, info_.resolution, &plan))
+    return plan_footprint(rect, info_.resolution, &plan);  // the message
   const double area = (rect.x1 - rect.x0) * (rect.y1 - rect.y0);
   if (!(area > 0.0))
     return depth(int64_t(std::floor(rect.x0)), int64_t(std::floor(rect.y0)), view, out);
   double o[3];
-  s = view_direction(view, o);
+  Status s = view_direction(view, o);
   if (!s.ok()) return s;
   const model::DirectionGrid<double> grid{int(info_.dirs), info_.min_cos};
   const model::BinBilinear<double> w = grid.bilinear_fast(model::Vec3d(o[0], o[1], o[2]));
   for (int k = 0; k < 4; ++k)
     if (w.weight[k] > 0.0 && !covers(uint32_t(w.index[k]))) return out_of_plan(w.index[k]);
+  // N <= 256: the corners are reduced to table indices once for all bins of the lookup.
+  ExactFootprint exact;
+  if (exact_sums_) exact = exact_footprint(info_.resolution, plan);
+  auto code_sum = [&](uint32_t bin) {
+    const uint32_t* table = bin_sat(bin);
+    return exact_sums_ && table != nullptr ? exact_footprint_sum(table, exact)
+                                           : footprint_code_sum(bin, plan);
+  };
   double sum = 0.0;
   if (steps_ == nullptr) {  // raw: one depth scale
     for (int k = 0; k < 4; ++k)
-      if (w.weight[k] > 0.0) sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan);
+      if (w.weight[k] > 0.0) sum += w.weight[k] * code_sum(uint32_t(w.index[k]));
     sum *= info_.depth_scale;
   } else {
     for (int k = 0; k < 4; ++k)
@@ -856,8 +942,7 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
         if (!ensure_sat(uint32_t(w.index[k])))
           return Status::error(ErrorCode::Unsupported, Check::None,
                                "parallax: cannot allocate the SAT of direction %d", w.index[k]);
-        sum += w.weight[k] * footprint_code_sum(uint32_t(w.index[k]), plan) *
-               steps_[plane(uint32_t(w.index[k]))];
+        sum += w.weight[k] * code_sum(uint32_t(w.index[k])) * steps_[plane(uint32_t(w.index[k]))];
       }
   }
   const double r = -sum / area;
