@@ -136,23 +136,42 @@ std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8
     double score;
     uint32_t sx, sy;
   };
-  std::vector<Scored> scored;
-  for (uint32_t sy = 0; sy < n; sy += shift_step)
+  // Every shift is scored on the same samples; rows of shifts in parallel, concatenated in order
+  // (the same list as a serial scan, so the same candidates for any thread count).
+  std::vector<uint8_t> sampled(std::size_t(samples) * samples);
+  for (uint32_t j = 0; j < samples; ++j)
+    for (uint32_t i = 0; i < samples; ++i)
+      sampled[std::size_t(j) * samples + i] =
+          plane[uint64_t(j * sample_step) * n + uint64_t(i * sample_step)];
+  const uint32_t shift_rows = (n + shift_step - 1) / shift_step;
+  std::vector<std::vector<Scored>> rows(shift_rows);
+  tbb::parallel_for(uint32_t(0), shift_rows, [&](uint32_t row) {
+    const uint32_t sy = row * shift_step;
+    std::vector<uint32_t> rx(samples);
+    std::vector<const uint8_t*> shifted_row(samples);
+    for (uint32_t j = 0; j < samples; ++j)
+      shifted_row[j] = plane + uint64_t((j * sample_step + n - sy) % n) * n;
     for (uint32_t sx = 0; sx < n; sx += shift_step) {
       if (sx == 0 && sy == 0) continue;
       if (std::max(std::min(sx, n - sx), std::min(sy, n - sy)) < min_length) continue;
+      for (uint32_t i = 0; i < samples; ++i)
+        rx[i] = (i * sample_step + n - sx) % n;
       uint32_t match = 0;
-      for (uint32_t j = 0; j < samples; ++j)
-        for (uint32_t i = 0; i < samples; ++i) {
-          const uint32_t x = i * sample_step, y = j * sample_step;
-          const uint32_t rx = (x + n - sx) % n, ry = (y + n - sy) % n;
-          match += plane[uint64_t(y) * n + x] == plane[uint64_t(ry) * n + rx];
-        }
+      for (uint32_t j = 0; j < samples; ++j) {
+        const uint8_t* own = sampled.data() + std::size_t(j) * samples;
+        const uint8_t* other = shifted_row[j];
+        for (uint32_t i = 0; i < samples; ++i)
+          match += own[i] == other[rx[i]];
+      }
       const double share = double(match) / double(samples * samples);
       if (share < 0.5) continue;
       const double causal = sy > 0 ? double(n - sy) / n : double(n - sx) / n;
-      scored.push_back({share * causal, sx, sy});
+      rows[row].push_back({share * causal, sx, sy});
     }
+  });
+  std::vector<Scored> scored;
+  for (const auto& r : rows)
+    scored.insert(scored.end(), r.begin(), r.end());
   std::stable_sort(scored.begin(), scored.end(),
                    [](const Scored& a, const Scored& b) { return a.score > b.score; });
   std::vector<std::pair<uint32_t, uint32_t>> out;
