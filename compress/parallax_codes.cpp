@@ -24,13 +24,17 @@ std::vector<double> parallax_offset_per_depth(int resolution, int dirs, double m
   return out;
 }
 
-QuantisedParallax quantise_parallax(const ParallaxCodes& raw, double max_error) {
-  const auto start = std::chrono::steady_clock::now();
+void check_parallax_compression_input(const ParallaxCodes& raw, double max_error) {
   if (raw.codes == nullptr || raw.resolution < 1 || raw.dirs < 1)
     throw_input_error("parallax compression: empty parallax table");
   if (!(max_error > 0.0 && max_error <= 1.0))
     throw_input_error("bake.parallax_max_error = " + std::to_string(max_error) +
                       " is out of range; valid range is (0, 1]");
+}
+
+QuantisedParallax quantise_parallax(const ParallaxCodes& raw, double max_error) {
+  const auto start = std::chrono::steady_clock::now();
+  check_parallax_compression_input(raw, max_error);
   const std::size_t texels = std::size_t(raw.resolution) * raw.resolution;
   const std::size_t d = std::size_t(raw.dirs) * raw.dirs;
   const double levels = double((1u << reader::kCompressedParallaxBits) - 1);

@@ -65,6 +65,10 @@ struct QuantisedParallax {
 // N tan(theta_d) at the bin centres: texels of Eq. 2 offset per unit of depth, D values.
 std::vector<double> parallax_offset_per_depth(int resolution, int dirs, double min_cos);
 
+// Throws Error(Input) for an empty table or max_error outside (0, 1] (naming
+// bake.parallax_max_error): the check of every parallax compressor.
+void check_parallax_compression_input(const ParallaxCodes& raw, double max_error);
+
 // Requantises the raw codes to 8 bits and measures the errors; if their RMS offset error is above
 // max_error (texels), returns the 16-bit form (the raw codes, errors 0) instead. Throws
 // Error(Input) for an empty table or max_error outside (0, 1] naming bake.parallax_max_error.

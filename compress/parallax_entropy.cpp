@@ -201,28 +201,16 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
     out.candidates = parallax_shift_candidates(packed.codes.data() + d * plane, n);
   }
   // Shift per block by the entropy of its own residuals (an estimate of its coded size).
-  struct Choice {
-    uint32_t sx = 0, sy = 0;
-    std::vector<uint64_t> counts;
-  };
-  std::vector<Choice> choice(d_count);
+  std::vector<ShiftChoice> choice(d_count);
   tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
     if (!kept(d)) {  // an empty block: no counts
       choice[d].counts.assign(std::size_t(kEntropyContexts) * 256, 0);
       return;
     }
     const uint8_t* codes = packed.codes.data() + d * plane;
-    Choice best{0, 0, parallax_residual_counts(codes, n, 0, 0)};
-    double best_bits = residual_entropy_bits(best.counts);
-    for (const auto& [sx, sy] : out.candidates) {
-      std::vector<uint64_t> c = parallax_residual_counts(codes, n, sx, sy);
-      const double bits = residual_entropy_bits(c);
-      if (bits < best_bits) {
-        best_bits = bits;
-        best = {sx, sy, std::move(c)};
-      }
-    }
-    choice[d] = std::move(best);
+    choice[d] = choose_shift(out.candidates, [&](uint32_t sx, uint32_t sy) {
+      return parallax_residual_counts(codes, n, sx, sy);
+    });
   });
   // One table set per row of the direction grid (counts summed in block order: deterministic).
   const uint32_t dirs = uint32_t(packed.dirs);
@@ -231,7 +219,7 @@ EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
   for (uint32_t g = 0; g < dirs; ++g) {
     std::vector<uint64_t> sum(std::size_t(kEntropyContexts) * 256, 0);
     for (uint32_t i = 0; i < dirs; ++i) {
-      const Choice& c = choice[std::size_t(g) * dirs + i];
+      const ShiftChoice& c = choice[std::size_t(g) * dirs + i];
       for (std::size_t k = 0; k < sum.size(); ++k)
         sum[k] += c.counts[k];
     }

@@ -78,6 +78,28 @@ std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax&
 // as parallax_residual_counts returns): the sum over contexts of −k log2(k / row total).
 double residual_entropy_bits(const std::vector<uint64_t>& counts);
 
+// A block's tile-repeat shift: (0, 0) or one of `candidates`, whichever gives the fewest
+// estimated bits (residual_entropy_bits of counts(sx, sy); the first on ties), with its counts.
+struct ShiftChoice {
+  uint32_t sx = 0, sy = 0;
+  std::vector<uint64_t> counts;
+};
+template <class Counts>
+ShiftChoice choose_shift(const std::vector<std::pair<uint32_t, uint32_t>>& candidates,
+                         Counts&& counts) {
+  ShiftChoice best{0, 0, counts(0u, 0u)};
+  double best_bits = residual_entropy_bits(best.counts);
+  for (const auto& [sx, sy] : candidates) {
+    std::vector<uint64_t> c = counts(sx, sy);
+    const double bits = residual_entropy_bits(c);
+    if (bits < best_bits) {
+      best_bits = bits;
+      best = {sx, sy, std::move(c)};
+    }
+  }
+  return best;
+}
+
 // Directions a plan's keep mask keeps (its non-zero entries; one entry per view bin).
 std::size_t kept_direction_count(const std::vector<uint8_t>& keep);
 

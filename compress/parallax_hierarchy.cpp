@@ -198,11 +198,7 @@ std::vector<uint8_t> encode_hierarchical_block(const HierarchicalParallax& p, ui
 HierarchicalParallax hierarchical_parallax(const ParallaxCodes& raw, double max_error,
                                            const std::vector<uint8_t>& keep) {
   const auto start = std::chrono::steady_clock::now();
-  if (raw.codes == nullptr || raw.resolution < 1 || raw.dirs < 1)
-    throw_input_error("parallax compression: empty parallax table");
-  if (!(max_error > 0.0 && max_error <= 1.0))
-    throw_input_error("bake.parallax_max_error = " + std::to_string(max_error) +
-                      " is out of range; valid range is (0, 1]");
+  check_parallax_compression_input(raw, max_error);
   const uint32_t n = uint32_t(raw.resolution), dirs = uint32_t(raw.dirs);
   const std::size_t d_count = std::size_t(dirs) * dirs;
   const uint64_t texels = uint64_t(n) * n;
@@ -277,28 +273,15 @@ HierarchicalParallax hierarchical_parallax(const ParallaxCodes& raw, double max_
     // median predictor already sees; the tile's real repeats are longer.
     p.candidates = parallax_shift_candidates(low.data(), n, 3, std::max<uint32_t>(4, n / 16));
   }
-  struct Choice {
-    uint32_t sx = 0, sy = 0;
-    std::vector<uint64_t> counts;
-  };
-  std::vector<Choice> choice(d_count);
+  std::vector<ShiftChoice> choice(d_count);
   tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
     if (!stored(d)) {  // an empty block: no counts
       choice[d].counts.assign(std::size_t(kHierContexts) * 256, 0);
       return;
     }
     const Difference plane = difference_plane(p, uint32_t(d));
-    Choice best{0, 0, symbol_counts(plane, n, 0, 0)};
-    double best_bits = residual_entropy_bits(best.counts);
-    for (const auto& [sx, sy] : p.candidates) {
-      std::vector<uint64_t> c = symbol_counts(plane, n, sx, sy);
-      const double bits = residual_entropy_bits(c);
-      if (bits < best_bits) {
-        best_bits = bits;
-        best = {sx, sy, std::move(c)};
-      }
-    }
-    choice[d] = std::move(best);
+    choice[d] = choose_shift(
+        p.candidates, [&](uint32_t sx, uint32_t sy) { return symbol_counts(plane, n, sx, sy); });
   });
   // Frequency tables: one set per group of blocks. More groups fit the blocks better but cost
   // kHierContexts * 512 bytes each; of the partitions {all}, {level}, {level x ring} the bake
