@@ -88,16 +88,7 @@ QuantisedParallax quantise_parallax(const ParallaxCodes& raw, double max_error) 
 
 std::vector<formats::Section> compressed_parallax_sections(const QuantisedParallax& p) {
   const uint32_t n = uint32_t(p.resolution), d = uint32_t(p.dirs * p.dirs);
-  reader::CompressedParallaxInfoRecord info{};
-  info.resolution = n;
-  info.dirs = uint32_t(p.dirs);
-  info.bits = uint32_t(p.bits);
-  info.min_cos = p.min_cos;
-  info.reference_height = p.reference_height;
-  info.max_offset = p.max_offset;
-  info.rms_offset_error = p.rms_offset_error;
-  info.max_offset_error = p.max_offset_error;
-  info.max_depth_error = p.max_depth_error;
+  const reader::CompressedParallaxInfoRecord info = parallax_info_record(p, uint32_t(p.bits), 0u);
   std::vector<formats::Section> out;
   out.push_back(formats::make_record_section(
       reader::SectionType::ParallaxCompressed, reader::kCompressedParallaxInfoInstance,

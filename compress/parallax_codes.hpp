@@ -21,6 +21,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "formats/reader/parallax_sections.hpp"  // CompressedParallaxInfoRecord
+
 namespace clothbake::formats {
 struct Section;
 }
@@ -68,6 +70,25 @@ std::vector<double> parallax_offset_per_depth(int resolution, int dirs, double m
 // Throws Error(Input) for an empty table or max_error outside (0, 1] (naming
 // bake.parallax_max_error): the check of every parallax compressor.
 void check_parallax_compression_input(const ParallaxCodes& raw, double max_error);
+
+// The info record of a compressed form (QuantisedParallax, HierarchicalParallax): its shape and
+// measured errors, with the given bits and flags.
+template <class Form>
+reader::CompressedParallaxInfoRecord parallax_info_record(const Form& p, uint32_t bits,
+                                                          uint32_t flags) {
+  reader::CompressedParallaxInfoRecord info{};
+  info.resolution = uint32_t(p.resolution);
+  info.dirs = uint32_t(p.dirs);
+  info.bits = bits;
+  info.flags = flags;
+  info.min_cos = p.min_cos;
+  info.reference_height = p.reference_height;
+  info.max_offset = p.max_offset;
+  info.rms_offset_error = p.rms_offset_error;
+  info.max_offset_error = p.max_offset_error;
+  info.max_depth_error = p.max_depth_error;
+  return info;
+}
 
 // Requantises the raw codes to 8 bits and measures the errors; if their RMS offset error is above
 // max_error (texels), returns the 16-bit form (the raw codes, errors 0) instead. Throws

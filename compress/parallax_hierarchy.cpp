@@ -346,19 +346,10 @@ HierarchicalParallax hierarchical_parallax(const ParallaxCodes& raw, double max_
 
 std::vector<formats::Section> hierarchical_parallax_sections(const HierarchicalParallax& p) {
   using reader::SectionType;
-  const uint32_t n = uint32_t(p.resolution), d = uint32_t(p.dirs * p.dirs);
+  const uint32_t d = uint32_t(p.dirs * p.dirs);
   const uint16_t v = reader::kHierParallaxVersion;
-  reader::CompressedParallaxInfoRecord info{};
-  info.resolution = n;
-  info.dirs = uint32_t(p.dirs);
-  info.bits = 16;
-  info.flags = p.planned ? reader::kEntropyPlannedFlag : 0u;
-  info.min_cos = p.min_cos;
-  info.reference_height = p.reference_height;
-  info.max_offset = p.max_offset;
-  info.rms_offset_error = p.rms_offset_error;
-  info.max_offset_error = p.max_offset_error;
-  info.max_depth_error = p.max_depth_error;
+  const reader::CompressedParallaxInfoRecord info =
+      parallax_info_record(p, 16u, p.planned ? reader::kEntropyPlannedFlag : 0u);
   if (p.stream.size() > 0xFFFFFFFFull)
     throw_input_error("parallax: the entropy-coded table exceeds 4 GiB");
   std::vector<formats::Section> out;
