@@ -34,14 +34,14 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
 // at one byte per texel and direction, before coding: the coded forms depend on the pattern); the
 // compressed Integral-Radiance tables from a mean C-PCA rank of kMeanRank per texel (the 256^2
 // twill measured 15.1: 991149 coefficients over 65536 texels) capped at the kept bins, plus one
-// basis image per rank and cluster. Times: per-stage rates of the 256^2 twill (2 threads,
-// `clothbake bake --report`, load ~1.5; docs/scene-plans.md): a fixed part per texel plus a part
-// per texel and direction.
+// basis image per rank and cluster. Times: per-stage rates of the 256^2 twill, format 1.5, fitted
+// to its full bake and its far-swatch plan (2 threads, idle machine; docs/scene-plans.md,
+// "Estimates"): a fixed part per texel plus a part per texel and direction.
 constexpr double kMeanRank = 15.1;
-constexpr double kParallaxPerTexel = 1.8e-5, kParallaxPerRay = 9.0e-8;
-constexpr double kVisibilityPerSample = 8.1e-8;  // per texel and visibility direction
-constexpr double kClusterPerTexel = 1.4e-5;
-constexpr double kCompressPerTexel = 2.7e-5, kCompressPerTexelBin = 2.9e-8;
+constexpr double kParallaxPerTexel = 6.9e-6, kParallaxPerRay = 7.7e-8;
+constexpr double kVisibilityPerSample = 8.0e-8;  // per texel and visibility direction
+constexpr double kClusterPerTexel = 5.3e-6;
+constexpr double kCompressPerTexel = 1.9e-5, kCompressPerTexelBin = 1.7e-8;
 constexpr double kWritePerByte = 6.6e-9;
 
 PlanEstimate estimate_bake(const Fabric& fabric, double view_dirs, double bins, bool gap_kind) {
