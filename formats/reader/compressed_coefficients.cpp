@@ -3,6 +3,7 @@
 
 #include <cstring>
 
+#include "formats/reader/detail/rans_block.hpp"
 #include "formats/reader/parallax_entropy.hpp"  // the rANS constants
 
 namespace clothbake::reader {
@@ -52,13 +53,6 @@ Status decode_compressed_coefficients(const uint8_t* stream, uint64_t size, uint
     has_table[c] = total == kRansScale;
   }
   uint64_t pos = kCoefficientHeaderBytes + kCoefficientTableBytes;
-  auto renormalise = [&] {
-    while (x < kRansLow) {
-      if (pos >= size) return false;
-      x = (x << 8) | stream[pos++];
-    }
-    return true;
-  };
   // A bit length in context c (a linear search of at most 32 symbols).
   auto bit_length = [&](uint32_t c, uint32_t* b) {
     if (!has_table[c]) return false;
@@ -68,17 +62,15 @@ Status decode_compressed_coefficients(const uint8_t* stream, uint64_t size, uint
            !(freq[c][s] > 0 && slot < uint32_t(start[c][s]) + freq[c][s]))
       ++s;
     if (s == kCoefficientSymbols) return false;
-    x = uint32_t(freq[c][s]) * (x >> kRansScaleBits) + slot - start[c][s];
     *b = s;
-    return renormalise();
+    return detail::rans_advance(freq[c][s], start[c][s], slot, stream, size, pos, x);
   };
   // k uniform bits (1 <= k <= 8).
   auto uniform_bits = [&](uint32_t k, uint32_t* v) {
     const uint32_t shift = kRansScaleBits - k, f = kRansScale >> k;
     const uint32_t slot = x & (kRansScale - 1);
     *v = slot >> shift;
-    x = f * (x >> kRansScaleBits) + slot - (*v << shift);
-    return renormalise();
+    return detail::rans_advance(f, *v << shift, slot, stream, size, pos, x);
   };
   uint64_t next = 0;
   for (uint32_t ty = 0; ty < n; ++ty)

@@ -45,12 +45,9 @@ Status decode_parallax_block(const uint8_t* block, uint64_t size, const uint16_t
       if (!has_table[p.context]) return fail("a context is used without a frequency table");
       const uint32_t slot = x & (kRansScale - 1);
       const uint8_t sym = scratch->symbol[p.context][slot];
-      x = uint32_t(scratch->freq[p.context][sym]) * (x >> kRansScaleBits) + slot -
-          scratch->start[p.context][sym];
-      while (x < kRansLow) {
-        if (pos >= size) return fail("stream ends early");
-        x = (x << 8) | block[pos++];
-      }
+      if (!detail::rans_advance(scratch->freq[p.context][sym], scratch->start[p.context][sym], slot,
+                                block, size, pos, x))
+        return fail("stream ends early");
       plane[uint64_t(y) * n + tx] = uint8_t(p.value + sym);
     }
   if (x != kRansLow) return fail("the coder does not end in its initial state");

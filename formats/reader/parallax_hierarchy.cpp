@@ -47,13 +47,9 @@ Status decode_hierarchical_block(const uint8_t* block, uint64_t size, const uint
     if (!has_table[c]) return false;
     const uint32_t slot = x & (kRansScale - 1);
     const uint8_t s = scratch->symbol[c][slot];
-    x = uint32_t(scratch->freq[c][s]) * (x >> kRansScaleBits) + slot - scratch->start[c][s];
-    while (x < kRansLow) {
-      if (pos >= size) return false;
-      x = (x << 8) | block[pos++];
-    }
     *symbol = s;
-    return true;
+    return detail::rans_advance(scratch->freq[c][s], scratch->start[c][s], slot, block, size, pos,
+                                x);
   };
   uint32_t ref_codes[4];
   for (uint32_t ty = 0; ty < n; ++ty)

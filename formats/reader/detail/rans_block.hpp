@@ -63,6 +63,20 @@ const char* build_rans_tables(const uint16_t* freq, uint8_t (*symbol)[kRansScale
   return nullptr;
 }
 
+// One rANS decoding step: the state x, whose low kRansScaleBits are `slot`, moves past the symbol
+// of frequency `freq` starting at `start` (start <= slot < start + freq), then takes bytes of
+// block[pos, size) until it is at least kRansLow again. False when the block runs out. The step of
+// every rANS decoder of the reader (parallax versions 1 and 2, coded coefficients).
+inline bool rans_advance(uint32_t freq, uint32_t start, uint32_t slot, const uint8_t* block,
+                         uint64_t size, uint64_t& pos, uint32_t& x) noexcept {
+  x = freq * (x >> kRansScaleBits) + slot - start;
+  while (x < kRansLow) {
+    if (pos >= size) return false;
+    x = (x << 8) | block[pos++];
+  }
+  return true;
+}
+
 // Checks `Contexts` rows of 256 frequencies: each sums to 4096 or is all zero (an unused context).
 // OK, or Malformed / CBK-E021 naming the context and its sum.
 template <int Contexts>
