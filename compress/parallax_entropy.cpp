@@ -147,21 +147,38 @@ std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8
   std::vector<std::vector<Scored>> rows(shift_rows);
   tbb::parallel_for(uint32_t(0), shift_rows, [&](uint32_t row) {
     const uint32_t sy = row * shift_step;
-    std::vector<uint32_t> rx(samples);
-    std::vector<const uint8_t*> shifted_row(samples);
-    for (uint32_t j = 0; j < samples; ++j)
-      shifted_row[j] = plane + uint64_t((j * sample_step + n - sy) % n) * n;
+    // The sample (i, j) shifted by (sx, sy) reads source row r_j = (j step + n - sy) mod n at
+    // column (i step + n - sx) mod n = n - sx + i step of the row repeated twice. Split the
+    // repeated row by the column's residue modulo the step, so that the samples of every shift are
+    // a contiguous window: decimated[r_j][res][q + i] with n - sx = res + q step. The same
+    // comparisons as sampling each shift directly, in a loop the compiler vectorises.
+    const uint32_t length = (2 * n + sample_step - 1) / sample_step;
+    std::vector<uint8_t> decimated(std::size_t(samples) * sample_step * length);
+    auto window = [&](uint32_t j, uint32_t residue) {
+      return decimated.data() + (std::size_t(j) * sample_step + residue) * length;
+    };
+    for (uint32_t j = 0; j < samples; ++j) {
+      const uint8_t* source = plane + uint64_t((j * sample_step + n - sy) % n) * n;
+      for (uint32_t residue = 0; residue < sample_step; ++residue) {
+        uint8_t* out = window(j, residue);
+        for (uint32_t q = 0; q < length; ++q) {
+          const uint64_t column = uint64_t(residue) + uint64_t(q) * sample_step;
+          out[q] = column < 2 * uint64_t(n) ? source[column % n] : 0;
+        }
+      }
+    }
     for (uint32_t sx = 0; sx < n; sx += shift_step) {
       if (sx == 0 && sy == 0) continue;
       if (std::max(std::min(sx, n - sx), std::min(sy, n - sy)) < min_length) continue;
-      for (uint32_t i = 0; i < samples; ++i)
-        rx[i] = (i * sample_step + n - sx) % n;
+      const uint32_t start = n - sx, residue = start % sample_step, q = start / sample_step;
       uint32_t match = 0;
       for (uint32_t j = 0; j < samples; ++j) {
         const uint8_t* own = sampled.data() + std::size_t(j) * samples;
-        const uint8_t* other = shifted_row[j];
+        const uint8_t* other = window(j, residue) + q;
+        uint32_t row_match = 0;
         for (uint32_t i = 0; i < samples; ++i)
-          match += own[i] == other[rx[i]];
+          row_match += own[i] == other[i] ? 1u : 0u;
+        match += row_match;
       }
       const double share = double(match) / double(samples * samples);
       if (share < 0.5) continue;
