@@ -1,13 +1,14 @@
 // `clothbake report plan SCENE.toml -o DIR`: the proof that a scene-planned bake does not change
 // the picture (docs/scene-plans.md, "Proof"). For every fabric the scene's objects name, bakes the
-// full asset and the planned one (timed, this machine, this run), renders the scene with each
-// (same method, spp and seed) and with the Reference method on the full assets, and writes the
-// relMSE of planned against full and of both against the reference over that fabric's pixels,
-// the sizes and bake times, DIR/plan.json, DIR/side-by-side.png (full | planned | difference map)
-// and a summary on stdout. Exit 5 when a fabric's planned render is over the scene's budget:
-// relMSE planned vs full > [render] max_error (the criterion; the relative RMS is reported
-// beside it, docs/scene-plans.md says why it is not the criterion). With --image-size the plan is made for that
-// size (footprints and view directions change with it).
+// full asset and the planned one (timed, this machine, this run), renders the scene twice with each
+// (same method and spp; two seeds, each shared by a full and a planned render) and once with the
+// Reference method on the full assets, and writes the relMSE between the expected planned and full
+// renders (unbiased, from the two pairs), of both against the reference over that fabric's
+// pixels, the sizes and bake times, DIR/plan.json, DIR/side-by-side.png (full | planned |
+// difference map) and a summary on stdout. Exit 5 when a fabric's planned render is over the
+// scene's budget: relMSE planned vs full > [render] max_error (the relative RMS is reported beside
+// it, docs/scene-plans.md says why it is not the criterion). With --image-size the plan is made
+// for that size (footprints and view directions change with it).
 #pragma once
 
 #include <cstdint>

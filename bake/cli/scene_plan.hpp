@@ -35,6 +35,9 @@ struct FabricPlan {
   std::string object_name, fabric_path;
   render::ObjectUsage usage;
   int resolution = 0, radiance_dirs = 0, half_vector_bins_total = 0, parallax_dirs = 0;
+  // Light directions per side of the visibility sampling: the fabric's, and the plan's (fewer
+  // where every footprint is wide; docs/scene-plans.md, "Visibility directions").
+  int fabric_visibility_dirs = 0, visibility_dirs = 0;
   double max_parallax_offset = 0;  // texels, over the scene's views
   std::vector<PlanDecision> decisions;
   std::vector<std::string> warnings;
@@ -71,6 +74,7 @@ struct ScenePlanSeeds {
   std::vector<std::string> left_out;  // in words, for messages and `info`
   uint32_t half_vector_bins_kept = 0, half_vector_bins_total = 0;
   uint32_t view_bins_kept = 0, view_bins_total = 0;
+  int visibility_dirs = 0, visibility_dirs_total = 0;  // per side: planned, the fabric's
   bool transmission = true;
   nlohmann::json metadata;
 };

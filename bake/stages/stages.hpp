@@ -48,13 +48,15 @@ inline constexpr const char* kCompressSupersedesArtifact = "supersedes/compress"
 // PlannedBake. The parallax stage casts rays only for the kept view directions and writes the
 // planned parallax section (ParallaxPlanned); the tables and compress stages fill and compress only
 // the kept half-vector bins (radiance_compressed payload version 2) and leave the gap kind out
-// without transmission. The command seeds the bin_map / scene_plan sections and the plan's
-// metadata itself ("section/scene_plan", "metadata/scene_plan").
+// without transmission; the visibility stage samples visibility_dirs^2 light directions when the
+// plan sets it (wide footprints, docs/scene-plans.md). The command seeds the bin_map / scene_plan
+// sections and the plan's metadata itself ("section/scene_plan", "metadata/scene_plan").
 inline constexpr const char* kScenePlanArtifact = "scene_plan";
 struct PlannedBake {
   std::vector<uint8_t> half_vector_bins;  // radiance_dirs^2 entries, 1 = kept; empty: all bins
   std::vector<uint8_t> view_bins;         // parallax_dirs^2 entries, 1 = kept; empty: all
   bool transmission = true;               // false: the gap tables are left out
+  int visibility_dirs = 0;  // light directions per side of the visibility sampling; 0: the fabric's
 };
 
 }  // namespace clothbake::stages

@@ -24,6 +24,13 @@ void run_visibility(pipeline::StageContext& ctx) {
   const Fabric& fabric = ctx.input<Fabric>("fabric");
   VisibilitySettings settings;
   settings.dirs = fabric.bake.visibility_dirs;
+  // A scene plan may sample fewer light directions where every footprint averages the ASGs of
+  // many texels (docs/scene-plans.md, "Visibility directions"); the clusters' mean-visibility
+  // grid keeps the fabric's setting.
+  if (ctx.has_input(kScenePlanArtifact)) {
+    const int planned = ctx.input<PlannedBake>(kScenePlanArtifact).visibility_dirs;
+    if (planned > 0) settings.dirs = planned;
+  }
   VisibilitySamples samples =
       sample_visibility(fabric.maps, settings, [&](double f) { ctx.progress(0.7 * f); });
   VisibilityAsgs asgs =
@@ -65,7 +72,7 @@ pipeline::Stage visibility_stage() {
   s.description = "per-texel visibility sampled by ray casting, fitted by one ASG (Sec. 3.1, 4.2)";
   s.inputs = {"fabric"};
   s.outputs = {"section/visibility", "metadata/visibility", "visibility/asg_params"};
-  s.collects = {kCompressSettingsArtifact};
+  s.collects = {kCompressSettingsArtifact, kScenePlanArtifact};
   s.run = run_visibility;
   s.key_view = fabric_without_colours_view;  // albedos do not change its outputs
   return s;

@@ -77,6 +77,39 @@ TEST(ScenePlanRules, AFarCameraNeedsNoPerTexelParallaxANearOneDoes) {
   EXPECT_EQ(decisions(near)["per-texel parallax"], "kept");
 }
 
+// Visibility directions: fewer where every footprint is wide (12^2 from a side of 128 texels,
+// never more than the fabric's), the fabric's where some footprint is narrow; the planned bake
+// samples that many (its visibility metadata) and records it.
+TEST(ScenePlanRules, WideFootprintsSampleFewerVisibilityDirections) {
+  const fs::path far_scene =
+      write_scene("far-vis.toml", plane_scene("[0, 0, 50]", kFrontLight, 100, 1.2));
+  const auto far = plan_of(far_scene);
+  ASSERT_GE(far["usage"]["footprint_texels"]["min"].get<double>(), 128.0);
+  EXPECT_EQ(decisions(far)["visibility directions"], "reduced");
+  for (const auto& x : far["decisions"]) {
+    if (x["item"] == "visibility directions") {
+      EXPECT_NE(x["reason"].get<std::string>().find("12^2 instead of 20^2"), std::string::npos)
+          << x["reason"];
+    }
+  }
+  const auto near =
+      plan_of(write_scene("near-vis.toml", plane_scene("[0.6, 0, 1.2]", kFrontLight, 1, 40)));
+  ASSERT_LT(near["usage"]["footprint_texels"]["min"].get<double>(), 128.0);
+  EXPECT_EQ(decisions(near)["visibility directions"], "kept");
+
+  const std::string out = (assets().dir / "far-vis.cbk").string();
+  const auto run = run_clothbake(
+      {"bake", twill_toml(), "--scene", far_scene.string(), "-o", out, "--quiet", "--json"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(run.out);
+  EXPECT_EQ(report["scene_plan"]["visibility_dirs"], 12);
+  EXPECT_EQ(report["scene_plan"]["visibility_dirs_total"], 20);
+  const nlohmann::json info = info_of(out);
+  const auto& vis = info["metadata"]["parameters"]["visibility"];
+  EXPECT_EQ(vis["dirs"], 12);
+  EXPECT_EQ(vis["rays"].get<double>(), 64.0 * 64.0 * 144.0);
+}
+
 TEST(ScenePlanRules, ALightOnlyInFrontLeavesOutTransmission) {
   const auto front = plan_of(write_scene("front.toml", plane_scene("[0, 0, 3]", kFrontLight, 2)));
   EXPECT_EQ(decisions(front)["transmission and gap tables"], "left out");
@@ -262,7 +295,8 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       auto stream_bytes = [](const std::string& asset) {
         const nlohmann::json info = info_of(asset);
         for (const auto& s : info["sections"])
-          if (s["name"] == "parallax_entropy" && s["instance"] == 3) return s["bytes"].get<double>();
+          if (s["name"] == "parallax_entropy" && s["instance"] == 3)
+            return s["bytes"].get<double>();
         return -1.0;
       };
       const double planned_stream = stream_bytes(f["planned_asset"].get<std::string>());
@@ -271,9 +305,19 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       EXPECT_LE(f["relmse"]["planned_vs_full"].get<double>(), f["budget"].get<double>())
           << name << ": " << f.dump();
       // The plan does not make the picture worse: the planned render is as far from the reference
-      // as the full one, within the budget (relative).
+      // as the full one, within the budget (relative), where the per-texel visibility is the
+      // full asset's (the two renders then share their noise). With fewer visibility directions
+      // the expected picture is the same (above) but the noise is not shared and differs: a few
+      // per cent more per sample on the far swatch (docs/scene-plans.md), and over this test's
+      // ~100 pixels the two relMSE estimates scatter by tens of per cent, so only a gross loss
+      // is an error here.
+      bool fewer_visibility_directions = false;
+      for (const auto& what : f["left_out"])
+        fewer_visibility_directions |=
+            what.get<std::string>().find("visibility sampled on") != std::string::npos;
       EXPECT_LE(f["relmse"]["planned_vs_reference"].get<double>(),
-                f["relmse"]["full_vs_reference"].get<double>() * (1 + f["budget"].get<double>()))
+                f["relmse"]["full_vs_reference"].get<double>() *
+                    (fewer_visibility_directions ? 2.0 : 1 + f["budget"].get<double>()))
           << name << ": " << f.dump();
       EXPECT_TRUE(f["relmse"].contains("full_vs_reference"));
       EXPECT_TRUE(f["relmse"].contains("planned_vs_reference"));
