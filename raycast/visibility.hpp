@@ -61,7 +61,8 @@ struct VisibilityAsgs {
   double mean_fit_error = 0.0, max_fit_error = 0.0;
   std::size_t worst_texel = 0;
   std::size_t texels_above_warning = 0;
-  uint64_t fit_evaluations = 0;
+  std::size_t distinct_patterns = 0;  // distinct sample patterns: the fits actually run
+  uint64_t fit_evaluations = 0;       // objective evaluations of those fits
 };
 
 void validate_visibility_settings(const VisibilitySettings& settings);
@@ -75,8 +76,9 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
                                     const std::function<void(double)>& progress = {});
 
 // Fits one ASG per texel (raycast/asg_fit.hpp), packs it, and records the RMS error of the
-// packed lobe. Warns once, naming the count and the worst texel, when texels exceed
-// settings.fit_warn_rms.
+// packed lobe. Texels with identical samples share one fit (run once per distinct pattern; the
+// same records as fitting each texel). Warns once, naming the count and the worst texel (the
+// first in texel order), when texels exceed settings.fit_warn_rms.
 VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const VisibilitySettings& settings,
                               const std::function<void(double)>& progress = {});
 

@@ -10,6 +10,7 @@
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/directions.hpp"
+#include "raycast/asg_fit.hpp"
 #include "raycast/visibility.hpp"
 #include "tests/raycast/cgal_check.hpp"
 #include "tests/raycast/reference.hpp"
@@ -226,6 +227,43 @@ TEST(Visibility, SameBitsAndLobesForAnyThreadCount) {
             0);
   EXPECT_EQ(a1.fit_error, a2.fit_error);
   EXPECT_EQ(a1.mean_fit_error, a2.mean_fit_error);
+}
+
+// Texels with the same samples share one fit: the records and errors are those of fitting every
+// texel on its own (fit_asg, pack_asg, asg_rms_error of the packed lobe), and a woven tile, whose
+// relief repeats, has fewer distinct patterns than texels. The worst texel is the first in texel
+// order with the largest error.
+TEST(Visibility, DistinctPatternsAreFittedOnceWithEveryTexelsOwnResult) {
+  FabricMaps maps = rctest::plain_weave_maps(32);
+  VisibilitySettings settings;
+  settings.dirs = 10;
+  VisibilitySamples v = sample_visibility(maps, settings);
+  VisibilityAsgs a = fit_visibility(v, settings);
+  const std::size_t texels = maps.texel_count();
+  EXPECT_GT(a.distinct_patterns, 1u);
+  EXPECT_LT(a.distinct_patterns, texels);
+  model::DirectionGrid<double> grid{settings.dirs, 0.0};
+  FitDirections directions;
+  for (int j = 0; j < settings.dirs; ++j)
+    for (int i = 0; i < settings.dirs; ++i) {
+      model::Vec3d d = grid.bin_center(i, j);
+      directions.push_back(d.x, d.y, d.z);
+    }
+  std::vector<uint8_t> visible(std::size_t(settings.dirs * settings.dirs));
+  double largest = -1;
+  std::size_t first_largest = 0;
+  for (std::size_t t = 0; t < texels; ++t) {
+    for (std::size_t k = 0; k < visible.size(); ++k)
+      visible[k] = v.visible(t, int(k)) ? 1 : 0;
+    const model::AsgRecord record = model::pack_asg(fit_asg(directions, visible.data()).params);
+    ASSERT_EQ(std::memcmp(&record, &a.records[t], sizeof record), 0) << "texel " << t;
+    const float error =
+        float(asg_rms_error(directions, visible.data(), model::unpack_asg<double>(record)));
+    ASSERT_EQ(error, a.fit_error[t]) << "texel " << t;
+    if (double(error) > largest) largest = double(error), first_largest = t;
+  }
+  EXPECT_EQ(a.worst_texel, first_largest);
+  EXPECT_EQ(a.max_fit_error, largest);
 }
 
 TEST(Visibility, RejectsBadSettings) {
