@@ -38,10 +38,10 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
 // to its full bake and its far-swatch plan (2 threads, idle machine; docs/scene-plans.md,
 // "Estimates"): a fixed part per texel plus a part per texel and direction.
 constexpr double kMeanRank = 15.1;
-constexpr double kParallaxPerTexel = 6.9e-6, kParallaxPerRay = 7.7e-8;
-constexpr double kVisibilityPerSample = 8.0e-8;  // per texel and visibility direction
-constexpr double kClusterPerTexel = 5.3e-6;
-constexpr double kCompressPerTexel = 1.9e-5, kCompressPerTexelBin = 1.7e-8;
+constexpr double kParallaxPerTexel = 4.2e-6, kParallaxPerRay = 5.8e-8;
+constexpr double kVisibilityPerSample = 4.8e-8;  // per texel and visibility direction
+constexpr double kClusterPerTexel = 4.9e-6;
+constexpr double kCompressPerTexel = 1.6e-5, kCompressPerTexelBin = 1.8e-8;
 constexpr double kWritePerByte = 6.6e-9;
 
 // Visibility directions: the ASG of a texel is fitted to binary visibility sampled on dirs^2 light
