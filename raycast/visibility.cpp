@@ -12,7 +12,6 @@
 #include <functional>
 #include <limits>
 #include <string>
-#include <unordered_map>
 
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -189,28 +188,28 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const Visibility
   const std::size_t words = std::size_t(samples.words_per_texel);
   auto pattern = [&](std::size_t t) { return samples.bits.data() + t * words; };
   std::vector<uint32_t> pattern_of(texels);  // index into `firsts`
-  std::vector<std::size_t> firsts;           // the first texel of each distinct pattern
+  std::vector<uint32_t> firsts;              // the first texel of each distinct pattern
   {
-    std::unordered_multimap<uint64_t, uint32_t> seen;
-    seen.reserve(texels);
+    // Open addressing with linear probing over a power-of-two table at most half full: 4 bytes
+    // per slot, 8 to 16 bytes per texel (docs/raycast.md; the memory estimate counts them).
+    constexpr uint32_t kEmpty = ~uint32_t(0);
+    const std::size_t capacity = std::bit_ceil(std::max<std::size_t>(2 * texels, 2));
+    std::vector<uint32_t> table(capacity, kEmpty);
     for (std::size_t t = 0; t < texels; ++t) {
       uint64_t h = 0x243f6a8885a308d3ull;
       for (std::size_t w = 0; w < words; ++w) {
         h ^= pattern(t)[w];
         h = model::splitmix64_next(h);
       }
-      uint32_t index = uint32_t(firsts.size());
-      const auto [lo, hi] = seen.equal_range(h);
-      for (auto it = lo; it != hi; ++it)
-        if (std::equal(pattern(t), pattern(t) + words, pattern(firsts[it->second]))) {
-          index = it->second;
-          break;
-        }
-      if (index == firsts.size()) {
-        firsts.push_back(t);
-        seen.emplace(h, index);
+      std::size_t slot = std::size_t(h) & (capacity - 1);
+      while (table[slot] != kEmpty &&
+             !std::equal(pattern(t), pattern(t) + words, pattern(firsts[table[slot]])))
+        slot = (slot + 1) & (capacity - 1);
+      if (table[slot] == kEmpty) {
+        table[slot] = uint32_t(firsts.size());
+        firsts.push_back(uint32_t(t));
       }
-      pattern_of[t] = index;
+      pattern_of[t] = table[slot];
     }
   }
   out.distinct_patterns = firsts.size();

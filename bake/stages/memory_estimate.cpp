@@ -132,7 +132,12 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     const double words = std::ceil(double(b.visibility_dirs) * b.visibility_dirs / 64.0);
     const double samples = words * 8 * texels;
     const double kept = (kAsgBytesPerTexel + kLobeBytesPerTexel) * texels;
-    m.add("visibility", samples + kEmbreeBytesPerTexel * texels + kAsgBytesPerTexel * texels + kept,
+    // The grouping of texels by sample pattern (raycast/visibility.cpp): pattern index, first
+    // texel and hash slots, 4 + 4 + up to 16 bytes a texel, and the fits of the distinct patterns
+    // (a record and an error, at most one per texel).
+    const double grouping = (24.0 + kAsgBytesPerTexel) * texels;
+    m.add("visibility",
+          samples + kEmbreeBytesPerTexel * texels + kAsgBytesPerTexel * texels + grouping + kept,
           kept, "the visibility samples of every texel and light direction",
           {"resolution", "visibility_dirs"});
   }
