@@ -191,7 +191,8 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const Visibility
   std::vector<uint32_t> firsts;              // the first texel of each distinct pattern
   {
     // Open addressing with linear probing over a power-of-two table at most half full: 4 bytes
-    // per slot, 8 to 16 bytes per texel (docs/raycast.md; the memory estimate counts them).
+    // per slot, 8 to 16 bytes per texel (docs/raycast.md; the memory estimate counts them, and
+    // `firsts` at up to 8 bytes a texel while its vector grows).
     constexpr uint32_t kEmpty = ~uint32_t(0);
     const std::size_t capacity = std::bit_ceil(std::max<std::size_t>(2 * texels, 2));
     std::vector<uint32_t> table(capacity, kEmpty);
@@ -238,17 +239,18 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const Visibility
         return evaluations;
       },
       std::plus<uint64_t>());
-  out.max_fit_error = 0.0;
+  double largest = -1;  // the first texel of the largest error (a NaN error is never it)
   for (std::size_t t = 0; t < texels; ++t) {
     out.records[t] = fitted_records[pattern_of[t]];
     const float err = fitted_errors[pattern_of[t]];
     out.fit_error[t] = err;
-    if (t == 0 || double(err) > out.max_fit_error) {  // the first texel of the largest error
-      out.max_fit_error = double(err);
+    if (double(err) > largest) {
+      largest = double(err);
       out.worst_texel = t;
     }
     out.texels_above_warning += double(err) > settings.fit_warn_rms ? 1 : 0;
   }
+  out.max_fit_error = std::max(largest, 0.0);
   // The mean is recomputed in texel order so that it does not depend on how TBB split the range.
   double sum = 0;
   for (float e : out.fit_error)

@@ -13,9 +13,11 @@
 #include "bake/inputs/scene_load.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/stages.hpp"
+#include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
 #include "formats/writer/atomic_file.hpp"
+#include "model/splitmix64.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
 
@@ -48,30 +50,44 @@ double relmse(const render::RenderResult& a, const render::RenderResult& ref,
 // pixels and channels of (a1 - b1)(a2 - b2) / (r^2 + eps^2), with r and eps as in relmse(). The
 // two pairs' noise is independent, so its products average to zero; each pair shares its random
 // numbers, so where the assets agree the difference is exactly zero. Can be slightly negative.
+// The standard error treats pixels as independent (a pixel's three channels come from the same
+// samples, so they are averaged first). relmse_pair() is the same normalisation for one pair.
 struct MeanAndError {
   double mean = 0, std_error = 0;
 };
-MeanAndError relmse_of_means(const render::RenderResult& a1, const render::RenderResult& b1,
-                             const render::RenderResult& a2, const render::RenderResult& b2,
-                             const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
+double relmse_floor2(const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
   double sum = 0;
   std::size_t count = 0;
   for (std::size_t k = 0; k < ref.rgb.size(); ++k)
     if (mask[k / 3]) sum += ref.rgb[k], ++count;
-  if (count == 0) return {};
-  const double eps = 0.01 * sum / double(count), floor2 = eps > 0 ? eps * eps : 1e-12;
+  const double eps = count ? 0.01 * sum / double(count) : 0.0;
+  return eps > 0 ? eps * eps : 1e-12;
+}
+MeanAndError relmse_of_means(const render::RenderResult& a1, const render::RenderResult& b1,
+                             const render::RenderResult& a2, const render::RenderResult& b2,
+                             const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
+  const double floor2 = relmse_floor2(ref, mask);
   double rel = 0, rel2 = 0;
-  for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
-    if (!mask[k / 3]) continue;
-    const double d1 = double(a1.rgb[k]) - b1.rgb[k], d2 = double(a2.rgb[k]) - b2.rgb[k];
-    const double term = d1 * d2 / (double(ref.rgb[k]) * ref.rgb[k] + floor2);
+  std::size_t pixels = 0;
+  for (std::size_t p = 0; p < mask.size(); ++p) {
+    if (!mask[p]) continue;
+    double term = 0;
+    for (std::size_t k = 3 * p; k < 3 * p + 3; ++k) {
+      const double d1 = double(a1.rgb[k]) - b1.rgb[k], d2 = double(a2.rgb[k]) - b2.rgb[k];
+      term += d1 * d2 / (double(ref.rgb[k]) * ref.rgb[k] + floor2) / 3;
+    }
     rel += term;
     rel2 += term * term;
+    ++pixels;
   }
-  const double n = double(count), mean = rel / n;
-  // The terms' sample standard deviation over sqrt(n) (pixels treated as independent).
-  const double var = count > 1 ? std::max(0.0, (rel2 - n * mean * mean) / (n - 1)) : 0.0;
+  if (pixels == 0) return {};
+  const double n = double(pixels), mean = rel / n;
+  const double var = pixels > 1 ? std::max(0.0, (rel2 - n * mean * mean) / (n - 1)) : 0.0;
   return {mean, std::sqrt(var / n)};
+}
+double relmse_pair(const render::RenderResult& a, const render::RenderResult& b,
+                   const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
+  return relmse_of_means(a, b, a, b, ref, mask).mean;
 }
 
 struct FabricRow {
@@ -166,7 +182,11 @@ int run_plan_report(const PlanReportOptions& o) {
   const render::RenderResult planned_image = render::Renderer(planned_scene, ro).render();
   // The second, independent pair of the unbiased comparison (relmse_of_means).
   render::RenderOptions ro2 = ro;
-  ro2.seed = o.seed + 7919;
+  // A full 64-bit seed: the renderer's per-pixel seeds XOR the pixel index into the seed, so a
+  // seed that differs from the first in low bits only would give some pixels another pixel's
+  // random numbers of the first pair.
+  uint64_t seed_state = o.seed;
+  ro2.seed = model::splitmix64_next(seed_state);
   const render::RenderResult full_image2 = render::Renderer(full_scene, ro2).render();
   const render::RenderResult planned_image2 = render::Renderer(planned_scene, ro2).render();
   render::RenderOptions ref_options;
@@ -193,10 +213,15 @@ int run_plan_report(const PlanReportOptions& o) {
         relmse_of_means(planned_image, full_image, planned_image2, full_image2, reference, mask);
     row.planned_vs_full = of_means.mean;
     row.planned_vs_full_error = of_means.std_error;
-    row.same_seed = relmse(planned_image, full_image, mask);
+    row.same_seed = relmse_pair(planned_image, full_image, reference, mask);
     row.full_vs_reference = relmse(full_image, reference, mask);
     row.planned_vs_reference = relmse(planned_image, reference, mask);
     row.pass = row.planned_vs_full <= budget;
+    if (row.planned_vs_full_error > budget / 4)
+      warn("report plan: " + row.fabric + ": the comparison's standard error " +
+           std::to_string(row.planned_vs_full_error) + " is above a quarter of the budget " +
+           std::to_string(budget) +
+           ": it cannot resolve the budget; raise --spp or the image size");
     all_pass = all_pass && row.pass;
     fabrics.push_back(
         {{"fabric", row.fabric},
@@ -223,21 +248,47 @@ int run_plan_report(const PlanReportOptions& o) {
          {"left_out", row.seeds.left_out}});
   }
 
-  // Side by side: full | planned | relative difference (x 1/budget, white = at the budget).
+  // Side by side: full | planned | where the expected picture changes: the terms of
+  // relmse_of_means, (P1 - F1)(P2 - F2) / (R^2 + eps^2) averaged over the channels, pooled in
+  // blocks of B x B pixels (B = max(2, min(w, h) / 16)), shown as sqrt(max(0, mean - 2 standard
+  // errors) / budget). A pixel's term is mostly noise that the two pairs do not share, of either
+  // sign; the block's lower bound is zero where only noise is, and at the budget (yellow) where the
+  // block's pixels alone would reach it.
+  const double floor2_all = relmse_floor2(reference, std::vector<uint8_t>(hit.size(), 1));
+  const int block = std::max(2, std::min(w, h) / 16);
+  const int bw = (w + block - 1) / block, bh = (h + block - 1) / block;
+  std::vector<double> block_sum(std::size_t(bw) * bh, 0.0), block_sum2(block_sum.size(), 0.0);
+  std::vector<int> block_count(block_sum.size(), 0);
   Image side(3 * w, h, 3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const std::size_t p = std::size_t(y) * w + x;
-      double a = 0, b = 0;
+      double term = 0;
       for (int c = 0; c < 3; ++c) {
+        const std::size_t k = 3 * p + std::size_t(c);
         side.pixels[(std::size_t(y) * 3 * w + x) * 3 + c] =
-            float(render::srgb_encode(full_image.rgb[3 * p + c]));
+            float(render::srgb_encode(full_image.rgb[k]));
         side.pixels[(std::size_t(y) * 3 * w + w + x) * 3 + c] =
-            float(render::srgb_encode(planned_image.rgb[3 * p + c]));
-        a += full_image.rgb[3 * p + c];
-        b += planned_image.rgb[3 * p + c];
+            float(render::srgb_encode(planned_image.rgb[k]));
+        term += (double(planned_image.rgb[k]) - full_image.rgb[k]) *
+                (double(planned_image2.rgb[k]) - full_image2.rgb[k]) /
+                (double(reference.rgb[k]) * reference.rgb[k] + floor2_all) / 3;
       }
-      const double e = a > 1e-6 ? std::min(1.0, std::abs(b - a) / a / budget) : 0.0;
+      if (hit[p] < 0) continue;  // no object: stays black
+      const std::size_t b = std::size_t(y / block) * bw + std::size_t(x / block);
+      block_sum[b] += term;
+      block_sum2[b] += term * term;
+      ++block_count[b];
+    }
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t b = std::size_t(y / block) * bw + std::size_t(x / block);
+      const int count = block_count[b];
+      if (hit[std::size_t(y) * w + x] < 0 || count < 2) continue;
+      const double mean = block_sum[b] / count;
+      const double var = std::max(0.0, (block_sum2[b] - count * mean * mean) / (count - 1));
+      const double lower = mean - 2 * std::sqrt(var / count);
+      const double e = std::min(1.0, std::sqrt(std::max(lower, 0.0) / budget));
       // False colour: black (equal) through red to yellow (at or over the budget).
       const float r = float(std::min(1.0, 2 * e)), g = float(std::max(0.0, 2 * e - 1));
       const std::size_t q = (std::size_t(y) * 3 * w + 2 * w + x) * 3;

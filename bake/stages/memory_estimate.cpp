@@ -133,9 +133,9 @@ MemoryEstimate estimate_bake_memory(const MemoryEstimateInput& in) {
     const double samples = words * 8 * texels;
     const double kept = (kAsgBytesPerTexel + kLobeBytesPerTexel) * texels;
     // The grouping of texels by sample pattern (raycast/visibility.cpp): pattern index, first
-    // texel and hash slots, 4 + 4 + up to 16 bytes a texel, and the fits of the distinct patterns
-    // (a record and an error, at most one per texel).
-    const double grouping = (24.0 + kAsgBytesPerTexel) * texels;
+    // texels (up to 8 bytes a texel while the vector grows) and hash slots (up to 16), and the
+    // fits of the distinct patterns (a record and an error, at most one per texel).
+    const double grouping = (28.0 + kAsgBytesPerTexel) * texels;
     m.add("visibility",
           samples + kEmbreeBytesPerTexel * texels + kAsgBytesPerTexel * texels + grouping + kept,
           kept, "the visibility samples of every texel and light direction",

@@ -140,7 +140,7 @@ void BM_AsgFit(benchmark::State& state) {
     benchmark::DoNotOptimize(a.records.data());
   }
   state.counters["fits/s"] = benchmark::Counter(double(fits), benchmark::Counter::kIsRate);
-  // Texels per second (each texel gets its record; distinct patterns are fitted once).
+  // Objective evaluations per fit actually run (distinct patterns are fitted once).
   state.counters["evals/fit"] = double(evaluations) / double(distinct);
   state.counters["distinct"] = double(distinct) / double(fits);
   state.counters["mean_rms"] = mean_error;

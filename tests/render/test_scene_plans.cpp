@@ -279,8 +279,10 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
     const std::string name = entry.path().stem().string();
     const fs::path scene = write_scene("example-" + name + ".toml", text);
     const fs::path dir = assets().dir / ("report-" + name);
-    const auto r = run_clothbake(
-        {"report", "plan", scene.string(), "-o", dir.string(), "--image-size", "12,12", "--json"});
+    // 8 spp: on 12^2 pixels the comparison's standard error at 2 spp can approach the budget
+    // where the plan samples fewer visibility directions (the pairs' noise is then not shared).
+    const auto r = run_clothbake({"report", "plan", scene.string(), "-o", dir.string(),
+                                  "--image-size", "12,12", "--spp", "8", "--json"});
     ASSERT_TRUE(r.code == 0 || r.code == 5) << name << ": " << r.err;
     const nlohmann::json j = nlohmann::json::parse(r.out);
     for (const auto& f : j["fabrics"]) {
@@ -304,6 +306,10 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       EXPECT_LE(planned_stream, stream_bytes(f["full_asset"].get<std::string>())) << name;
       EXPECT_LE(f["relmse"]["planned_vs_full"].get<double>(), f["budget"].get<double>())
           << name << ": " << f.dump();
+      // ... and the comparison resolves the budget: its standard error is well below it.
+      EXPECT_LT(f["relmse"]["planned_vs_full_std_error"].get<double>(),
+                f["budget"].get<double>() / 4)
+          << name << ": " << f.dump();
       // The plan does not make the picture worse: the planned render is as far from the reference
       // as the full one, within the budget (relative), where the per-texel visibility is the
       // full asset's (the two renders then share their noise). With fewer visibility directions
@@ -314,7 +320,7 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       bool fewer_visibility_directions = false;
       for (const auto& what : f["left_out"])
         fewer_visibility_directions |=
-            what.get<std::string>().find("visibility sampled on") != std::string::npos;
+            what.get<std::string>().find("visibility light directions") != std::string::npos;
       EXPECT_LE(f["relmse"]["planned_vs_reference"].get<double>(),
                 f["relmse"]["full_vs_reference"].get<double>() *
                     (fewer_visibility_directions ? 2.0 : 1 + f["budget"].get<double>()))
