@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/render_error.hpp"
 #include "bake/cli/scene_bake.hpp"
 #include "bake/inputs/fabric_files.hpp"
 #include "common/diagnostics.hpp"
@@ -36,30 +37,7 @@ struct Row {
   render::RenderResult image;
 };
 
-// relMSE = mean over pixels and channels of (x - r)^2 / (r^2 + eps^2), eps = 1 % of the reference's
-// mean (a floor, so that nearly black pixels do not dominate: docs/rendering.md), over the pixels
-// of `mask` (all when empty); and the absolute RMSE.
-double relmse_floor(const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
-  double sum = 0;
-  std::size_t count = 0;
-  for (std::size_t k = 0; k < ref.rgb.size(); ++k)
-    if (mask.empty() || mask[k / 3]) sum += ref.rgb[k], ++count;
-  const double eps = 0.01 * (count ? sum / count : 0.0);
-  return eps > 0 ? eps * eps : 1e-12;
-}
-double masked_relmse(const render::RenderResult& a, const render::RenderResult& ref,
-                     const std::vector<uint8_t>& mask) {
-  const double floor2 = relmse_floor(ref, mask);
-  double rel = 0;
-  std::size_t count = 0;
-  for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
-    if (!mask.empty() && !mask[k / 3]) continue;
-    const double d = double(a.rgb[k]) - ref.rgb[k];
-    rel += d * d / (double(ref.rgb[k]) * ref.rgb[k] + floor2);
-    ++count;
-  }
-  return count ? rel / count : 0;
-}
+// relMSE (render_error.hpp) over every pixel, and the absolute RMSE.
 void errors(const render::RenderResult& a, const render::RenderResult& ref, double* relmse,
             double* rmse) {
   double abs2 = 0;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/render_error.hpp"
 #include "bake/cli/scene_plan.hpp"
 #include "bake/inputs/scene_load.hpp"
 #include "bake/pipeline/bake.hpp"
@@ -26,65 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// relMSE as `report error-time` defines it (docs/rendering.md): the mean over the masked pixels
-// and channels of (x - r)^2 / (r^2 + eps^2), eps = 1 % of the reference's mean over the mask.
-double relmse(const render::RenderResult& a, const render::RenderResult& ref,
-              const std::vector<uint8_t>& mask) {
-  double sum = 0;
-  std::size_t count = 0;
-  for (std::size_t k = 0; k < ref.rgb.size(); ++k)
-    if (mask[k / 3]) sum += ref.rgb[k], ++count;
-  if (count == 0) return 0;
-  const double eps = 0.01 * sum / double(count), floor2 = eps > 0 ? eps * eps : 1e-12;
-  double rel = 0;
-  for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
-    if (!mask[k / 3]) continue;
-    const double d = double(a.rgb[k]) - ref.rgb[k];
-    rel += d * d / (double(ref.rgb[k]) * ref.rgb[k] + floor2);
-  }
-  return rel / double(count);
-}
-
-// The relMSE between the expected values of two renders, estimated without bias from two
-// independent pairs (a1, b1), (a2, b2) (docs/scene-plans.md, "Proof"): the mean over the masked
-// pixels and channels of (a1 - b1)(a2 - b2) / (r^2 + eps^2), with r and eps as in relmse(). The
-// two pairs' noise is independent, so its products average to zero; each pair shares its random
-// numbers, so where the assets agree the difference is exactly zero. Can be slightly negative.
-// The standard error treats pixels as independent (a pixel's three channels come from the same
-// samples, so they are averaged first). relmse_pair() is the same normalisation for one pair.
-struct MeanAndError {
-  double mean = 0, std_error = 0;
-};
-double relmse_floor2(const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
-  double sum = 0;
-  std::size_t count = 0;
-  for (std::size_t k = 0; k < ref.rgb.size(); ++k)
-    if (mask[k / 3]) sum += ref.rgb[k], ++count;
-  const double eps = count ? 0.01 * sum / double(count) : 0.0;
-  return eps > 0 ? eps * eps : 1e-12;
-}
-MeanAndError relmse_of_means(const render::RenderResult& a1, const render::RenderResult& b1,
-                             const render::RenderResult& a2, const render::RenderResult& b2,
-                             const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
-  const double floor2 = relmse_floor2(ref, mask);
-  double rel = 0, rel2 = 0;
-  std::size_t pixels = 0;
-  for (std::size_t p = 0; p < mask.size(); ++p) {
-    if (!mask[p]) continue;
-    double term = 0;
-    for (std::size_t k = 3 * p; k < 3 * p + 3; ++k) {
-      const double d1 = double(a1.rgb[k]) - b1.rgb[k], d2 = double(a2.rgb[k]) - b2.rgb[k];
-      term += d1 * d2 / (double(ref.rgb[k]) * ref.rgb[k] + floor2) / 3;
-    }
-    rel += term;
-    rel2 += term * term;
-    ++pixels;
-  }
-  if (pixels == 0) return {};
-  const double n = double(pixels), mean = rel / n;
-  const double var = pixels > 1 ? std::max(0.0, (rel2 - n * mean * mean) / (n - 1)) : 0.0;
-  return {mean, std::sqrt(var / n)};
-}
+// The same-seed pair's relMSE, with the normalisation of relmse_of_means (render_error.hpp).
 double relmse_pair(const render::RenderResult& a, const render::RenderResult& b,
                    const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
   return relmse_of_means(a, b, a, b, ref, mask).mean;
@@ -214,8 +157,8 @@ int run_plan_report(const PlanReportOptions& o) {
     row.planned_vs_full = of_means.mean;
     row.planned_vs_full_error = of_means.std_error;
     row.same_seed = relmse_pair(planned_image, full_image, reference, mask);
-    row.full_vs_reference = relmse(full_image, reference, mask);
-    row.planned_vs_reference = relmse(planned_image, reference, mask);
+    row.full_vs_reference = masked_relmse(full_image, reference, mask);
+    row.planned_vs_reference = masked_relmse(planned_image, reference, mask);
     row.pass = row.planned_vs_full <= budget;
     if (row.planned_vs_full_error > budget / 4)
       warn("report plan: " + row.fabric + ": the comparison's standard error " +
@@ -254,7 +197,7 @@ int run_plan_report(const PlanReportOptions& o) {
   // errors) / budget). A pixel's term is mostly noise that the two pairs do not share, of either
   // sign; the block's lower bound is zero where only noise is, and at the budget (yellow) where the
   // block's pixels alone would reach it.
-  const double floor2_all = relmse_floor2(reference, std::vector<uint8_t>(hit.size(), 1));
+  const double floor2_all = relmse_floor(reference, {});
   const int block = std::max(2, std::min(w, h) / 16);
   const int bw = (w + block - 1) / block, bh = (h + block - 1) / block;
   std::vector<double> block_sum(std::size_t(bw) * bh, 0.0), block_sum2(block_sum.size(), 0.0);

@@ -1,0 +1,35 @@
+// relMSE of renders against a reference, as the reports define it (docs/rendering.md, "Error
+// against run time"; docs/scene-plans.md, "Proof"): the mean over pixels and channels of
+// (x - r)^2 / (r^2 + eps^2), eps = 1 % of the reference's mean over the pixels compared (a floor,
+// so that nearly black pixels do not dominate). Shared by `report error-time` and `report plan`.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "render/renderer.hpp"
+
+namespace clothbake::cli {
+
+// eps^2 of the definition above over the pixels of `mask` (all when empty); 1e-12 for a black
+// reference.
+double relmse_floor(const render::RenderResult& ref, const std::vector<uint8_t>& mask);
+
+// relMSE of `a` against `ref` over the pixels of `mask` (all when empty); 0 without pixels.
+double masked_relmse(const render::RenderResult& a, const render::RenderResult& ref,
+                     const std::vector<uint8_t>& mask);
+
+// The relMSE between the expected values of two renders, estimated without bias from two
+// independent pairs (a1, b1), (a2, b2): the mean over the pixels of `mask` and their channels of
+// (a1 - b1)(a2 - b2) / (r^2 + eps^2). The pairs' noise is independent, so its products average to
+// zero; where a pair shares its random numbers and the two renders agree, its difference is exactly
+// zero. Can be slightly negative. The standard error treats pixels as independent (a pixel's three
+// channels come from the same samples, so they are averaged first).
+struct MeanAndError {
+  double mean = 0, std_error = 0;
+};
+MeanAndError relmse_of_means(const render::RenderResult& a1, const render::RenderResult& b1,
+                             const render::RenderResult& a2, const render::RenderResult& b2,
+                             const render::RenderResult& ref, const std::vector<uint8_t>& mask);
+
+}  // namespace clothbake::cli
