@@ -163,6 +163,17 @@ VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySett
   return samples;
 }
 
+FitDirections visibility_fit_directions(int dirs) {
+  const model::DirectionGrid<double> grid{dirs, 0.0};
+  FitDirections directions;
+  for (int j = 0; j < dirs; ++j)
+    for (int i = 0; i < dirs; ++i) {
+      const model::Vec3d d = grid.bin_center(i, j);
+      directions.push_back(d.x, d.y, d.z);
+    }
+  return directions;
+}
+
 VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const VisibilitySettings& settings,
                               const std::function<void(double)>& progress) {
   validate_visibility_settings(settings);
@@ -172,13 +183,7 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const Visibility
   out.records.resize(texels);
   out.fit_error.resize(texels);
   const int dir_count = samples.dirs * samples.dirs;
-  model::DirectionGrid<double> grid{samples.dirs, 0.0};
-  FitDirections directions;  // in bin order: bin_index(i, j) = j * dirs + i
-  for (int j = 0; j < samples.dirs; ++j)
-    for (int i = 0; i < samples.dirs; ++i) {
-      model::Vec3d d = grid.bin_center(i, j);
-      directions.push_back(d.x, d.y, d.z);
-    }
+  const FitDirections directions = visibility_fit_directions(samples.dirs);
 
   // Texels with the same visibility samples get the same fit (fit_asg and the packing depend on
   // nothing else), and a woven tile repeats its relief: the 256^2 example weaves have 4 % (satin)
@@ -239,7 +244,9 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const Visibility
         return evaluations;
       },
       std::plus<uint64_t>());
-  double largest = -1;  // the first texel of the largest error (a NaN error is never it)
+  // Statistics in texel order (independent of how TBB split the fits): the first texel of the
+  // largest error (a NaN error is never it), the count above the warning, the mean.
+  double largest = -1, sum = 0;
   for (std::size_t t = 0; t < texels; ++t) {
     out.records[t] = fitted_records[pattern_of[t]];
     const float err = fitted_errors[pattern_of[t]];
@@ -249,12 +256,9 @@ VisibilityAsgs fit_visibility(const VisibilitySamples& samples, const Visibility
       out.worst_texel = t;
     }
     out.texels_above_warning += double(err) > settings.fit_warn_rms ? 1 : 0;
+    sum += double(err);
   }
   out.max_fit_error = std::max(largest, 0.0);
-  // The mean is recomputed in texel order so that it does not depend on how TBB split the range.
-  double sum = 0;
-  for (float e : out.fit_error)
-    sum += double(e);
   out.mean_fit_error = texels ? sum / double(texels) : 0.0;
   if (out.texels_above_warning > 0) {
     const std::size_t n = std::size_t(samples.resolution);

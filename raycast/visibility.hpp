@@ -15,6 +15,7 @@
 
 #include "fabric/fabric.hpp"
 #include "model/asg.hpp"
+#include "raycast/asg_fit.hpp"
 #include "raycast/heightfield_scene.hpp"
 
 namespace clothbake::raycast {
@@ -74,6 +75,11 @@ void validate_visibility_settings(const VisibilitySettings& settings);
 // `progress` (optional) is called from worker threads with the fraction of the work done.
 VisibilitySamples sample_visibility(const FabricMaps& maps, const VisibilitySettings& settings,
                                     const std::function<void(double)>& progress = {});
+
+// The sample directions of the visibility, as the ASG fit takes them: the bin centres of
+// DirectionGrid{dirs, 0} in bin order (bin_index(i, j) = j * dirs + i), the order of the sample
+// bits.
+FitDirections visibility_fit_directions(int dirs);
 
 // Fits one ASG per texel (raycast/asg_fit.hpp), packs it, and records the RMS error of the
 // packed lobe. Texels with identical samples share one fit (run once per distinct pattern; the

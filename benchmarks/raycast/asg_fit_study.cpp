@@ -19,7 +19,6 @@
 #include <vector>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "model/directions.hpp"
 #include "raycast/asg_fit.hpp"
 #include "raycast/visibility.hpp"
 
@@ -58,13 +57,7 @@ int main(int argc, char** argv) {
       fabrics.push_back(std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/fabrics/" + name + ".toml");
 
   raycast::VisibilitySettings settings;
-  model::DirectionGrid<double> grid{settings.dirs, 0.0};
-  raycast::FitDirections directions;
-  for (int j = 0; j < settings.dirs; ++j)
-    for (int i = 0; i < settings.dirs; ++i) {
-      model::Vec3d d = grid.bin_center(i, j);
-      directions.push_back(d.x, d.y, d.z);
-    }
+  const raycast::FitDirections directions = raycast::visibility_fit_directions(settings.dirs);
   const int dir_count = settings.dirs * settings.dirs;
 
   std::printf("%-10s %-9s %10s %10s %12s\n", "fabric", "fit", "mean RMS", "p90 RMS", "us/texel");

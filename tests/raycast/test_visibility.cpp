@@ -242,13 +242,7 @@ TEST(Visibility, DistinctPatternsAreFittedOnceWithEveryTexelsOwnResult) {
   const std::size_t texels = maps.texel_count();
   EXPECT_GT(a.distinct_patterns, 1u);
   EXPECT_LT(a.distinct_patterns, texels);
-  model::DirectionGrid<double> grid{settings.dirs, 0.0};
-  FitDirections directions;
-  for (int j = 0; j < settings.dirs; ++j)
-    for (int i = 0; i < settings.dirs; ++i) {
-      model::Vec3d d = grid.bin_center(i, j);
-      directions.push_back(d.x, d.y, d.z);
-    }
+  const FitDirections directions = visibility_fit_directions(settings.dirs);
   std::vector<uint8_t> visible(std::size_t(settings.dirs * settings.dirs));
   double largest = -1;
   std::size_t first_largest = 0;
