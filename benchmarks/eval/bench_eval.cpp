@@ -5,6 +5,7 @@
 //   CLOTHBAKE_BENCH_TABLES=raw|compressed (default: auto, as the evaluator opens it)
 // Items per second: estimates (Multiscale*, Brute), samples (BrutePerSample), texels (Reference).
 // Target (docs/evaluator.md, "Speed"): Multiscale at 2 spp <= 2 us per footprint, flat in size.
+// *Scanlines: the same in a renderer's order (abutting footprints, one direction pair per row).
 // Lazily built structures are warmed up before timing (setup()).
 #include <benchmark/benchmark.h>
 
@@ -93,6 +94,41 @@ void run(benchmark::State& state, Method method, uint32_t spp) {
   state.SetItemsProcessed(int64_t(state.iterations()));
 }
 
+// Renderer order: rows of 64 abutting footprints (neighbouring pixels of a far-field swatch), one
+// direction pair per row (a distant light and camera change the directions little from one pixel
+// to the next), the next row below the last. The figure a renderer sees per pixel, where run()'s
+// random positions and directions, a new part of every table per estimate, are the worst case.
+void run_scanlines(benchmark::State& state, Method method, uint32_t spp) {
+  Setup& s = setup();
+  const double side = double(state.range(0));
+  constexpr int kRow = 64;
+  Rng rng(7);
+  Estimate e;
+  for (const auto& d : s.directions) {  // warm-up, as in run()
+    const Footprint p{0.0, 0.0, side, side};
+    (void)s.evaluator.estimate(p, d.data(), d.data() + 3, method, spp, rng, kAllLobes, &e);
+  }
+  size_t k = 0;
+  for (auto _ : state) {
+    const size_t row = k / kRow;
+    const auto& d = s.directions[row % s.directions.size()];
+    const double x = double(k % kRow) * side, y = double(row) * side;
+    const Status st = s.evaluator.estimate({x, y, x + side, y + side}, d.data(), d.data() + 3,
+                                           method, spp, rng, kAllLobes, &e);
+    if (!st.ok()) state.SkipWithError(st.message());
+    benchmark::DoNotOptimize(e);
+    ++k;
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()));
+}
+
+void BM_MultiscaleScanlines(benchmark::State& state) {
+  run_scanlines(state, Method::Multiscale, 2);
+}
+void BM_Brute2sppScanlines(benchmark::State& state) {
+  run_scanlines(state, Method::Brute, 2);
+}
+
 void BM_Multiscale(benchmark::State& state) {
   run(state, Method::Multiscale, 2);
 }
@@ -118,6 +154,8 @@ BENCHMARK(BM_MultiscalePaper)->Arg(1)->Arg(32)->Arg(256)->Arg(4096);
 BENCHMARK(BM_Brute2spp)->Arg(32)->Arg(256);
 BENCHMARK(BM_BrutePerSample)->Arg(32);
 BENCHMARK(BM_ReferencePerTexel)->Arg(4)->Arg(32);
+BENCHMARK(BM_MultiscaleScanlines)->Arg(1)->Arg(32)->Arg(256)->Arg(4096);
+BENCHMARK(BM_Brute2sppScanlines)->Arg(32)->Arg(256);
 
 }  // namespace
 }  // namespace clothbake::eval
