@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -21,6 +20,7 @@
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
 #include "common/version.hpp"
+#include "formats/writer/atomic_file.hpp"
 #include "render/heightfield_reference.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
@@ -79,11 +79,27 @@ double loglog_at(const std::vector<std::pair<double, double>>& pts, double x, bo
   return NAN;
 }
 
+// A report file, atomically (formats/writer/atomic_file.hpp): Error(Input) naming it when it cannot
+// be written, and never a partial file.
+void write_text(const fs::path& path, const std::string& text) {
+  formats::OutputOptions options;
+  options.require_asset_to_replace = false;
+  formats::write_file_atomically(
+      path, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); }, options);
+}
+
+// An 8-bit PNG through a temporary name renamed when complete (as write_text).
+void write_png_atomically(const fs::path& path, const Image& img) {
+  formats::TempFile tmp(path, ".png");
+  write_image(tmp.path().string(), img, PixelType::UInt8);
+  tmp.commit();
+}
+
 void write_png(const fs::path& path, const render::RenderResult& r) {
   Image img(r.width, r.height, 3);
   for (std::size_t k = 0; k < r.rgb.size(); ++k)
     img.pixels[k] = float(render::srgb_encode(r.rgb[k]));
-  write_image(path.string(), img, PixelType::UInt8);
+  write_png_atomically(path, img);
 }
 
 // A grey relative-error map, |x - r| / r of the channel mean, scaled to [0, 1] by `scale`.
@@ -97,7 +113,7 @@ void write_error_png(const fs::path& path, const render::RenderResult& a,
     const double e = r > 1e-6 ? std::abs(x - r) / r : 0.0;
     img.pixels[std::size_t(k)] = float(std::min(1.0, e / scale));
   }
-  write_image(path.string(), img, PixelType::UInt8);
+  write_png_atomically(path, img);
 }
 
 }  // namespace
@@ -119,9 +135,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw_input_error(o.output + ": exists and is not a directory");
-  fs::create_directories(out / "images", ec);
-  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
 
+  // Everything that can refuse the scene comes before anything is written.
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
   bake_scene_fabrics(loaded, o.cache, true);
   if (o.width > 0 && o.height > 0) {
@@ -132,17 +147,39 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   bool environment = false;
   for (const render::Light& l : scene.lights)
     environment |= l.type == render::LightType::Environment;
+  std::size_t near_field_object = scene.objects.size();
+  if (o.near_field) {
+    for (std::size_t k = 0; k < scene.objects.size(); ++k)
+      if (scene.objects[k].shape == render::ShapeType::Plane && !scene.objects[k].asset.empty()) {
+        near_field_object = k;
+        break;
+      }
+    if (near_field_object == scene.objects.size())
+      throw_input_error(o.scene + ": --near-field needs a plane with a fabric");
+  }
+  fs::create_directories(out / "images", ec);
+  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
 
   // The reference: exact footprints; environment lights need many light samples. Cached by the
-  // content of the scene, its assets and the reference settings.
+  // content of everything it depends on: the tool's version, the scene file, the image size, the
+  // reference's spp and seed, every asset and every environment map (its pixels and scale, so that
+  // an edited map is not answered with a stale reference).
   render::RenderOptions ref_options;
   ref_options.method = eval::Method::Reference;
   ref_options.spp = environment ? o.reference_spp : 1;
   ref_options.seed = o.seed + 1000003;
-  std::string key = std::string(CLOTHBAKE_VERSION_STRING) + inputs::hash_file(o.scene) +
-                    std::to_string(ref_options.spp);
+  std::string key = fmt::format("{} {} {}x{} spp {} seed {}", CLOTHBAKE_VERSION_STRING,
+                                inputs::hash_file(o.scene), scene.camera.width, scene.camera.height,
+                                ref_options.spp, ref_options.seed);
   for (const render::Object& obj : scene.objects)
-    if (!obj.asset.empty()) key += inputs::hash_file(obj.asset);
+    if (!obj.asset.empty()) key += " " + inputs::hash_file(obj.asset);
+  for (const render::Light& l : scene.lights)
+    if (l.type == render::LightType::Environment) {
+      const render::EnvironmentMap& map = l.environment;
+      key += fmt::format(" env {}x{} scale {} ", map.width, map.height, map.scale) +
+             inputs::xxh64_hex(std::string_view(reinterpret_cast<const char*>(map.rgb.data()),
+                                                map.rgb.size() * sizeof(float)));
+    }
   const fs::path cache_dir = scene_cache_dir(o.cache);
   fs::create_directories(cache_dir, ec);
   const fs::path cached = cache_dir / ("reference-" + inputs::xxh64_hex(key) + ".exr");
@@ -294,14 +331,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   // Near field: the ray-traced relief against the model with and without parallax offsets.
   nlohmann::json near_field = nullptr;
   if (o.near_field) {
-    std::size_t object = scene.objects.size();
-    for (std::size_t k = 0; k < scene.objects.size(); ++k)
-      if (scene.objects[k].shape == render::ShapeType::Plane && !scene.objects[k].asset.empty()) {
-        object = k;
-        break;
-      }
-    if (object == scene.objects.size())
-      throw_input_error(o.scene + ": --near-field needs a plane with a fabric");
+    const std::size_t object = near_field_object;
     const render::HeightfieldReference traced =
         render::render_heightfield_reference(scene, object, o.near_field_samples);
     render::RenderOptions flat = ref_options;
@@ -346,9 +376,9 @@ int run_error_time_report(const ErrorTimeOptions& o) {
                         {"summary", summary},
                         {"near_field", near_field},
                         {"grid", grid}};
-  std::ofstream(out / "error-time.csv") << csv;
-  std::ofstream(out / "error-time.json")
-      << doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  write_text(out / "error-time.csv", csv);
+  write_text(out / "error-time.json",
+             doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   if (!o.no_plots) {
     // $CLOTHBAKE_PLOT_SCRIPT_DIR, else the source tree this file was compiled from.
     const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT_DIR");

@@ -154,6 +154,72 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   EXPECT_TRUE(nlohmann::json::parse(again.out)["reference"]["cached"].get<bool>());
 }
 
+// A scene the report refuses leaves no output folder; the cached reference is keyed on everything
+// it depends on: another image size or an edited environment map renders a new reference instead
+// of reusing (or refusing) the old one.
+TEST(ReportErrorTime, RefusesBeforeWritingAndKeysTheReferenceOnWhatItDependsOn) {
+  const fs::path cache = assets().dir / "cache-keys";
+  fs::remove_all(cache);
+  auto report = [&](const fs::path& scene, const fs::path& out, std::vector<std::string> extra) {
+    std::vector<std::string> args = {
+        "report",    "error-time",       scene.string(), "-o",           out.string(), "--spp", "1",
+        "--methods", "multiscale,brute", "--cache",      cache.string(), "--no-plots", "--json"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_clothbake(args);
+  };
+  // Refused: an unknown key; --near-field without a cloth plane. Nothing is created.
+  std::string bad = good_scene();
+  bad.replace(bad.find("tiles_per_unit"), 14, "tiles_per_unti");
+  const fs::path out_bad = assets().dir / "report-bad";
+  auto run = report(write_scene("report-bad.toml", bad), out_bad, {});
+  EXPECT_EQ(run.code, 2) << run.err;
+  EXPECT_NE(run.err.find("tiles_per_unit"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(out_bad));
+  std::string sphere = good_scene();
+  const std::string plane = "shape = \"plane\"";
+  sphere.replace(sphere.find(plane), plane.size(), "shape = \"sphere\"\nradius = 0.5");
+  for (const char* key : {"normal = [0, 0, 1]\n", "tangent = [1, 0, 0]\n", "size = [2, 2]\n"})
+    sphere.erase(sphere.find(key), std::string(key).size());
+  run = report(write_scene("report-sphere.toml", sphere), out_bad, {"--near-field"});
+  EXPECT_EQ(run.code, 2) << run.err;
+  EXPECT_NE(run.err.find("--near-field"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(out_bad));
+
+  // Image size: a second size is a second reference; the first is still in the cache.
+  const fs::path scene = write_scene("report-keys.toml", good_scene());
+  const fs::path out = assets().dir / "report-keys";
+  const std::pair<const char*, bool> sizes[] = {{"8,8", false}, {"12,10", false}, {"8,8", true}};
+  for (const auto& [size, expect_cached] : sizes) {
+    run = report(scene, out, {"--image-size", size});
+    ASSERT_EQ(run.code, 0) << size << ": " << run.err;
+    EXPECT_EQ(nlohmann::json::parse(run.out)["reference"]["cached"].get<bool>(), expect_cached)
+        << size;
+  }
+  // Environment map: the same file name with other pixels is another reference.
+  const fs::path map = assets().dir / "report-keys-sky.exr";
+  std::string env = good_scene();
+  const std::string point = "type = \"point\"\nposition = [0.5, 0.5, 1.5]\nintensity = 3";
+  env.replace(env.find(point), point.size(),
+              "type = \"environment\"\nmap = \"" + map.string() + "\"");
+  const fs::path env_scene = write_scene("report-keys-env.toml", env);
+  bool cached[3];
+  const char* colours[3] = {"0.5,0.6,0.7", "0.5,0.6,0.7", "0.9,0.6,0.7"};
+  for (int k = 0; k < 3; ++k) {
+    if (k != 1) {
+      const auto made = test_support::detail::spawn(
+          {"/usr/bin/oiiotool", "--pattern", std::string("constant:color=") + colours[k], "16x8",
+           "3", "-d", "half", "-o", map.string()});
+      ASSERT_EQ(made.code, 0) << made.err;
+    }
+    run = report(env_scene, out, {"--image-size", "8,8", "--reference-spp", "2"});
+    ASSERT_EQ(run.code, 0) << run.err;
+    cached[k] = nlohmann::json::parse(run.out)["reference"]["cached"].get<bool>();
+  }
+  EXPECT_FALSE(cached[0]);
+  EXPECT_TRUE(cached[1]);   // the same map: the cached reference
+  EXPECT_FALSE(cached[2]);  // new pixels: a new reference
+}
+
 }  // namespace
 }  // namespace clothbake::render
 
