@@ -88,6 +88,10 @@ uint64_t Evaluator::derived_bytes() const noexcept {
 
 Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) noexcept {
   data_.reset();
+  if (!(options.cv_min_side_per_offset_range >= 0.0) ||
+      !std::isfinite(options.cv_min_side_per_offset_range))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "cv_min_side_per_offset_range must be finite and >= 0");
   if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "direct_max_side must be finite and >= 0");
@@ -299,7 +303,17 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
   const double direct_side = data_->options.direct_max_side;
   const bool direct = !(w > 0.0 && h > 0.0) || (multiscale && w < direct_side && h < direct_side);
-  if (multiscale && !direct) {  // a scene-planned asset answers only the half vectors it kept
+  // The unbiased form without its control variate where the parallax offsets vary by more than the
+  // footprint (EvalOptions::cv_min_side_per_offset_range).
+  bool without_cv = false;
+  if (method == Method::Multiscale && !direct && data_->options.parallax) {
+    const double range =
+        data_->parallax_blocks.depth_range(frame.parallax_bins.index, frame.parallax_bins.weight) *
+        std::hypot(frame.offset_per_depth[0], frame.offset_per_depth[1]);
+    without_cv = std::min(w, h) < data_->options.cv_min_side_per_offset_range * range;
+  }
+  if (multiscale && !direct &&
+      !without_cv) {  // a scene-planned asset answers only the half vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
     if (!data_->specular.tables->covers_bins(hv))
       return Status::error(ErrorCode::OutOfPlan, Check::None,
@@ -312,7 +326,8 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
     s = exact_average(*data_, frame, footprint, 0, out);
   } else if (method == Method::Reference) {
     s = exact_average(*data_, frame, footprint, 0, out);
-  } else if (method == Method::Brute) {
+  } else if (method == Method::Brute || without_cv) {
+    out->counters.without_control_variate = without_cv;
     brute_force(*data_, frame, footprint, spp, rng, out);
   } else {
     s = control_variates(*data_, frame, footprint, spp, rng, method == Method::MultiscalePaper,

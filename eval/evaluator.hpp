@@ -26,9 +26,13 @@
 //
 // Contract: C++17, standard library only, over the reader library and model/. open() allocates the
 // derived footprint sums (docs/evaluator.md, "Memory") and never throws: allocation failure is a
-// Status. estimate() does not allocate except in the Reference method for footprints of more than
-// 64 texels (a dense weight map of N x N doubles), is noexcept, thread-safe (const), and safe for
-// any argument values (bad ones give InvalidArgument). The Asset must outlive the Evaluator.
+// Status. estimate() allocates only on first use or for large footprints (docs/evaluator.md,
+// "Allocation in estimate()"): the Reference method's dense weight map of N x N doubles for
+// footprints of more than 64 source texels, the unbiased form's block-mean parallax table of a
+// direction bin on its first use, and in the reader a compressed parallax table's per-direction SAT
+// (MultiscalePaper's footprint mean) or an entropy-coded direction's decoded plane; a failed map or
+// SAT is Unsupported. It is noexcept, thread-safe (const), and safe for any argument values (bad
+// ones give InvalidArgument). The Asset must outlive the Evaluator.
 #pragma once
 
 #include <cstdint>
@@ -85,6 +89,14 @@ struct EvalOptions {
   // given spp by a third to a half but doubles the cost, so per unit time it does not pay on the
   // example fabrics (docs/performance.md, "Evaluator").
   uint32_t warp_samples_per_sample = 0;
+  // The unbiased multi-scale form samples a footprint without its control variate (as brute force
+  // does) when the footprint's shorter side is below this many times the parallax offset range of
+  // its view (the tile's max - min of the per-texel depth times the offset per unit depth, texels):
+  // then the shifted footprint the tables integrate and the samples' own destinations cover
+  // different parts of the pattern, and the control variate adds variance instead of removing it
+  // (docs/evaluator.md, "Footprints the control variate does not help"). 0: always the control
+  // variate. The estimate stays unbiased either way.
+  double cv_min_side_per_offset_range = 2.0;
   // The sheen table of every texel's BSDF (model/sheen.hpp, docs/sheen.md): the published one of
   // Zeltner et al. by default, as renderers ship it; Converged for the layer's exact albedo. The
   // asset stores only the sheen colour and roughness, so this is the evaluator's choice.
@@ -101,6 +113,8 @@ struct Counters {
   uint32_t texel_evals = 0;    // per-texel BSDF evaluations (f^ V at one texel)
   uint32_t table_queries = 0;  // footprint queries on SATs (radiance, parallax, footprint sums)
   bool direct = false;         // answered by the exact sum (footprint below direct_max_side)
+  bool without_control_variate = false;  // multiscale: sampled as brute force (footprint below
+                                         // cv_min_side_per_offset_range times the offset range)
 };
 
 struct Estimate {
@@ -138,13 +152,16 @@ class Evaluator {
   // (towards the viewer) are any finite non-zero vectors in the local frame (normalised here);
   // spp >= 1 samples for the sampling methods (ignored by Reference and by the direct path); rng
   // advances. Errors: InvalidArgument for a bad footprint, direction, spp or lobe mask (0 or
-  // unknown bits), NotFound when the method needs tables the asset does not have.
+  // unknown bits), NotFound when the method needs tables the asset does not have, Unsupported when
+  // a dense weight map or a parallax SAT cannot be allocated (header comment), OutOfPlan when a
+  // scene-planned asset left out what the query needs.
   Status estimate(const Footprint& footprint, const double wi[3], const double wo[3], Method method,
                   uint32_t spp, Rng& rng, LobeMask lobes, Estimate* out) const noexcept;
 
   // The Reference method with s x s midpoint samples per covered source texel instead of the exact
-  // partition (s >= 1): converges to Reference at |difference| <= 2 / s * max_lobe_value
-  // (docs/evaluator.md, "Reference"); for testing that bound.
+  // partition (s >= 1): converges to Reference at |difference| <= max_t f(t) / s per channel, f(t)
+  // the integrand of texel t summed over the lobes asked for (docs/evaluator.md, "Reference"); for
+  // testing that bound.
   Status reference_supersampled(const Footprint& footprint, const double wi[3], const double wo[3],
                                 uint32_t s, LobeMask lobes, Estimate* out) const noexcept;
 

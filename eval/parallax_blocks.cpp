@@ -1,6 +1,7 @@
 // Block-mean parallax depths (parallax_blocks.hpp).
 #include "eval/parallax_blocks.hpp"
 
+#include <algorithm>
 #include <new>
 
 namespace clothbake::eval {
@@ -11,6 +12,7 @@ bool ParallaxBlockMeans::init(const reader::ParallaxView* view, uint32_t n) noex
   try {
     once_.reset(new std::once_flag[bins]);
     sums_.assign(bins, FootprintSums());
+    range_.assign(bins, 0.0);
   } catch (...) {
     return false;
   }
@@ -26,18 +28,26 @@ const FootprintSums* ParallaxBlockMeans::sums(uint32_t bin) const noexcept {
   std::call_once(once_[bin], [&] {
     const uint32_t b = block_, nb = blocks_;
     const double inv = 1.0 / double(b * b);
+    double lowest = 0.0, highest = 0.0;
+    bool any = false;
     try {
       sums_[bin].build(nb, 1, [&](uint64_t t, double* out) {
         const int64_t bx = int64_t(t % nb) * b, by = int64_t(t / nb) * b;
         double sum = 0.0;
         for (uint32_t y = 0; y < b; ++y)
-          for (uint32_t x = 0; x < b; ++x)
-            sum += view_->bin_depth(bin, bx + x, by + y);
+          for (uint32_t x = 0; x < b; ++x) {
+            const double r = view_->bin_depth(bin, bx + x, by + y);
+            sum += r;
+            lowest = any ? std::min(lowest, r) : r;
+            highest = any ? std::max(highest, r) : r;
+            any = true;
+          }
         out[0] = sum * inv;
       });
     } catch (...) {
       // Left empty: the bin contributes depth 0.
     }
+    if (!sums_[bin].empty()) range_[bin] = highest - lowest;
   });
   return sums_[bin].empty() ? nullptr : &sums_[bin];
 }
@@ -60,6 +70,16 @@ double ParallaxBlockMeans::mean_depth(const reader::Footprint& p, const int bin[
     r += weight[k] * (integral / area);
   }
   return r;
+}
+
+double ParallaxBlockMeans::depth_range(const int bin[4], const double weight[4]) const noexcept {
+  if (view_ == nullptr) return 0.0;
+  double range = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    if (!(weight[k] > 0.0) || bin[k] < 0) continue;
+    if (sums(uint32_t(bin[k])) != nullptr) range += weight[k] * range_[uint32_t(bin[k])];
+  }
+  return range;
 }
 
 }  // namespace clothbake::eval

@@ -42,6 +42,11 @@ class ParallaxBlockMeans {
   // constant for the unbiased form).
   double mean_depth(const reader::Footprint& p, const int bin[4],
                     const double weight[4]) const noexcept;
+  // The range (max - min) of the per-texel depth r over the tile, interpolated over the given bins
+  // as mean_depth(), in tile-side units (>= 0): how far apart two texels' parallax offsets can be,
+  // times the view's offset per unit depth. Builds a bin's table on its first use (0 for a bin
+  // whose table cannot be allocated).
+  double depth_range(const int bin[4], const double weight[4]) const noexcept;
 
  private:
   const FootprintSums* sums(uint32_t bin) const noexcept;
@@ -50,6 +55,7 @@ class ParallaxBlockMeans {
   uint32_t n_ = 0, block_ = 1, blocks_ = 0;
   mutable std::unique_ptr<std::once_flag[]> once_;
   mutable std::vector<FootprintSums> sums_;  // one per direction bin, empty until first use
+  mutable std::vector<double> range_;        // per bin: max - min of the per-texel depth
 };
 
 }  // namespace clothbake::eval

@@ -135,6 +135,7 @@ int run_eval(const EvalCliOptions& o) {
                           {"seconds_per_estimate", seconds},
                           {"footprint_texels", texels},
                           {"direct", e.counters.direct},
+                          {"without_control_variate", e.counters.without_control_variate},
                           {"texel_evals", e.counters.texel_evals},
                           {"samples", e.counters.samples}};
     print_json(out);

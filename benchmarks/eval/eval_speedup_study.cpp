@@ -3,11 +3,13 @@
 // positions) and random reflection directions (cos >= 0.2 on both sides), the relative MSE
 // against the Reference method of the multi-scale methods at 2 spp and of brute force over an spp
 // sweep, each with its mean time per estimate (one core); brute force's time at the multi-scale
-// error is interpolated on the log-log curve.
+// error is interpolated on the log-log curve. relMSE has the reports' floor: (x - r)^2 / (r^2 +
+// eps^2), eps = 1 % of the mean reference over the footprints.
 //
-//   eval_speedup_study ASSET [--footprints N] [--repeats K] [--min-side S] [--max-side S] [--warp
-//   M] [--per-footprint]
-//                      [--seed S] [--tables raw|compressed]
+//   eval_speedup_study ASSET [--footprints N] [--repeats K] [--min-side S] [--max-side S]
+//                      [--warp M] [--cv-min-side K] [--per-footprint] [--seed S]
+//                      [--tables raw|compressed]
+// --cv-min-side: EvalOptions::cv_min_side_per_offset_range (0: the control variate everywhere).
 // Exit 2 on a bad argument or asset.
 #include <algorithm>
 #include <chrono>
@@ -29,6 +31,7 @@ struct Config {
   Footprint footprint;
   double wi[3], wo[3];
   double reference;  // channel mean of the reference value
+  double weight;     // sqrt(reference^2 + eps^2): the relative error's denominator
 };
 
 struct Point {
@@ -39,7 +42,7 @@ struct Point {
   std::fprintf(stderr,
                "eval_speedup_study: %s\nusage: eval_speedup_study ASSET [--footprints N] "
                "[--repeats K] [--min-side S] [--max-side S] [--seed S] [--tables raw|compressed] "
-               "[--warp M] [--per-footprint]\n",
+               "[--warp M] [--cv-min-side K] [--per-footprint]\n",
                why);
   std::exit(2);
 }
@@ -78,7 +81,7 @@ Point measure(const Evaluator& ev, const std::vector<Config>& configs, Method me
       Estimate e;
       const Status s = ev.estimate(c.footprint, c.wi, c.wo, method, spp, rng, kAllLobes, &e);
       if (!s.ok()) usage(s.message());
-      const double rel = (mean3(e.value) - c.reference) / c.reference;
+      const double rel = (mean3(e.value) - c.reference) / c.weight;
       sq += rel * rel;
       own += rel * rel;
       sum += rel;
@@ -139,6 +142,9 @@ int main(int argc, char** argv) {
     else if (opt == "--warp")  // 0 allowed: the one-level residual
       options.warp_samples_per_sample =
           std::strcmp(v, "0") == 0 ? 0u : uint32_t(number(v, "--warp"));
+    else if (opt == "--cv-min-side")  // 0 allowed: the control variate on every footprint
+      options.cv_min_side_per_offset_range =
+          std::strcmp(v, "0") == 0 ? 0.0 : number(v, "--cv-min-side");
     else if (opt == "--tables") {
       if (std::strcmp(v, "raw") == 0)
         options.tables = TableChoice::Raw;
@@ -187,6 +193,14 @@ int main(int argc, char** argv) {
     c.reference = mean3(e.value);
     if (c.reference > 1e-6) configs.push_back(c);  // relative errors need a non-black reference
   }
+  // relMSE as the renderer's reports define it (bake/cli/render_error.hpp): (x - r)^2 / (r^2 +
+  // eps^2) with eps = 1 % of the mean reference, so that a few nearly black footprints do not
+  // decide the mean.
+  double mean_reference = 0;
+  for (const Config& c : configs)
+    mean_reference += c.reference / double(configs.size());
+  for (Config& c : configs)
+    c.weight = std::sqrt(c.reference * c.reference + 1e-4 * mean_reference * mean_reference);
   std::printf(
       "asset %s: %g^2 texels, %u clusters, %s tables; %d footprints of side %g..%g texels, "
       "%d repeats\n",

@@ -27,13 +27,15 @@ struct Opened {
 
 std::unique_ptr<Opened> open(
     const std::string& path, TableChoice tables = TableChoice::Auto,
-    uint32_t warp_samples_per_sample = EvalOptions().warp_samples_per_sample) {
+    uint32_t warp_samples_per_sample = EvalOptions().warp_samples_per_sample,
+    double cv_min_side_per_offset_range = EvalOptions().cv_min_side_per_offset_range) {
   auto o = std::make_unique<Opened>();
   const Status s = o->asset.open_file(path.c_str());
   EXPECT_TRUE(s.ok()) << s.message();
   EvalOptions options;
   options.tables = tables;
   options.warp_samples_per_sample = warp_samples_per_sample;
+  options.cv_min_side_per_offset_range = cv_min_side_per_offset_range;
   const Status e = o->evaluator.open(o->asset, options);
   EXPECT_TRUE(e.ok()) << e.message();
   return o;
@@ -346,9 +348,10 @@ TEST(Multiscale, IsUnbiasedOnTheTwillWithRawAndCompressedTables) {
                                   {0, 0, 64, 64}};           // a whole tile
   for (TableChoice tables : {TableChoice::Raw, TableChoice::Compressed}) {
     // Both forms of the residual: two-level (6 warp samples per sample) and one-level (the
-    // default).
+    // default); the control variate on every footprint, however narrow against the parallax
+    // offsets (cv_min_side_per_offset_range 0), so that each size tests it.
     for (uint32_t warp : {6u, 0u}) {
-      auto o = open(assets().twill, tables, warp);
+      auto o = open(assets().twill, tables, warp, 0.0);
       for (const Directions& dirs : kConfigurations)
         for (const Footprint& p : footprints) {
           const Stats st =
@@ -375,6 +378,52 @@ TEST(Multiscale, SmallFootprintsAreSummedExactly) {
     for (int c = 0; c < 3; ++c)
       EXPECT_EQ(e.value[c], ref[c]);
   }
+}
+
+// Where the parallax offsets vary by more than the footprint (its shorter side below
+// cv_min_side_per_offset_range times the view's offset range), the unbiased form samples without
+// its control variate: bit for bit brute force with the same generator. Elsewhere it keeps it.
+TEST(Multiscale, FootprintsNarrowerThanTheOffsetRangeAreSampledWithoutTheControlVariate) {
+  auto o = open(assets().twill);
+  const EvalData& data = *o->evaluator.data();
+  const double wo[3] = {-0.4, 0.1, 0.85};
+  ShadingFrame frame;
+  Status status;
+  ASSERT_TRUE(make_frame(data, kReflectWi, wo, kAllLobes, &frame, &status));
+  const double range =
+      data.parallax_blocks.depth_range(frame.parallax_bins.index, frame.parallax_bins.weight) *
+      std::hypot(frame.offset_per_depth[0], frame.offset_per_depth[1]);
+  const double threshold = EvalOptions().cv_min_side_per_offset_range * range;
+  ASSERT_GT(threshold, 2.0);  // a real relief: the narrow footprint below is below it
+  ASSERT_LT(threshold, 60.0);
+  const Footprint narrow{3.5, 9.25, 3.5 + 0.9 * threshold, 70.0},  // tall but narrow
+      wide{-10.0, 5.0, -10.0 + 1.1 * threshold, 5.0 + 1.1 * threshold};
+  for (int k = 0; k < 20; ++k) {
+    Rng a(100 + k), b(100 + k);
+    Estimate ms, brute;
+    ASSERT_TRUE(
+        o->evaluator.estimate(narrow, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
+            .ok());
+    ASSERT_TRUE(
+        o->evaluator.estimate(narrow, kReflectWi, wo, Method::Brute, 2, b, kAllLobes, &brute).ok());
+    EXPECT_TRUE(ms.counters.without_control_variate);
+    EXPECT_FALSE(brute.counters.without_control_variate);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(ms.value[c], brute.value[c]);
+    ASSERT_TRUE(
+        o->evaluator.estimate(wide, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms).ok());
+    EXPECT_FALSE(ms.counters.without_control_variate);
+    EXPECT_GT(ms.counters.table_queries, 0u);
+  }
+  // The paper's form is as printed: always its control variate.
+  Rng rng(1);
+  Estimate paper;
+  ASSERT_TRUE(
+      o->evaluator
+          .estimate(narrow, kReflectWi, wo, Method::MultiscalePaper, 2, rng, kAllLobes, &paper)
+          .ok());
+  EXPECT_FALSE(paper.counters.without_control_variate);
+  EXPECT_GT(paper.counters.table_queries, 0u);
 }
 
 TEST(Multiscale, HasLessVarianceThanBruteForceOnFarFieldFootprints) {
@@ -433,6 +482,23 @@ TEST(ParallaxBlocks, AreTheExactFootprintMeanOnWholeBlocksAndTheBlockMeanInside)
                                                 frame.parallax_bins.weight),
                 mean, 1e-12);
     EXPECT_LT(mean, 0.0);  // a real relief: the check is not 0 = 0
+    // The offset range: per bin the max - min of the per-texel depth over the tile, weighted.
+    double range = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (!(frame.parallax_bins.weight[k] > 0)) continue;
+      double lo = INFINITY, hi = -INFINITY;
+      for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+          const double r = data.parallax.bin_depth(uint32_t(frame.parallax_bins.index[k]), x, y);
+          lo = std::min(lo, r);
+          hi = std::max(hi, r);
+        }
+      range += frame.parallax_bins.weight[k] * (hi - lo);
+    }
+    EXPECT_NEAR(
+        data.parallax_blocks.depth_range(frame.parallax_bins.index, frame.parallax_bins.weight),
+        range, 1e-12);
+    EXPECT_GT(range, 0.0);
   }
 }
 
