@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <stdexcept>
 
 #include "common/error.hpp"
 #include "formats/writer/open_asset.hpp"
@@ -44,6 +45,7 @@ uint64_t pixel_seed(uint64_t seed, uint32_t pass, uint64_t pixel) {
 
 struct Counters {
   std::atomic<uint64_t> estimates{0}, texel_evals{0}, samples{0}, direct{0}, cloth_pixels{0};
+  std::atomic<uint64_t> without_control_variate{0};
   std::atomic<uint64_t> out_of_plan{0}, fallback_brute{0}, fallback_zero{0};
   std::mutex mutex;
   double min_texels = INFINITY, max_texels = 0;
@@ -106,6 +108,20 @@ PixelFootprint Renderer::pixel_footprint(int px, int py) const {
 }
 
 RenderResult Renderer::render(const std::function<void(double)>& progress) const {
+  return render_impl(options_, progress);
+}
+
+RenderResult Renderer::render(const RenderOptions& pass,
+                              const std::function<void(double)>& progress) const {
+  if (pass.tables != options_.tables || pass.parallax != options_.parallax ||
+      pass.sheen_convention != options_.sheen_convention)
+    throw std::invalid_argument(
+        "Renderer::render: the tables, parallax and sheen convention are the constructor's");
+  return render_impl(pass, progress);
+}
+
+RenderResult Renderer::render_impl(const RenderOptions& pass_options,
+                                   const std::function<void(double)>& progress) const {
   const auto start = std::chrono::steady_clock::now();
   const Scene& scene = scene_;
   const Impl& impl = *impl_;
@@ -115,11 +131,11 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
   result.height = h;
   std::vector<double> sum(std::size_t(w) * h * 3, 0.0);
   Counters counters;
-  const uint32_t spp = options_.spp;
+  const uint32_t spp = pass_options.spp;
 
   // One pixel sample of pass `pass`: the primary hit's direct lighting.
   auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
-    eval::Rng rng(pixel_seed(options_.seed, pass, uint64_t(py) * w + px));
+    eval::Rng rng(pixel_seed(pass_options.seed, pass, uint64_t(py) * w + px));
     const CameraRay cr = impl.camera.generate(px + 0.5, py + 0.5);
     const SurfaceHit hit = intersect_scene(cr.ray, scene.objects, 0.0, INFINITY);
     if (!hit.hit()) return impl.background ? impl.background->radiance(cr.ray.direction) : Rgb();
@@ -152,13 +168,14 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
       const double wi_arr[3] = {wi.x, wi.y, wi.z};
       eval::Estimate e;
       reader::Status s =
-          m.evaluator.estimate(fp, wi_arr, wo_arr, options_.method, samples, rng, mask, &e);
+          m.evaluator.estimate(fp, wi_arr, wo_arr, pass_options.method, samples, rng, mask, &e);
       if (s.code() == reader::ErrorCode::OutOfPlan) {
         // A scene-planned asset left out what this query needs (docs/scene-plans.md,
         // "Queries outside the plan"): brute force over the same footprint needs no table; when
         // it is refused too (a view bin or transmission left out), the light contributes 0.
         counters.out_of_plan.fetch_add(1, std::memory_order_relaxed);
-        if (options_.method != eval::Method::Brute && options_.method != eval::Method::Reference)
+        if (pass_options.method != eval::Method::Brute &&
+            pass_options.method != eval::Method::Reference)
           s = m.evaluator.estimate(fp, wi_arr, wo_arr, eval::Method::Brute, samples, rng, mask, &e);
         if (s.ok())
           counters.fallback_brute.fetch_add(1, std::memory_order_relaxed);
@@ -169,6 +186,8 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
       counters.texel_evals.fetch_add(e.counters.texel_evals, std::memory_order_relaxed);
       counters.samples.fetch_add(e.counters.samples, std::memory_order_relaxed);
       if (e.counters.direct) counters.direct.fetch_add(1, std::memory_order_relaxed);
+      if (e.counters.without_control_variate)
+        counters.without_control_variate.fetch_add(1, std::memory_order_relaxed);
       return s.ok() ? e.value : Rgb();
     };
     // A BSDF-sampled direction and its density (continuous techniques only).
@@ -255,18 +274,18 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
           out[2] += c.b;
         }
         const uint64_t done = rows_done.fetch_add(1) + 1;
-        if (progress && options_.time_budget <= 0) progress(double(done) / h);
+        if (progress && pass_options.time_budget <= 0) progress(double(done) / h);
       }
     });
     ++pass;
-    if (progress && options_.time_budget > 0) {
+    if (progress && pass_options.time_budget > 0) {
       const double elapsed =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      progress(std::min(1.0, elapsed / options_.time_budget));
+      progress(std::min(1.0, elapsed / pass_options.time_budget));
     }
-  } while (options_.time_budget > 0 &&
+  } while (pass_options.time_budget > 0 &&
            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() <
-               options_.time_budget);
+               pass_options.time_budget);
 
   result.rgb.resize(sum.size());
   for (std::size_t k = 0; k < sum.size(); ++k)
@@ -278,6 +297,7 @@ RenderResult Renderer::render(const std::function<void(double)>& progress) const
   st.texel_evals = counters.texel_evals;
   st.samples = counters.samples;
   st.direct = counters.direct;
+  st.without_control_variate = counters.without_control_variate;
   st.out_of_plan = counters.out_of_plan;
   st.fallback_brute = counters.fallback_brute;
   st.fallback_zero = counters.fallback_zero;

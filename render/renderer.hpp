@@ -42,6 +42,7 @@ struct RenderStats {
   uint32_t passes = 0;
   uint64_t estimates = 0;  // evaluator calls
   uint64_t texel_evals = 0, samples = 0, direct = 0;
+  uint64_t without_control_variate = 0;  // multiscale estimates sampled as brute force
   uint64_t cloth_pixels = 0;
   // Scene-planned assets: estimates refused as OutOfPlan, of which answered by brute force (the
   // fallback) and counted as 0 (refused again: a view bin or transmission left out).
@@ -72,6 +73,14 @@ class Renderer {
   // cheap).
   RenderResult render(const std::function<void(double)>& progress = {}) const;
 
+  // The same with another method, spp, seed and time budget (those of `pass`) on the assets this
+  // renderer opened, so that what the evaluators build on first use (the parallax planes of the
+  // views met, per-bin tables) is built once, as a renderer keeps its assets between frames. The
+  // image is the one a new Renderer(scene, pass) renders. Throws std::invalid_argument when
+  // pass's tables, parallax or sheen convention differ from the constructor's.
+  RenderResult render(const RenderOptions& pass,
+                      const std::function<void(double)>& progress = {}) const;
+
   // The primary hit of pixel (x, y): object, texel footprint and view direction in the object's
   // shading frame (docs/rendering.md, "Pixel footprints").
   PixelFootprint pixel_footprint(int x, int y) const;
@@ -80,6 +89,8 @@ class Renderer {
 
  private:
   struct Impl;
+  RenderResult render_impl(const RenderOptions& options,
+                           const std::function<void(double)>& progress) const;
   const Scene& scene_;
   RenderOptions options_;
   std::unique_ptr<Impl> impl_;

@@ -105,6 +105,7 @@ int run_render(const RenderCliOptions& o) {
                 {"texel_evals", s.texel_evals},
                 {"samples", s.samples},
                 {"direct_footprints", s.direct},
+                {"without_control_variate", s.without_control_variate},
                 {"out_of_plan", s.out_of_plan},
                 {"out_of_plan_brute_fallback", s.fallback_brute},
                 {"out_of_plan_zero", s.fallback_zero},

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <stdexcept>
 
 #include "bake/inputs/scene_load.hpp"
 #include "render/environment.hpp"
@@ -139,6 +140,37 @@ TEST(Render, ImagesAreIdenticalForAnyThreadCount) {
   }
   ASSERT_EQ(one.rgb.size(), two.rgb.size());
   EXPECT_EQ(0, std::memcmp(one.rgb.data(), two.rgb.data(), one.rgb.size() * sizeof(float)));
+}
+
+// A renderer reused for another method, spp and seed renders the image a new one renders (what its
+// evaluators built on the first render changes no bit), and refuses evaluator options of its own.
+TEST(Render, AReusedRendererRendersWhatANewOneRenders) {
+  Scene s = plane_scene(24, 24);
+  s.objects[0].asset = assets().twill;
+  s.objects[0].tiles_per_unit = 6;
+  Light point;
+  point.position = {0.5, 0.5, 1.5};
+  point.intensity = Rgb(3);
+  s.lights.push_back(point);
+  RenderOptions first;
+  first.method = eval::Method::Brute;
+  const Renderer reused(s, first);
+  (void)reused.render();
+  for (eval::Method m : {eval::Method::Multiscale, eval::Method::MultiscalePaper,
+                         eval::Method::Brute, eval::Method::Reference}) {
+    RenderOptions pass;
+    pass.method = m;
+    pass.spp = 3;
+    pass.seed = 11;
+    const RenderResult again = reused.render(pass), fresh = Renderer(s, pass).render();
+    ASSERT_EQ(again.rgb.size(), fresh.rgb.size());
+    EXPECT_EQ(0, std::memcmp(again.rgb.data(), fresh.rgb.data(), again.rgb.size() * sizeof(float)))
+        << eval::method_name(m);
+    EXPECT_EQ(again.stats.estimates, fresh.stats.estimates);
+  }
+  RenderOptions flat;
+  flat.parallax = false;
+  EXPECT_THROW((void)reused.render(flat), std::invalid_argument);
 }
 
 // relMSE of an image against a reference, over pixels with a non-black reference.
