@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "bake/cli/command.hpp"
@@ -156,6 +157,20 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       }
     if (near_field_object == scene.objects.size())
       throw_input_error(o.scene + ": --near-field needs a plane with a fabric");
+  }
+  // --raw-tables: the same scene over assets with both table forms, one renderer per form (an
+  // `asset =` without raw tables is refused here, exit 2 naming the object).
+  inputs::LoadedScene raw_loaded;
+  std::unique_ptr<render::Renderer> with_raw, with_compressed;
+  if (o.raw_tables) {
+    raw_loaded = inputs::load_scene(o.scene);
+    bake_scene_fabrics(raw_loaded, o.cache, true, /*keep_raw_tables=*/true);
+    raw_loaded.scene.camera = scene.camera;
+    render::RenderOptions form;
+    form.tables = eval::TableChoice::Raw;
+    with_raw = std::make_unique<render::Renderer>(raw_loaded.scene, form);
+    form.tables = eval::TableChoice::Compressed;
+    with_compressed = std::make_unique<render::Renderer>(raw_loaded.scene, form);
   }
   fs::create_directories(out / "images", ec);
   if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
@@ -342,6 +357,29 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     panel(equal_error, "brute-equal-error", "brute, equal error:");
   }
 
+  // What the compression changes: each multi-scale method at the sweep's largest spp, the same
+  // seed, with the raw and with the compressed tables of the same assets.
+  nlohmann::json tables = nullptr;
+  if (o.raw_tables) {
+    const uint32_t spp = *std::max_element(o.spp.begin(), o.spp.end());
+    tables = {{"spp", spp}, {"methods", nlohmann::json::object()}};
+    for (eval::Method m : methods) {
+      if (m == eval::Method::Brute) continue;  // reads no table
+      render::RenderOptions ro;
+      ro.method = m;
+      ro.spp = spp;
+      ro.seed = o.seed;
+      ro.tables = eval::TableChoice::Raw;
+      const render::RenderResult raw = with_raw->render(ro);
+      ro.tables = eval::TableChoice::Compressed;
+      const render::RenderResult compressed = with_compressed->render(ro);
+      tables["methods"][eval::method_name(m)] = {
+          {"relmse_compressed_vs_raw", masked_relmse(compressed, raw, {})},
+          {"relmse_raw", masked_relmse(raw, reference, {})},
+          {"relmse_compressed", masked_relmse(compressed, reference, {})}};
+    }
+  }
+
   // Near field: the ray-traced relief against the model with and without parallax offsets.
   nlohmann::json near_field = nullptr;
   if (o.near_field) {
@@ -390,6 +428,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
                         {"rows", jrows},
                         {"summary", summary},
                         {"near_field", near_field},
+                        {"tables", tables},
                         {"grid", grid}};
   write_text(out / "error-time.csv", csv);
   write_text(out / "error-time.json",
@@ -430,6 +469,13 @@ int run_error_time_report(const ErrorTimeOptions& o) {
                 : bound == "lower" ? " (brute force never got there in the sweep)"
                                    : "");
   }
+  if (!tables.is_null())
+    for (const auto& [name, t] : tables["methods"].items())
+      std::printf(
+          "  %s at %u spp, compressed against raw tables: relMSE %.3g (against the reference: "
+          "raw %.4g, compressed %.4g)\n",
+          name.c_str(), tables["spp"].get<uint32_t>(), t["relmse_compressed_vs_raw"].get<double>(),
+          t["relmse_raw"].get<double>(), t["relmse_compressed"].get<double>());
   if (!near_field.is_null())
     std::printf(
         "  near field (%s, ray-traced relief): relMSE %.4g with parallax offsets, %.4g "

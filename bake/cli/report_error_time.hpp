@@ -17,13 +17,18 @@ struct ErrorTimeOptions {
   std::vector<std::string> methods = {"multiscale", "multiscale-paper", "brute"};
   std::vector<uint32_t> spp = {1, 2, 4, 8, 16, 32, 64};
   uint32_t reference_spp = 256;
-  int width = 0, height = 0;  // > 0: render at this size instead of the scene camera's  // light samples of the reference with environment lights
+  int width = 0, height = 0;  // > 0: render at this size instead of the scene camera's  // light
+                              // samples of the reference with environment lights
   uint64_t seed = 1;
   bool no_plots = false, json = false;
   // Also ray-trace the first cloth plane's real relief and report the error of the parallax-offset
   // model and of the model without offsets against it (paper Fig. 6).
   bool near_field = false;
   uint32_t near_field_samples = 4;  // s x s sub-pixel rays of the ray-traced reference
+  // Also render the multi-scale methods with the raw and with the compressed tables of assets that
+  // hold both (objects given as `fabric =` are baked with --keep-raw into the cache for it), and
+  // report what the compression changes.
+  bool raw_tables = false;
 };
 
 // Throws CLI::ValidationError for bad options, clothbake::Error for a bad scene or output.

@@ -18,6 +18,7 @@
 #include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "common/version.hpp"
+#include "compress/compress_settings.hpp"
 #include "formats/reader/layout.hpp"
 
 namespace clothbake::cli {
@@ -73,7 +74,8 @@ std::string scene_cache_dir(const std::string& option) {
   return (fs::temp_directory_path() / "clothbake-cache").string();
 }
 
-void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_option, bool quiet) {
+void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_option, bool quiet,
+                        bool keep_raw_tables) {
   std::string cache;
   std::unique_ptr<cache::DiskCache> stage_cache;
   const cache::Codecs codecs = stages::artifact_codecs();
@@ -88,7 +90,7 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
         throw_input_error(cache + ": cannot create the asset cache (" + ec.message() + ")");
     }
     const Fabric fabric = load_fabric(loaded.fabrics[k]);
-    const std::string key = asset_key(fabric, codecs);
+    const std::string key = asset_key(fabric, codecs) + (keep_raw_tables ? "-raw" : "");
     const std::string stem = fs::path(loaded.fabrics[k]).stem().string();
     const fs::path asset = fs::path(cache) / cache::kAssetFolder / (stem + "-" + key + ".cbk");
     // One process bakes a given asset; a concurrent render of the same fabric waits, then uses it.
@@ -109,6 +111,11 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
       request.output_path = asset.string();
       request.run.show_progress = !quiet;
       request.run.cache = stage_cache->enabled() ? stage_cache.get() : nullptr;
+      if (keep_raw_tables) {
+        compress::CompressRequest keep;
+        keep.keep_raw = true;
+        request.seeds.put(stages::kCompressSettingsArtifact, keep);
+      }
       pipeline::bake(request, stages::bake_stages());
       stage_cache->enforce_bound();  // the asset counts towards the bound as well
     }

@@ -220,6 +220,53 @@ TEST(ReportErrorTime, RefusesBeforeWritingAndKeysTheReferenceOnWhatItDependsOn) 
   EXPECT_FALSE(cached[2]);  // new pixels: a new reference
 }
 
+// --raw-tables: the multi-scale methods with the raw and with the compressed tables of the same
+// assets. The paper's form reads the tables directly, so compression changes its image a little;
+// an asset without compressed tables is refused before anything is written; a `fabric =` object is
+// baked with its raw tables into the cache.
+TEST(ReportErrorTime, RawTablesShowWhatTheCompressionChanges) {
+  const fs::path cache = assets().dir / "cache-raw";
+  auto report = [&](const std::string& scene_text, const std::string& name) {
+    return run_clothbake({"report", "error-time", write_scene(name + ".toml", scene_text).string(),
+                          "-o", (assets().dir / name).string(), "--spp", "1,4", "--image-size",
+                          "16,12", "--raw-tables", "--cache", cache.string(), "--no-plots",
+                          "--json"});
+  };
+  auto run = report(good_scene(), "report-raw");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json tables = nlohmann::json::parse(run.out)["tables"];
+  EXPECT_EQ(tables["spp"].get<int>(), 4);
+  EXPECT_FALSE(tables["methods"].contains("brute"));
+  for (const char* m : {"multiscale", "multiscale-paper"}) {
+    const nlohmann::json& t = tables["methods"][m];
+    for (const char* k : {"relmse_compressed_vs_raw", "relmse_raw", "relmse_compressed"})
+      EXPECT_TRUE(std::isfinite(t[k].get<double>()) && t[k].get<double>() >= 0) << m << k;
+  }
+  const double paper = tables["methods"]["multiscale-paper"]["relmse_compressed_vs_raw"];
+  EXPECT_GT(paper, 0.0);   // the compressed tables are not the raw ones...
+  EXPECT_LT(paper, 0.01);  // ...but close (the bake's error target)
+
+  // The flat asset has raw tables only: refused, naming the object, no output folder.
+  std::string flat = good_scene();
+  flat.replace(flat.find(assets().twill), assets().twill.size(), assets().flat);
+  run = report(flat, "report-raw-flat");
+  EXPECT_EQ(run.code, 2) << run.err;
+  EXPECT_NE(run.err.find("object[0]"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(assets().dir / "report-raw-flat"));
+
+  // A fabric: baked with --keep-raw into the cache.
+  std::string fabric = good_scene();
+  const std::string asset_line = "asset = \"" + assets().twill + "\"";
+  fabric.replace(fabric.find(asset_line), asset_line.size(),
+                 "fabric = \"" + (assets().dir / "twill.toml").string() + "\"");
+  run = report(fabric, "report-raw-fabric");
+  ASSERT_EQ(run.code, 0) << run.err;
+  bool raw_variant = false;
+  for (const auto& entry : fs::directory_iterator(cache / "assets"))
+    raw_variant |= entry.path().filename().string().find("-raw.cbk") != std::string::npos;
+  EXPECT_TRUE(raw_variant);
+}
+
 }  // namespace
 }  // namespace clothbake::render
 
