@@ -66,7 +66,10 @@ struct PixelFootprint {
 
 class Renderer {
  public:
+  // Keeps a reference to `scene`: it must outlive the renderer and stay unchanged while it lives
+  // (the camera, objects and lights are read at construction and at every render).
   Renderer(const Scene& scene, const RenderOptions& options);
+  Renderer(Scene&&, const RenderOptions&) = delete;  // a temporary scene would dangle
   ~Renderer();
 
   // Renders the image; `progress(fraction)` is called from the rendering threads (thread-safe,

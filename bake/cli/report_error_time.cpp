@@ -158,23 +158,6 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     if (near_field_object == scene.objects.size())
       throw_input_error(o.scene + ": --near-field needs a plane with a fabric");
   }
-  // --raw-tables: the same scene over assets with both table forms, one renderer per form (an
-  // `asset =` without raw tables is refused here, exit 2 naming the object).
-  inputs::LoadedScene raw_loaded;
-  std::unique_ptr<render::Renderer> with_raw, with_compressed;
-  if (o.raw_tables) {
-    raw_loaded = inputs::load_scene(o.scene);
-    bake_scene_fabrics(raw_loaded, o.cache, true, /*keep_raw_tables=*/true);
-    raw_loaded.scene.camera = scene.camera;
-    render::RenderOptions form;
-    form.tables = eval::TableChoice::Raw;
-    with_raw = std::make_unique<render::Renderer>(raw_loaded.scene, form);
-    form.tables = eval::TableChoice::Compressed;
-    with_compressed = std::make_unique<render::Renderer>(raw_loaded.scene, form);
-  }
-  fs::create_directories(out / "images", ec);
-  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
-
   // The reference: exact footprints; environment lights need many light samples. Cached by the
   // content of everything it depends on: the tool's version, the scene file, the image size, the
   // reference's spp and seed, every asset and every environment map (its pixels and scale, so that
@@ -202,6 +185,25 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   // (the parallax planes of the views met, per-bin tables), as a renderer keeps its assets between
   // frames, so that the timed renders measure shading, not the asset's one-time preparation.
   const render::Renderer renderer(scene, ref_options);
+  // --raw-tables: the same scene over assets with both table forms, one renderer per form (an
+  // `asset =` without raw tables is refused here, exit 2 naming the object). After the main
+  // renderer has opened its assets and the reference key has read them: this bake may prune the
+  // cache (its bound) and with it the assets just baked.
+  inputs::LoadedScene raw_loaded;
+  std::unique_ptr<render::Renderer> with_raw, with_compressed;
+  if (o.raw_tables) {
+    raw_loaded = inputs::load_scene(o.scene);
+    bake_scene_fabrics(raw_loaded, o.cache, true, /*keep_raw_tables=*/true);
+    raw_loaded.scene.camera = scene.camera;
+    render::RenderOptions form;
+    form.tables = eval::TableChoice::Raw;
+    with_raw = std::make_unique<render::Renderer>(raw_loaded.scene, form);
+    form.tables = eval::TableChoice::Compressed;
+    with_compressed = std::make_unique<render::Renderer>(raw_loaded.scene, form);
+  }
+  fs::create_directories(out / "images", ec);
+  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
+
   render::RenderResult reference;
   double reference_seconds = 0;
   if (fs::is_regular_file(cached, ec)) {

@@ -16,9 +16,8 @@ struct ErrorTimeOptions {
   std::string scene, output, cache;
   std::vector<std::string> methods = {"multiscale", "multiscale-paper", "brute"};
   std::vector<uint32_t> spp = {1, 2, 4, 8, 16, 32, 64};
-  uint32_t reference_spp = 256;
-  int width = 0, height = 0;  // > 0: render at this size instead of the scene camera's  // light
-                              // samples of the reference with environment lights
+  uint32_t reference_spp = 256;  // light samples of the reference with environment lights
+  int width = 0, height = 0;     // > 0: render at this size instead of the scene camera's
   uint64_t seed = 1;
   bool no_plots = false, json = false;
   // Also ray-trace the first cloth plane's real relief and report the error of the parallax-offset
