@@ -88,7 +88,9 @@ Rgb visibility_weighted_rgb(const ShadingFrame& frame, uint32_t clusters, const 
 }  // namespace
 
 Status control_variates(const EvalData& data, const ShadingFrame& frame, const Footprint& p,
-                        uint32_t spp, Rng& rng, bool paper_form, Estimate* out) noexcept {
+                        uint32_t spp, Rng& rng, bool paper_form, double weight,
+                        Estimate* out) noexcept {
+  if (paper_form) weight = 1.0;
   const uint32_t n = data.n, clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
 
@@ -248,7 +250,7 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     else
       control_variate(data, frame, k, qx, qy, true, g);
     for (int l = 0; l < model::kLobeCount; ++l)
-      residual[l] += shading.lobes[l] - g[l];
+      residual[l] += shading.lobes[l] - g[l] * weight;
   });
   // The warp term E_p[g(x'(p)) - g(p + mean offset)]: cheap, no BSDF, its own stratified points.
   Rgb warp[model::kLobeCount];
@@ -264,9 +266,10 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
       for (int l = 0; l < model::kLobeCount; ++l)
         warp[l] += at_destination[l] - shifted[l];
     });
+  // weight * base + mean(f - weight g) (+ weight * the warp term): unbiased for any weight.
   for (int l = 0; l < model::kLobeCount; ++l) {
-    out->lobes[l] += base[l] + residual[l] / double(spp);
-    if (warp_samples > 0) out->lobes[l] += warp[l] / double(warp_samples);
+    out->lobes[l] += base[l] * weight + residual[l] / double(spp);
+    if (warp_samples > 0) out->lobes[l] += warp[l] * weight / double(warp_samples);
   }
   out->counters.samples += spp;
   out->counters.texel_evals += spp;

@@ -1,6 +1,7 @@
 // Evaluator: opening an asset for evaluation and dispatching estimates (evaluator.hpp).
 #include "eval/evaluator.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -303,15 +304,19 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
   const double direct_side = data_->options.direct_max_side;
   const bool direct = !(w > 0.0 && h > 0.0) || (multiscale && w < direct_side && h < direct_side);
-  // The unbiased form without its control variate where the parallax offsets vary by more than the
-  // footprint (EvalOptions::cv_min_side_per_offset_range).
-  bool without_cv = false;
-  if (method == Method::Multiscale && !direct && data_->options.parallax) {
+  // The unbiased form's control-variate weight (Eq. 7's alpha): 0 where the parallax offsets vary
+  // by more than the footprint, 1 where the footprint is twice as wide, a linear ramp between
+  // (EvalOptions::cv_min_side_per_offset_range).
+  double cv_weight = 1.0;
+  if (method == Method::Multiscale && !direct && data_->options.parallax &&
+      data_->options.cv_min_side_per_offset_range > 0.0) {
     const double range =
         data_->parallax_blocks.depth_range(frame.parallax_bins.index, frame.parallax_bins.weight) *
         std::hypot(frame.offset_per_depth[0], frame.offset_per_depth[1]);
-    without_cv = std::min(w, h) < data_->options.cv_min_side_per_offset_range * range;
+    const double start = data_->options.cv_min_side_per_offset_range * range;
+    if (start > 0.0) cv_weight = std::clamp(std::min(w, h) / start - 1.0, 0.0, 1.0);
   }
+  const bool without_cv = cv_weight == 0.0;
   if (multiscale && !direct &&
       !without_cv) {  // a scene-planned asset answers only the half vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
@@ -331,7 +336,7 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
     brute_force(*data_, frame, footprint, spp, rng, out);
   } else {
     s = control_variates(*data_, frame, footprint, spp, rng, method == Method::MultiscalePaper,
-                         out);
+                         cv_weight, out);
   }
   if (!s.ok()) return s;
   sum_value(out);

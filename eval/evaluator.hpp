@@ -89,13 +89,14 @@ struct EvalOptions {
   // given spp by a third to a half but doubles the cost, so per unit time it does not pay on the
   // example fabrics (docs/performance.md, "Evaluator").
   uint32_t warp_samples_per_sample = 0;
-  // The unbiased multi-scale form samples a footprint without its control variate (as brute force
-  // does) when the footprint's shorter side is below this many times the parallax offset range of
-  // its view (the tile's max - min of the per-texel depth times the offset per unit depth, texels):
-  // then the shifted footprint the tables integrate and the samples' own destinations cover
-  // different parts of the pattern, and the control variate adds variance instead of removing it
-  // (docs/evaluator.md, "Footprints the control variate does not help"). 0: always the control
-  // variate. The estimate stays unbiased either way.
+  // The unbiased multi-scale form weights its control variate by alpha (Eq. 7) from the footprint's
+  // shorter side s against the parallax offset range D of its view (the tile's max - min of the
+  // per-texel depth times the offset per unit depth, texels) and this k: alpha = 0 for s <= k D
+  // (sampled exactly as brute force), rising linearly to 1 at s = 2 k D. Below that width the
+  // shifted footprint the tables integrate and the samples' own destinations cover different parts
+  // of the pattern, and the full control variate adds variance instead of removing it
+  // (docs/evaluator.md, "Footprints the control variate does not help"). 0: alpha = 1 always. The
+  // estimate stays unbiased for any alpha.
   double cv_min_side_per_offset_range = 2.0;
   // The sheen table of every texel's BSDF (model/sheen.hpp, docs/sheen.md): the published one of
   // Zeltner et al. by default, as renderers ship it; Converged for the layer's exact albedo. The
@@ -113,8 +114,9 @@ struct Counters {
   uint32_t texel_evals = 0;    // per-texel BSDF evaluations (f^ V at one texel)
   uint32_t table_queries = 0;  // footprint queries on SATs (radiance, parallax, footprint sums)
   bool direct = false;         // answered by the exact sum (footprint below direct_max_side)
-  bool without_control_variate = false;  // multiscale: sampled as brute force (footprint below
-                                         // cv_min_side_per_offset_range times the offset range)
+  bool without_control_variate = false;  // multiscale: sampled as brute force (alpha = 0: the
+                                         // footprint below cv_min_side_per_offset_range times the
+                                         // offset range)
 };
 
 struct Estimate {

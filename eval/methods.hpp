@@ -17,8 +17,11 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
 // footprint sums over the footprint shifted by its mean parallax offset, plus a residual of spp
 // samples. paper_form: Eq. 8-10 as printed (residual k G D (V - v_c) at the shifted samples);
 // otherwise the unbiased form (residual f(x'(p)) - g(p + mean offset)). P has positive area; the
-// specular tables are open. Errors: InvalidArgument from the parallax footprint query.
+// specular tables are open. weight in (0, 1]: the unbiased form's control-variate coefficient
+// (Eq. 7's alpha: weight * base + residual of f - weight * g; any value keeps it unbiased); the
+// paper form takes 1. Errors: InvalidArgument from the parallax footprint query.
 Status control_variates(const EvalData& data, const ShadingFrame& frame, const Footprint& footprint,
-                        uint32_t spp, Rng& rng, bool paper_form, Estimate* out) noexcept;
+                        uint32_t spp, Rng& rng, bool paper_form, double weight,
+                        Estimate* out) noexcept;
 
 }  // namespace clothbake::eval

@@ -380,9 +380,10 @@ TEST(Multiscale, SmallFootprintsAreSummedExactly) {
   }
 }
 
-// Where the parallax offsets vary by more than the footprint (its shorter side below
-// cv_min_side_per_offset_range times the view's offset range), the unbiased form samples without
-// its control variate: bit for bit brute force with the same generator. Elsewhere it keeps it.
+// The unbiased form's control-variate weight (Eq. 7's alpha) from the footprint's shorter side s
+// against the view's offset range D: 0 for s <= k D (bit for bit brute force with the same
+// generator), a ramp to 1 at 2 k D; unbiased on the ramp; the paper form always has its control
+// variate.
 TEST(Multiscale, FootprintsNarrowerThanTheOffsetRangeAreSampledWithoutTheControlVariate) {
   auto o = open(assets().twill);
   const EvalData& data = *o->evaluator.data();
@@ -393,7 +394,7 @@ TEST(Multiscale, FootprintsNarrowerThanTheOffsetRangeAreSampledWithoutTheControl
   const double range =
       data.parallax_blocks.depth_range(frame.parallax_bins.index, frame.parallax_bins.weight) *
       std::hypot(frame.offset_per_depth[0], frame.offset_per_depth[1]);
-  const double threshold = EvalOptions().cv_min_side_per_offset_range * range;
+  const double threshold = EvalOptions().cv_min_side_per_offset_range * range;  // k D
   ASSERT_GT(threshold, 2.0);  // a real relief: the narrow footprint below is below it
   ASSERT_LT(threshold, 60.0);
   const Footprint narrow{3.5, 9.25, 3.5 + 0.9 * threshold, 70.0},  // tall but narrow
@@ -415,6 +416,10 @@ TEST(Multiscale, FootprintsNarrowerThanTheOffsetRangeAreSampledWithoutTheControl
     EXPECT_FALSE(ms.counters.without_control_variate);
     EXPECT_GT(ms.counters.table_queries, 0u);
   }
+  // On the ramp (alpha = 1/2): still unbiased.
+  const Footprint ramp{20.25, 3.5, 20.25 + 1.5 * threshold, 3.5 + 1.5 * threshold};
+  const Stats st = repeat(o->evaluator, ramp, kReflectWi, wo, Method::Multiscale, 2, 4000, 17);
+  expect_mean_within_3se(st, reference(o->evaluator, ramp, kReflectWi, wo), 2e-4, "ramp");
   // The paper's form is as printed: always its control variate.
   Rng rng(1);
   Estimate paper;

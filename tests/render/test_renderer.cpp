@@ -152,7 +152,7 @@ TEST(Render, ImagesAreIdenticalForAnyThreadCount) {
 // A renderer reused for another method, spp and seed renders the image a new one renders (what its
 // evaluators built on earlier renders, of this method with another seed included, changes no bit),
 // and refuses evaluator options of its own. Near (1.5 tiles per unit: pixels a few texels wide,
-// sampled without the control variate) and far (6: with it).
+// some sampled without the control variate, most with a partial weight) and far (6: with it).
 TEST(Render, AReusedRendererRendersWhatANewOneRenders) {
   for (const double tiles : {1.5, 6.0}) {
     const Scene s = lit_twill_plane(tiles);
@@ -177,7 +177,7 @@ TEST(Render, AReusedRendererRendersWhatANewOneRenders) {
       EXPECT_EQ(again.stats.estimates, fresh.stats.estimates);
       if (m == eval::Method::Multiscale) {
         if (tiles < 2) {
-          EXPECT_GT(again.stats.without_control_variate, again.stats.estimates / 2);
+          EXPECT_GT(again.stats.without_control_variate, 0u);
         } else {
           EXPECT_LT(again.stats.without_control_variate, again.stats.estimates / 10);
         }
