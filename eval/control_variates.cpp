@@ -90,7 +90,6 @@ Rgb visibility_weighted_rgb(const ShadingFrame& frame, uint32_t clusters, const 
 Status control_variates(const EvalData& data, const ShadingFrame& frame, const Footprint& p,
                         uint32_t spp, Rng& rng, bool paper_form, double weight,
                         Estimate* out) noexcept {
-  if (paper_form) weight = 1.0;
   const uint32_t n = data.n, clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
 

@@ -19,7 +19,8 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
 // otherwise the unbiased form (residual f(x'(p)) - g(p + mean offset)). P has positive area; the
 // specular tables are open. weight in (0, 1]: the unbiased form's control-variate coefficient
 // (Eq. 7's alpha: weight * base + residual of f - weight * g; any value keeps it unbiased); the
-// paper form takes 1. Errors: InvalidArgument from the parallax footprint query.
+// paper form must be given 1 (its residual is not weighted). Errors: InvalidArgument from the
+// parallax footprint query.
 Status control_variates(const EvalData& data, const ShadingFrame& frame, const Footprint& footprint,
                         uint32_t spp, Rng& rng, bool paper_form, double weight,
                         Estimate* out) noexcept;

@@ -2,6 +2,7 @@
 #include "eval/parallax_blocks.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <new>
 
 namespace clothbake::eval {
@@ -28,8 +29,7 @@ const FootprintSums* ParallaxBlockMeans::sums(uint32_t bin) const noexcept {
   std::call_once(once_[bin], [&] {
     const uint32_t b = block_, nb = blocks_;
     const double inv = 1.0 / double(b * b);
-    double lowest = 0.0, highest = 0.0;
-    bool any = false;
+    double lowest = INFINITY, highest = -INFINITY;  // over every texel (B divides N)
     try {
       sums_[bin].build(nb, 1, [&](uint64_t t, double* out) {
         const int64_t bx = int64_t(t % nb) * b, by = int64_t(t / nb) * b;
@@ -38,9 +38,8 @@ const FootprintSums* ParallaxBlockMeans::sums(uint32_t bin) const noexcept {
           for (uint32_t x = 0; x < b; ++x) {
             const double r = view_->bin_depth(bin, bx + x, by + y);
             sum += r;
-            lowest = any ? std::min(lowest, r) : r;
-            highest = any ? std::max(highest, r) : r;
-            any = true;
+            lowest = std::min(lowest, r);
+            highest = std::max(highest, r);
           }
         out[0] = sum * inv;
       });

@@ -30,6 +30,13 @@ void check_output_path(const std::string& exr_path) {
     throw_input_error(exr_path + ": the folder " + dir.string() + " does not exist");
 }
 
+void write_image_atomically(const fs::path& path, const Image& image, PixelType type) {
+  // The extension stays last: OpenImageIO picks the format by it.
+  formats::TempFile tmp(path, path.extension().string());
+  write_image(tmp.path().string(), image, type);
+  tmp.commit();
+}
+
 OutputFiles write_render_images(const std::string& exr_path, const RenderResult& r) {
   OutputFiles files;
   files.exr = exr_path;

@@ -2,8 +2,10 @@
 // through OpenImageIO to temporary names that are renamed only when both are complete.
 #pragma once
 
+#include <filesystem>
 #include <string>
 
+#include "common/image_io/image_io.hpp"
 #include "render/renderer.hpp"
 
 namespace clothbake::render {
@@ -19,6 +21,12 @@ void check_output_path(const std::string& exr_path);
 // Writes exr_path and the same path with .png. Throws clothbake::Error(Input) on I/O failure,
 // leaving neither file changed.
 OutputFiles write_render_images(const std::string& exr_path, const RenderResult& image);
+
+// Writes `image` to `path` through OpenImageIO (the format from the extension) under a temporary
+// name (formats::TempFile: locked, removed on a signal, stale ones of a killed writer removed
+// first) renamed when complete. Throws clothbake::Error(Input) naming the path; `path` is then
+// unchanged.
+void write_image_atomically(const std::filesystem::path& path, const Image& image, PixelType type);
 
 // The sRGB transfer function of a linear value, clamped to [0, 1].
 double srgb_encode(double linear);

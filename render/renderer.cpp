@@ -108,20 +108,15 @@ PixelFootprint Renderer::pixel_footprint(int px, int py) const {
 }
 
 RenderResult Renderer::render(const std::function<void(double)>& progress) const {
-  return render_impl(options_, progress);
+  return render(options_, progress);
 }
 
-RenderResult Renderer::render(const RenderOptions& pass,
+RenderResult Renderer::render(const RenderOptions& pass_options,
                               const std::function<void(double)>& progress) const {
-  if (pass.tables != options_.tables || pass.parallax != options_.parallax ||
-      pass.sheen_convention != options_.sheen_convention)
+  if (pass_options.tables != options_.tables || pass_options.parallax != options_.parallax ||
+      pass_options.sheen_convention != options_.sheen_convention)
     throw std::invalid_argument(
         "Renderer::render: the tables, parallax and sheen convention are the constructor's");
-  return render_impl(pass, progress);
-}
-
-RenderResult Renderer::render_impl(const RenderOptions& pass_options,
-                                   const std::function<void(double)>& progress) const {
   const auto start = std::chrono::steady_clock::now();
   const Scene& scene = scene_;
   const Impl& impl = *impl_;

@@ -92,8 +92,6 @@ class Renderer {
 
  private:
   struct Impl;
-  RenderResult render_impl(const RenderOptions& options,
-                           const std::function<void(double)>& progress) const;
   const Scene& scene_;
   RenderOptions options_;
   std::unique_ptr<Impl> impl_;

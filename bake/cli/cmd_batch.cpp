@@ -210,11 +210,7 @@ void write_stamp(const BatchOptions& o, const Job& j, const nlohmann::json& repo
                      {"xxh64", input["xxh64"]}});
   }
   stamp["inputs"] = files;
-  const std::string text = stamp.dump(1) + "\n";
-  formats::OutputOptions out;
-  out.require_asset_to_replace = false;
-  formats::write_file_atomically(
-      stamp_path(o, j), [&](formats::Sink& s) { s.write(text.data(), text.size()); }, out);
+  formats::write_text_atomically(stamp_path(o, j), stamp.dump(1) + "\n");
 }
 
 std::vector<std::string> bake_arguments(const BatchOptions& o, const Job& j, int threads,
@@ -314,13 +310,8 @@ int emit_slurm(const BatchOptions& o, const std::vector<Job>& jobs, uint64_t pea
   if (!cache.empty()) s << " \\\n  --cache " << sh_quote(fs::absolute(cache).string());
   if (!o.scene.empty()) s << " \\\n  --scene " << sh_quote(fs::absolute(o.scene).string());
   s << "\n";
-  formats::OutputOptions out;
-  out.require_asset_to_replace = false;
-  const std::string text = s.str();
-  formats::write_file_atomically(
-      list, [&](formats::Sink& k) { k.write(list_text.data(), list_text.size()); }, out);
-  formats::write_file_atomically(
-      script, [&](formats::Sink& k) { k.write(text.data(), text.size()); }, out);
+  formats::write_text_atomically(list, list_text);
+  formats::write_text_atomically(script, s.str());
   ::chmod(script.c_str(), 0755);
   int failed = 0;
   for (const auto& j : jobs)

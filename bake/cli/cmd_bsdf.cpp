@@ -26,10 +26,10 @@
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
-#include "formats/writer/atomic_file.hpp"
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
 #include "model/lobe_integral.hpp"
+#include "render/image_output.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -180,11 +180,7 @@ SliceResult write_slice(const model::ClothBsdf<double>& bsdf, const Vec3d& wi, d
     for (float& p : image.pixels)
       p = float(p * result.scale);
   }
-  // Locked, registered for the signal handlers, stale ones of a killed run removed first; the
-  // extension stays last (OpenImageIO picks the format by it).
-  formats::TempFile temp(path, ext);
-  write_image(temp.path().string(), image, type);
-  temp.commit();
+  render::write_image_atomically(path, image, type);
   return result;
 }
 

@@ -26,6 +26,7 @@
 #include "formats/writer/atomic_file.hpp"
 #include "formats/writer/open_asset.hpp"
 #include "formats/writer/valid_asset.hpp"
+#include "render/image_output.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -279,9 +280,7 @@ Action setup_export(CLI::App& app) {
       throw_input_error(o->output +
                         " is a clothbake asset; refusing to overwrite it with an image (pass "
                         "--force to replace it)");
-    formats::TempFile temp(output, output.extension().string());
-    write_image(temp.path().string(), image, PixelType::Float32);
-    temp.commit();
+    render::write_image_atomically(output, image, PixelType::Float32);
     info("wrote " + o->output + " (" + std::to_string(image.width) + " x " +
          std::to_string(image.height) + ", " + std::to_string(image.channels) + " channels)");
     return 0;

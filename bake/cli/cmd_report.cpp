@@ -140,7 +140,7 @@ Action setup_report(CLI::App& app) {
                  "error-time: render at W,H pixels instead of the scene camera's resolution");
   app.add_flag("--raw-tables", et->raw_tables,
                "error-time: also render the multi-scale methods with the raw and the compressed "
-               "tables (fabrics baked with --keep-raw into the cache: 2.5 GB at 256^2)");
+               "tables (fabrics baked with --keep-raw into the cache: 2 GB for a 256^2 twill)");
   app.add_flag("--near-field", et->near_field,
                "error-time: also ray-trace the first cloth plane's relief and compare the model "
                "with and without parallax offsets against it");

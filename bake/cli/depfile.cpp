@@ -53,11 +53,7 @@ std::string current_executable() {
 
 void write_depfile(const std::string& path, const std::string& target,
                    const std::vector<std::string>& deps) {
-  const std::string text = depfile_text(target, deps);
-  formats::OutputOptions options;
-  options.require_asset_to_replace = false;
-  formats::write_file_atomically(
-      path, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); }, options);
+  formats::write_text_atomically(path, depfile_text(target, deps));
 }
 
 }  // namespace clothbake::cli

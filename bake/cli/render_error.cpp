@@ -37,11 +37,7 @@ MeanAndError relmse_of_means(const render::RenderResult& a1, const render::Rende
   std::size_t pixels = 0;
   for (std::size_t p = 0; 3 * p < ref.rgb.size(); ++p) {
     if (!mask.empty() && !mask[p]) continue;
-    double term = 0;
-    for (std::size_t k = 3 * p; k < 3 * p + 3; ++k) {
-      const double d1 = double(a1.rgb[k]) - b1.rgb[k], d2 = double(a2.rgb[k]) - b2.rgb[k];
-      term += d1 * d2 / (double(ref.rgb[k]) * ref.rgb[k] + floor2) / 3;
-    }
+    const double term = relmse_of_means_term(a1, b1, a2, b2, ref, p, floor2);
     rel += term;
     rel2 += term * term;
     ++pixels;
@@ -50,6 +46,22 @@ MeanAndError relmse_of_means(const render::RenderResult& a1, const render::Rende
   const double n = double(pixels), mean = rel / n;
   const double var = pixels > 1 ? std::max(0.0, (rel2 - n * mean * mean) / (n - 1)) : 0.0;
   return {mean, std::sqrt(var / n)};
+}
+
+double relmse_of_means_term(const render::RenderResult& a1, const render::RenderResult& b1,
+                            const render::RenderResult& a2, const render::RenderResult& b2,
+                            const render::RenderResult& ref, std::size_t p, double floor2) {
+  double term = 0;
+  for (std::size_t k = 3 * p; k < 3 * p + 3; ++k) {
+    const double d1 = double(a1.rgb[k]) - b1.rgb[k], d2 = double(a2.rgb[k]) - b2.rgb[k];
+    term += d1 * d2 / (double(ref.rgb[k]) * ref.rgb[k] + floor2) / 3;
+  }
+  return term;
+}
+
+double relmse_between(const render::RenderResult& a, const render::RenderResult& b,
+                      const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
+  return relmse_of_means(a, b, a, b, ref, mask).mean;
 }
 
 }  // namespace clothbake::cli

@@ -32,4 +32,15 @@ MeanAndError relmse_of_means(const render::RenderResult& a1, const render::Rende
                              const render::RenderResult& a2, const render::RenderResult& b2,
                              const render::RenderResult& ref, const std::vector<uint8_t>& mask);
 
+// The term of relmse_of_means at pixel p (its channels averaged), with floor2 = relmse_floor(ref,
+// mask): for maps of where two expected pictures differ.
+double relmse_of_means_term(const render::RenderResult& a1, const render::RenderResult& b1,
+                            const render::RenderResult& a2, const render::RenderResult& b2,
+                            const render::RenderResult& ref, std::size_t p, double floor2);
+
+// relMSE between two renders a and b with the reference's normalisation: the mean over the pixels
+// of `mask` and their channels of (a - b)^2 / (r^2 + eps^2) (relmse_of_means with one pair).
+double relmse_between(const render::RenderResult& a, const render::RenderResult& b,
+                      const render::RenderResult& ref, const std::vector<uint8_t>& mask);
+
 }  // namespace clothbake::cli

@@ -56,15 +56,7 @@ void errors(const render::RenderResult& a, const render::RenderResult& ref, doub
 // two renders, so it is meaningful where bias^2 is not small against var / spp).
 double bias_estimate(const render::RenderResult& a, const render::RenderResult& b,
                      const render::RenderResult& ref) {
-  const double floor2 = relmse_floor(ref, {});
-  double e_ar = 0, e_ab = 0;
-  for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
-    const double w = double(ref.rgb[k]) * ref.rgb[k] + floor2;
-    e_ar += std::pow(double(a.rgb[k]) - ref.rgb[k], 2) / w;
-    e_ab += std::pow(double(a.rgb[k]) - b.rgb[k], 2) / w;
-  }
-  const double n = ref.rgb.empty() ? 1.0 : double(ref.rgb.size());
-  return std::sqrt(std::max(0.0, e_ar / n - 0.5 * e_ab / n));
+  return std::sqrt(std::max(0.0, masked_relmse(a, ref, {}) - 0.5 * relmse_between(a, b, ref, {})));
 }
 
 // Value of y at x on the log-log polyline through (xs, ys) sorted by x; NaN outside.
@@ -80,27 +72,11 @@ double loglog_at(const std::vector<std::pair<double, double>>& pts, double x, bo
   return NAN;
 }
 
-// A report file, atomically (formats/writer/atomic_file.hpp): Error(Input) naming it when it cannot
-// be written, and never a partial file.
-void write_text(const fs::path& path, const std::string& text) {
-  formats::OutputOptions options;
-  options.require_asset_to_replace = false;
-  formats::write_file_atomically(
-      path, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); }, options);
-}
-
-// An 8-bit PNG through a temporary name renamed when complete (as write_text).
-void write_png_atomically(const fs::path& path, const Image& img) {
-  formats::TempFile tmp(path, ".png");
-  write_image(tmp.path().string(), img, PixelType::UInt8);
-  tmp.commit();
-}
-
 void write_png(const fs::path& path, const render::RenderResult& r) {
   Image img(r.width, r.height, 3);
   for (std::size_t k = 0; k < r.rgb.size(); ++k)
     img.pixels[k] = float(render::srgb_encode(r.rgb[k]));
-  write_png_atomically(path, img);
+  render::write_image_atomically(path, img, PixelType::UInt8);
 }
 
 // A grey relative-error map, |x - r| / r of the channel mean, scaled to [0, 1] by `scale`.
@@ -114,7 +90,7 @@ void write_error_png(const fs::path& path, const render::RenderResult& a,
     const double e = r > 1e-6 ? std::abs(x - r) / r : 0.0;
     img.pixels[std::size_t(k)] = float(std::min(1.0, e / scale));
   }
-  write_png_atomically(path, img);
+  render::write_image_atomically(path, img, PixelType::UInt8);
 }
 
 }  // namespace
@@ -432,9 +408,10 @@ int run_error_time_report(const ErrorTimeOptions& o) {
                         {"near_field", near_field},
                         {"tables", tables},
                         {"grid", grid}};
-  write_text(out / "error-time.csv", csv);
-  write_text(out / "error-time.json",
-             doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  formats::write_text_atomically(out / "error-time.csv", csv);
+  formats::write_text_atomically(
+      out / "error-time.json",
+      doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   if (!o.no_plots) {
     // $CLOTHBAKE_PLOT_SCRIPT_DIR, else the source tree this file was compiled from.
     const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT_DIR");

@@ -27,12 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The same-seed pair's relMSE, with the normalisation of relmse_of_means (render_error.hpp).
-double relmse_pair(const render::RenderResult& a, const render::RenderResult& b,
-                   const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
-  return relmse_of_means(a, b, a, b, ref, mask).mean;
-}
-
 struct FabricRow {
   std::string fabric, stem;
   std::vector<int> objects;
@@ -156,7 +150,7 @@ int run_plan_report(const PlanReportOptions& o) {
         relmse_of_means(planned_image, full_image, planned_image2, full_image2, reference, mask);
     row.planned_vs_full = of_means.mean;
     row.planned_vs_full_error = of_means.std_error;
-    row.same_seed = relmse_pair(planned_image, full_image, reference, mask);
+    row.same_seed = relmse_between(planned_image, full_image, reference, mask);
     row.full_vs_reference = masked_relmse(full_image, reference, mask);
     row.planned_vs_reference = masked_relmse(planned_image, reference, mask);
     row.pass = row.planned_vs_full <= budget;
@@ -206,18 +200,16 @@ int run_plan_report(const PlanReportOptions& o) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const std::size_t p = std::size_t(y) * w + x;
-      double term = 0;
       for (int c = 0; c < 3; ++c) {
         const std::size_t k = 3 * p + std::size_t(c);
         side.pixels[(std::size_t(y) * 3 * w + x) * 3 + c] =
             float(render::srgb_encode(full_image.rgb[k]));
         side.pixels[(std::size_t(y) * 3 * w + w + x) * 3 + c] =
             float(render::srgb_encode(planned_image.rgb[k]));
-        term += (double(planned_image.rgb[k]) - full_image.rgb[k]) *
-                (double(planned_image2.rgb[k]) - full_image2.rgb[k]) /
-                (double(reference.rgb[k]) * reference.rgb[k] + floor2_all) / 3;
       }
       if (hit[p] < 0) continue;  // no object: stays black
+      const double term = relmse_of_means_term(planned_image, full_image, planned_image2,
+                                               full_image2, reference, p, floor2_all);
       const std::size_t b = std::size_t(y / block) * bw + std::size_t(x / block);
       block_sum[b] += term;
       block_sum2[b] += term * term;
@@ -237,7 +229,7 @@ int run_plan_report(const PlanReportOptions& o) {
       const std::size_t q = (std::size_t(y) * 3 * w + 2 * w + x) * 3;
       side.pixels[q] = r, side.pixels[q + 1] = g, side.pixels[q + 2] = 0;
     }
-  write_image((out / "side-by-side.png").string(), side, PixelType::UInt8);
+  render::write_image_atomically(out / "side-by-side.png", side, PixelType::UInt8);
   render::write_render_images((out / "full.exr").string(), full_image);
   render::write_render_images((out / "planned.exr").string(), planned_image);
   render::write_render_images((out / "reference.exr").string(), reference);
@@ -256,12 +248,7 @@ int run_plan_report(const PlanReportOptions& o) {
                                 {"brute_fallback", planned_image.stats.fallback_brute},
                                 {"zero", planned_image.stats.fallback_zero}}},
                               {"fabrics", fabrics}};
-  const std::string text = doc.dump(2) + "\n";
-  formats::OutputOptions json_output;
-  json_output.require_asset_to_replace = false;
-  formats::write_file_atomically((out / "plan.json").string(),
-                                 [&](formats::Sink& sink) { sink.write(text.data(), text.size()); },
-                                 json_output);
+  formats::write_text_atomically(out / "plan.json", doc.dump(2) + "\n");
   if (o.json) {
     print_json(doc);
   } else {

@@ -239,6 +239,13 @@ void TempFile::commit() {
   }
 }
 
+void write_text_atomically(const fs::path& path, const std::string& text) {
+  OutputOptions options;
+  options.require_asset_to_replace = false;
+  write_file_atomically(
+      path, [&](Sink& sink) { sink.write(text.data(), text.size()); }, options);
+}
+
 void write_file_atomically(const fs::path& path, const std::function<void(Sink&)>& produce,
                            const OutputOptions& options) {
   check_output_path(path, options);

@@ -86,6 +86,11 @@ bool remove_if_unlocked(const std::filesystem::path& path);
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(Sink&)>& produce, const OutputOptions& options);
 
+// `text` as a file that is not an asset (reports, depfiles, scripts: any existing regular file is
+// replaced; options.require_asset_to_replace false), through write_file_atomically. Throws
+// Error(Input) naming the path when it cannot be written.
+void write_text_atomically(const std::filesystem::path& path, const std::string& text);
+
 // True if the file at `path` starts with the asset magic bytes.
 bool looks_like_asset(const std::filesystem::path& path);
 
