@@ -19,6 +19,21 @@ std::vector<formats::Section> cluster_sections(const VisibilityClusters& c) {
   return out;
 }
 
+std::vector<formats::Section> visibility_basis_sections(const VisibilityBasis& b) {
+  const uint32_t n = uint32_t(b.resolution), d = uint32_t(b.dirs), k = uint32_t(b.clusters),
+                 m = uint32_t(b.rank);
+  if (k == 0 || b.components.size() != std::size_t(k) * (m + 1) * d * d ||
+      b.coefficients.size() != std::size_t(n) * n * m)
+    throw_internal_error("visibility basis: inconsistent sizes");
+  std::vector<formats::Section> out;
+  out.push_back(formats::make_array_section<float>(reader::SectionType::ClusterVisibilityBasis, 0,
+                                                   b.components, {k, m + 1, d, d}));
+  if (m > 0)
+    out.push_back(formats::make_array_section<float>(reader::SectionType::ClusterVisibilityBasis, 1,
+                                                     b.coefficients, {n, n, m}));
+  return out;
+}
+
 nlohmann::json cluster_metadata(const VisibilityClusters& c,
                                 const VisibilityClusterOptions& options) {
   nlohmann::json per_cluster = nlohmann::json::array();

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
+#include <utility>
 
 #include "common/error.hpp"
 #include "model/directions.hpp"
@@ -96,8 +98,46 @@ VisibilityClusters cluster_visibility(int resolution, std::span<const model::Asg
   out.visibility_dirs = options.visibility_dirs;
   out.samples_per_bin_side = options.samples_per_bin_side;
   out.labels.resize(asgs.size());
-  for (std::size_t i = 0; i < asgs.size(); ++i)
-    out.labels[i] = uint8_t(out.kmeans.labels[i]);
+  // Per cluster: texels and inertia (squared embedding distance to the texel's K-means centre).
+  std::vector<uint64_t> sizes;
+  std::vector<double> inertia;
+  if (options.split_by.empty()) {
+    for (std::size_t i = 0; i < asgs.size(); ++i)
+      out.labels[i] = uint8_t(out.kmeans.labels[i]);
+    sizes = out.kmeans.sizes;
+    inertia = out.kmeans.inertia;
+  } else {
+    if (options.split_by.size() != asgs.size())
+      throw_input_error("visibility clusters: " + std::to_string(options.split_by.size()) +
+                        " split groups for " + std::to_string(asgs.size()) + " texels");
+    std::map<std::pair<int32_t, uint16_t>, int> ids;
+    for (std::size_t i = 0; i < asgs.size(); ++i)
+      ids.emplace(std::make_pair(out.kmeans.labels[i], options.split_by[i]), 0);
+    if (ids.size() > std::size_t(kMaxVisibilityClusters))
+      throw_input_error("visibility clusters: splitting " + std::to_string(out.clusters) +
+                        " clusters by yarn gives " + std::to_string(ids.size()) +
+                        " clusters, more than " + std::to_string(kMaxVisibilityClusters) +
+                        "; lower [bake] clusters or set clusters_by_yarn = false");
+    int next = 0;
+    for (auto& entry : ids)
+      entry.second = next++;
+    out.clusters = next;
+    sizes.assign(std::size_t(next), 0);
+    inertia.assign(std::size_t(next), 0.0);
+    for (std::size_t i = 0; i < asgs.size(); ++i) {
+      const int32_t k = out.kmeans.labels[i];
+      const int c = ids.at(std::make_pair(k, options.split_by[i]));
+      out.labels[i] = uint8_t(c);
+      sizes[std::size_t(c)] += 1;
+      double d2 = 0.0;
+      for (std::size_t j = 0; j < kAsgEmbeddingDim; ++j) {
+        const double d = double(embedding[i * kAsgEmbeddingDim + j]) -
+                         out.kmeans.centres[std::size_t(k) * kAsgEmbeddingDim + j];
+        d2 += d * d;
+      }
+      inertia[std::size_t(c)] += d2;
+    }
+  }
 
   // Per block of texels: sum and sum of squares of V(x, b) per (cluster, bin), in double.
   const BinDirections directions =
@@ -144,7 +184,7 @@ VisibilityClusters cluster_visibility(int resolution, std::span<const model::Asg
   out.stats.resize(k);
   double total_var = 0.0, total_res = 0.0;
   for (std::size_t c = 0; c < k; ++c) {
-    const double n = double(out.kmeans.sizes[c]);
+    const double n = double(sizes[c]);
     double var = 0.0, res = 0.0;
     for (std::size_t d = 0; d < bins; ++d) {
       const double s = sum[c * bins + d], q = sq[c * bins + d];
@@ -156,8 +196,8 @@ VisibilityClusters cluster_visibility(int resolution, std::span<const model::Asg
       var += std::max(0.0, q - 2.0 * g * s + n * g * g);
     }
     ClusterStats& st = out.stats[c];
-    st.texels = out.kmeans.sizes[c];
-    st.inertia = out.kmeans.inertia[c];
+    st.texels = sizes[c];
+    st.inertia = inertia[c];
     st.variance = var / (n * double(bins));
     st.residual_variance = res / (n * double(bins));
     st.explained_fraction = var > 0.0 ? 1.0 - res / var : 1.0;

@@ -40,6 +40,10 @@ struct VisibilityClusterOptions {
   int visibility_dirs = 32;      // mean-visibility grid: dirs x dirs hemisphere bins, 1..256
   int samples_per_bin_side = 2;  // s: s x s stratified ASG samples per bin, 1..16
   AsgEmbeddingWeights weights;   // embedding weights
+  // Optional group per texel (N^2 values, e.g. the yarn id): when given, every K-means cluster is
+  // split by group, so that no cluster spans two groups. The clusters are then the occurring
+  // (K-means cluster, group) pairs, numbered in that lexicographic order (at most 255).
+  std::span<const uint16_t> split_by;
 };
 
 struct ClusterStats {
@@ -65,7 +69,8 @@ struct VisibilityClusters {
 };
 
 // Clusters the N x N per-texel ASGs (row-major). Errors (clothbake::Error, Input): asgs.size() !=
-// N * N, N < 1, options out of range, a non-finite ASG parameter (naming the texel).
+// N * N, N < 1, options out of range, a non-finite ASG parameter (naming the texel), split_by of
+// the wrong size or a split into more than 255 clusters.
 VisibilityClusters cluster_visibility(int resolution, std::span<const model::AsgParams<float>> asgs,
                                       const VisibilityClusterOptions& options);
 

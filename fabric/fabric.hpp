@@ -63,12 +63,16 @@ struct BakeSettings {
   double parallax_max_error = 0.05;  // compressed parallax: RMS Eq. 2 offset error, texels
                                      // (= compress::kDefaultParallaxMaxError)
   int visibility_dirs = 20;          // visibility sampling: dirs x dirs light directions
-  int radiance_dirs = 32;            // Integral-Radiance half-vector bins: dirs x dirs
-  int clusters = 8;                  // N_c visibility clusters
-  bool compress = true;              // C-PCA compress the Integral-Radiance tables
-  int compress_clusters = 0;         // C-PCA clusters k per visibility cluster; 0: auto (1)
-  int compress_rank = 0;  // C-PCA rank r (fixed shape); 0: auto (ranks for a target error)
-  uint64_t seed = 1;      // seed of every randomised step (k-means++, verify sampling)
+  int radiance_dirs = 32;            // Integral-Radiance half-vector bins: dirs x dirs (the loader
+                           // picks it from the narrowest roughness when the file does not)
+  int clusters = 8;              // N_c visibility clusters (K-means)
+  bool clusters_by_yarn = true;  // split every K-means cluster by yarn (no cluster mixes yarns)
+  int visibility_rank = 4;       // per-cluster principal components of the visibility stored
+                                 // for the multi-scale control variate (0: the cluster means)
+  bool compress = true;          // C-PCA compress the Integral-Radiance tables
+  int compress_clusters = 0;     // C-PCA clusters k per visibility cluster; 0: auto (1)
+  int compress_rank = 0;         // C-PCA rank r (fixed shape); 0: auto (ranks for a target error)
+  uint64_t seed = 1;             // seed of every randomised step (k-means++, verify sampling)
 };
 
 // One input file the fabric was built from, with its content hash (provenance in the asset).

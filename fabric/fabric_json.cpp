@@ -10,6 +10,8 @@ nlohmann::json bake_settings_json(const BakeSettings& b) {
           {"visibility_dirs", b.visibility_dirs},
           {"radiance_dirs", b.radiance_dirs},
           {"clusters", b.clusters},
+          {"clusters_by_yarn", b.clusters_by_yarn},
+          {"visibility_rank", b.visibility_rank},
           {"compress", b.compress},
           {"compress_clusters", b.compress_clusters},
           {"compress_rank", b.compress_rank},

@@ -10,9 +10,9 @@
 namespace clothbake {
 
 // {"resolution", "parallax_dirs", "parallax_min_cos", "parallax_max_error", "visibility_dirs",
-// "radiance_dirs", "clusters", "compress", "compress_clusters", "compress_rank", "seed"}: every
-// BakeSettings field under its [bake] key, unconverted. Deterministic (keys sorted, as
-// nlohmann::json stores them).
+// "radiance_dirs", "clusters", "clusters_by_yarn", "visibility_rank", "compress",
+// "compress_clusters", "compress_rank", "seed"}: every BakeSettings field under its [bake] key,
+// unconverted. Deterministic (keys sorted, as nlohmann::json stores them).
 nlohmann::json bake_settings_json(const BakeSettings& bake);
 
 }  // namespace clothbake

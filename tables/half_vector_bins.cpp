@@ -53,6 +53,12 @@ bool bins_resolve_roughness(int bins_per_side, double sigma) {
   return bin_angular_width(bins_per_side) <= 2.0 * sigma * (1.0 + 1e-9);
 }
 
+int default_bins_per_side(double min_roughness) {
+  if (!(min_roughness > 0.0)) return 128;
+  const double n = std::ceil(2.0 * std::sqrt(2.0 * model::kPi<double>) / min_roughness - 1e-9);
+  return int(std::clamp(n, 32.0, 128.0));
+}
+
 int default_samples_per_side(int bins_per_side, double min_roughness) {
   if (!(min_roughness > 0.0)) return 8;
   const double s = std::ceil(bin_angular_width(bins_per_side) / (0.5 * min_roughness) - 1e-9);

@@ -16,7 +16,7 @@ static_assert(sizeof(YarnMaterial) == sizeof(std::string) + 2 * 8 + 4 * sizeof(R
               "YarnMaterial changed: update encode_fabric in bake/cache/basic_codecs.cpp");
 static_assert(sizeof(SheenParams) == sizeof(Rgb) + 8,
               "SheenParams changed: update encode_fabric in bake/cache/basic_codecs.cpp");
-static_assert(sizeof(BakeSettings) == 56,
+static_assert(sizeof(BakeSettings) == 64,
               "BakeSettings changed: update encode_fabric in bake/cache/basic_codecs.cpp");
 static_assert(sizeof(InputFile) == 3 * sizeof(std::string),
               "InputFile changed: update encode_fabric in bake/cache/basic_codecs.cpp");
@@ -58,6 +58,8 @@ void encode_fabric(const Fabric& f, ByteWriter& w) {
   w.pod(int32_t(b.visibility_dirs));
   w.pod(int32_t(b.radiance_dirs));
   w.pod(int32_t(b.clusters));
+  w.pod(uint8_t(b.clusters_by_yarn));
+  w.pod(int32_t(b.visibility_rank));
   w.pod(uint8_t(b.compress));
   w.pod(int32_t(b.compress_clusters));
   w.pod(int32_t(b.compress_rank));
@@ -103,6 +105,8 @@ Fabric decode_fabric(ByteReader& r) {
   b.visibility_dirs = r.pod<int32_t>();
   b.radiance_dirs = r.pod<int32_t>();
   b.clusters = r.pod<int32_t>();
+  b.clusters_by_yarn = r.pod<uint8_t>() != 0;
+  b.visibility_rank = r.pod<int32_t>();
   b.compress = r.pod<uint8_t>() != 0;
   b.compress_clusters = r.pod<int32_t>();
   b.compress_rank = r.pod<int32_t>();

@@ -24,7 +24,7 @@
 namespace clothbake::cache {
 
 inline constexpr uint64_t kDefaultCacheMaxBytes = uint64_t(10) << 30;  // 10 GiB
-inline constexpr uint32_t kCacheSchema = 2;  // bump when the entry layout or a codec changes
+inline constexpr uint32_t kCacheSchema = 3;  // bump when the entry layout or a codec changes
 // Subfolder of finished assets that scene renders keep beside the entries (bake/cli/scene_bake):
 // counted by cache_info as stage "asset" and bounded with the entries (least recently used out).
 inline constexpr const char* kAssetFolder = "assets";

@@ -16,6 +16,7 @@
 #include "bake/inputs/wif.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
+#include "tables/half_vector_bins.hpp"
 
 namespace clothbake {
 
@@ -110,8 +111,8 @@ SheenParams parse_sheen(const TomlSection& s) {
 
 BakeSettings parse_bake(const TomlSection& s) {
   s.check_keys({"resolution", "parallax_dirs", "parallax_min_cos", "parallax_max_error",
-                "visibility_dirs", "radiance_dirs", "clusters", "compress", "compress_clusters",
-                "compress_rank", "seed"});
+                "visibility_dirs", "radiance_dirs", "clusters", "clusters_by_yarn",
+                "visibility_rank", "compress", "compress_clusters", "compress_rank", "seed"});
   BakeSettings b;
   b.resolution =
       int(s.integer("resolution", kMinResolution, kMaxResolution).value_or(b.resolution));
@@ -121,8 +122,15 @@ BakeSettings parse_bake(const TomlSection& s) {
   b.parallax_max_error =
       s.real("parallax_max_error", Range{0, 1, true, false}).value_or(b.parallax_max_error);
   b.visibility_dirs = int(s.integer("visibility_dirs", 2, 256).value_or(b.visibility_dirs));
-  b.radiance_dirs = int(s.integer("radiance_dirs", 2, 256).value_or(b.radiance_dirs));
+  // 0 (or no key) means "auto": chosen from the narrowest yarn roughness once the yarns are known
+  // (tables::default_bins_per_side).
+  b.radiance_dirs = int(s.integer("radiance_dirs", 0, 256).value_or(0));
+  if (b.radiance_dirs == 1)
+    throw_input_error(s.where("radiance_dirs") +
+                      "radiance_dirs = 1 is out of range; valid: 0 (auto) or [2, 256]");
   b.clusters = int(s.integer("clusters", 1, 64).value_or(b.clusters));
+  b.clusters_by_yarn = s.boolean("clusters_by_yarn").value_or(b.clusters_by_yarn);
+  b.visibility_rank = int(s.integer("visibility_rank", 0, 16).value_or(b.visibility_rank));
   b.compress = s.boolean("compress").value_or(b.compress);
   // 0 means "auto" (the compress stage's target-error mode); the upper bounds are the C-PCA's
   // (compress/cpca.hpp: kMaxCpcaClustersPerStratum, kMaxCpcaRank).
@@ -156,6 +164,22 @@ void apply_overrides(weave::YarnGeometry& g, const weave::YarnGeometry& mask) {
   if (!std::isnan(mask.width)) g.width = mask.width;
   if (!std::isnan(mask.height_mm)) g.height_mm = mask.height_mm;
   if (!std::isnan(mask.twist_deg)) g.twist_deg = mask.twist_deg;
+}
+
+// radiance_dirs = 0 ("auto", the default): the bins that resolve the narrowest yarn roughness for
+// the multi-scale control variate (tables::default_bins_per_side; docs/fabric-format.md).
+void resolve_radiance_dirs(BakeSettings& b, const std::vector<double>& roughness) {
+  if (b.radiance_dirs != 0) return;
+  double narrowest = YarnMaterial{}.roughness;
+  if (!roughness.empty()) narrowest = *std::min_element(roughness.begin(), roughness.end());
+  b.radiance_dirs = tables::default_bins_per_side(narrowest);
+}
+
+void resolve_radiance_dirs(Fabric& f) {
+  std::vector<double> roughness;
+  for (const YarnMaterial& y : f.yarns)
+    roughness.push_back(y.roughness);
+  resolve_radiance_dirs(f.bake, roughness);
 }
 
 std::vector<YarnMaterial> default_weave_yarns() {
@@ -471,6 +495,7 @@ LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOpt
   }
   if (auto sheen = root.table("sheen")) f.sheen = parse_sheen(*sheen);
   std::optional<int64_t> resolution;
+  f.bake.radiance_dirs = 0;  // auto unless [bake] says otherwise
   if (auto bake = root.table("bake")) {
     f.bake = parse_bake(*bake);
     if (bake->has("resolution")) resolution = f.bake.resolution;
@@ -490,6 +515,7 @@ LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOpt
     if (f.yarns.empty()) f.yarns = default_weave_yarns();
     load_weave(out, *weave_section, base_dir, toml_path);
   }
+  resolve_radiance_dirs(f);
   return out;
 }
 
@@ -500,8 +526,14 @@ std::optional<FabricSettingsPeek> peek_fabric_settings(const std::string& toml_p
     const std::string text = inputs::read_file_bytes(toml_path);
     const toml::table root_table = inputs::parse_toml_text(text, toml_path);
     const TomlSection root(root_table, toml_path, "");
+    out.bake.radiance_dirs = 0;
     if (auto bake = root.table("bake")) out.bake = parse_bake(*bake);
     if (options.resolution) out.bake.resolution = *options.resolution;
+    std::vector<double> roughness;
+    if (auto yarns = root.table_array("yarn"))
+      for (std::size_t i = 0; i < yarns->size(); ++i)
+        roughness.push_back((*yarns)[i].real("roughness", kRoughness).value_or(0.3));
+    resolve_radiance_dirs(out.bake, roughness);
     if (auto maps = root.table("maps")) {
       out.image_maps = true;
       const auto file = maps->string("height");

@@ -253,14 +253,16 @@ std::string inspect_text(const LoadedFabric& loaded, const inputs::MapStats& s,
       "radiance {}x{} bins\n",
       b.resolution, b.parallax_dirs, b.parallax_dirs, b.parallax_min_cos, b.visibility_dirs,
       b.visibility_dirs, b.radiance_dirs, b.radiance_dirs);
-  t += fmt::format("            {} visibility clusters, compression {}, seed {}\n", b.clusters,
-                   !b.compress ? std::string("off")
-                   : b.compress_rank > 0
-                       ? fmt::format("C-PCA {} clusters x rank {}",
-                                     std::max(b.compress_clusters, 1), b.compress_rank)
-                       : fmt::format("C-PCA {} clusters, ranks chosen for the default target error",
-                                     std::max(b.compress_clusters, 1)),
-                   b.seed);
+  t += fmt::format(
+      "            {} visibility clusters{}, visibility rank {}, compression {}, seed {}\n",
+      b.clusters, b.clusters_by_yarn ? " (split by yarn)" : "", b.visibility_rank,
+      !b.compress ? std::string("off")
+      : b.compress_rank > 0
+          ? fmt::format("C-PCA {} clusters x rank {}", std::max(b.compress_clusters, 1),
+                        b.compress_rank)
+          : fmt::format("C-PCA {} clusters, ranks chosen for the default target error",
+                        std::max(b.compress_clusters, 1)),
+      b.seed);
   t += "\ninputs\n";
   for (const auto& in : f.inputs)
     t += fmt::format("  {:<8} {}  {}\n", in.role, in.xxh64, in.path);

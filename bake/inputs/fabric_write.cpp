@@ -200,6 +200,8 @@ std::string fabric_toml_text(const Fabric& f, const std::string& comment) {
   t += fmt::format("visibility_dirs = {}\n", b.visibility_dirs);
   t += fmt::format("radiance_dirs = {}\n", b.radiance_dirs);
   t += fmt::format("clusters = {}\n", b.clusters);
+  t += fmt::format("clusters_by_yarn = {}\n", b.clusters_by_yarn ? "true" : "false");
+  t += fmt::format("visibility_rank = {}\n", b.visibility_rank);
   t += fmt::format("compress = {}\n", b.compress ? "true" : "false");
   t += fmt::format("compress_clusters = {}\n", b.compress_clusters);
   t += fmt::format("compress_rank = {}\n", b.compress_rank);

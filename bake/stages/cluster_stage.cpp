@@ -1,7 +1,9 @@
 // The `cluster` stage (paper Sec. 4.2): K-means on the per-texel visibility ASGs of the
 // `visibility` stage -> label map and per-cluster mean visibility (sections cluster_labels and
 // cluster_mean_visibility), plus the artifact "clusters" (cluster::VisibilityClusters) for the
-// tables stage. Settings: [bake] clusters, seed, visibility_dirs (the mean-visibility grid).
+// tables stage, and the clusters' visibility basis (section cluster_visibility_basis,
+// cluster/visibility_basis.hpp). Settings: [bake] clusters, clusters_by_yarn (split by the yarn id
+// map), seed, visibility_dirs (the mean-visibility grid and the basis' bins), visibility_rank.
 #include <nlohmann/json.hpp>
 
 #include "bake/stages/cache_support.hpp"
@@ -23,10 +25,22 @@ void run_cluster(pipeline::StageContext& ctx) {
   options.clusters = fabric.bake.clusters;
   options.seed = fabric.bake.seed;
   options.visibility_dirs = fabric.bake.visibility_dirs;
+  if (fabric.bake.clusters_by_yarn) options.split_by = fabric.maps.yarn_id;
   VisibilityClusters clusters = cluster_visibility(fabric.maps.resolution, lobes, options);
+  ctx.progress(0.6);
+  const VisibilityBasis basis =
+      fit_visibility_basis(fabric.maps.resolution, lobes, clusters.labels, clusters.clusters,
+                           fabric.bake.visibility_dirs, fabric.bake.visibility_rank);
   ctx.progress(0.9);
-  ctx.output("section/clusters", cluster_sections(clusters));
-  ctx.output("metadata/clusters", cluster_metadata(clusters, options));
+  std::vector<formats::Section> sections = cluster_sections(clusters);
+  for (formats::Section& s : visibility_basis_sections(basis))
+    sections.push_back(std::move(s));
+  ctx.output("section/clusters", std::move(sections));
+  nlohmann::json meta = cluster_metadata(clusters, options);
+  meta["clusters_by_yarn"] = fabric.bake.clusters_by_yarn;
+  meta["visibility_rank"] = basis.rank;
+  meta["visibility_basis_explained_fraction"] = basis.explained_fraction;
+  ctx.output("metadata/clusters", std::move(meta));
   ctx.output("clusters", std::move(clusters));
   ctx.progress(1.0);
 }
@@ -37,7 +51,8 @@ pipeline::Stage cluster_stage() {
   pipeline::Stage s;
   s.name = "cluster";
   s.description =
-      "visibility clusters: K-means on the ASG lobes, label map, mean visibility (Sec. 4.2)";
+      "visibility clusters: K-means on the ASG lobes split by yarn, label map, mean visibility "
+      "(Sec. 4.2), per-cluster visibility basis";
   s.inputs = {"fabric", "visibility/asg_params"};
   s.outputs = {"clusters", "section/clusters", "metadata/clusters"};
   s.run = run_cluster;

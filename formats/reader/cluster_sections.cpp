@@ -54,6 +54,57 @@ Status VisibilityClusterView::open(const Asset& asset) noexcept {
   return {};
 }
 
+Status VisibilityBasisView::open(const Asset& asset) noexcept {
+  *this = VisibilityBasisView();
+  ArrayView<float> components, coefficients;
+  bool present = false;
+  Status s = detail::view_optional(asset, {SectionType::ClusterVisibilityBasis, 0},
+                                   "cluster_visibility_basis: payload version must be 1",
+                                   &components, &present);
+  if (!s.ok()) return s;
+  if (!present)
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "this asset has no cluster_visibility_basis (bake format 1.6)");
+  if (components.rank != 4 || components.dims[0] == 0 ||
+      components.dims[0] > kMaxVisibilityClusters || components.dims[1] == 0 ||
+      components.dims[1] > kMaxVisibilityBasisRank + 1 ||
+      components.dims[2] != components.dims[3] || components.dims[2] == 0 ||
+      components.dims[2] > kMaxVisibilityDirs)
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "cluster_visibility_basis instance 0 must be f32 {C, M + 1, n, n} with "
+                         "1 <= C <= 255, 0 <= M <= 16 and 1 <= n <= 256");
+  const uint32_t rank = components.dims[1] - 1;
+  s = detail::view_optional(asset, {SectionType::ClusterVisibilityBasis, 1},
+                            "cluster_visibility_basis: payload version must be 1", &coefficients,
+                            &present);
+  if (!s.ok()) return s;
+  if (present != (rank > 0) ||
+      (present && (coefficients.rank != 3 || coefficients.dims[0] != coefficients.dims[1] ||
+                   coefficients.dims[0] == 0 || coefficients.dims[2] != rank)))
+    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
+                         "cluster_visibility_basis instance 1 must be f32 {N, N, M} exactly when "
+                         "M = %u > 0",
+                         unsigned(rank));
+  for (uint64_t k = 0; k < components.size; ++k)
+    if (!std::isfinite(components[k]))
+      return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                           "cluster_visibility_basis: component value %llu is not finite",
+                           static_cast<unsigned long long>(k));
+  if (present)
+    for (uint64_t k = 0; k < coefficients.size; ++k)
+      if (!std::isfinite(coefficients[k]))
+        return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                             "cluster_visibility_basis: coefficient %llu is not finite",
+                             static_cast<unsigned long long>(k));
+  components_ = components.data;
+  coefficients_ = present ? coefficients.data : nullptr;
+  clusters_ = components.dims[0];
+  rank_ = rank;
+  dirs_ = components.dims[2];
+  n_ = present ? coefficients.dims[0] : 0;
+  return {};
+}
+
 uint32_t VisibilityClusterView::label(int64_t x, int64_t y) const noexcept {
   const int64_t n = int64_t(n_);
   int64_t xm = x % n, ym = y % n;

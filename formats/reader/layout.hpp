@@ -22,15 +22,17 @@ inline constexpr uint16_t kFormatMajor = 1;
 // 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans; 1.3: planned ParallaxEntropy;
 // 1.4: feature maps at reduced precision (payload versions 2 and 3 of 0x0100-0x0103 and 0x0105);
 // 1.5: hierarchical parallax (payload version 2 of ParallaxEntropy, parallax_hierarchy.hpp) and
-// entropy-coded C-PCA coefficients (part 6 of radiance_compressed, compressed_coefficients.hpp).
-inline constexpr uint16_t kFormatMinor = 5;
+// entropy-coded C-PCA coefficients (part 6 of radiance_compressed, compressed_coefficients.hpp);
+// 1.6: the clusters' visibility basis (cluster_visibility_basis, cluster_sections.hpp).
+inline constexpr uint16_t kFormatMinor = 6;
 
 // The minor version that introduced a section type: writers stamp an asset with the largest minor
 // its sections need (so that an asset without 1.1 sections stays a byte-identical 1.0 file).
 constexpr uint16_t format_minor_of(uint32_t section_type) {
   if (section_type >= 0x0600 && section_type <= 0x0602) return 2;  // scene plans: 1.2
-  return section_type == 0x0203   ? 2  // SectionType::ParallaxEntropy: 1.2
-         : section_type == 0x0202 ? 1  // SectionType::ParallaxCompressed: 1.1
+  if (section_type == 0x0402) return 6;  // SectionType::ClusterVisibilityBasis: 1.6
+  return section_type == 0x0203   ? 2    // SectionType::ParallaxEntropy: 1.2
+         : section_type == 0x0202 ? 1    // SectionType::ParallaxCompressed: 1.1
                                   : 0;
 }
 
@@ -87,6 +89,7 @@ enum class SectionType : uint32_t {
   AsgFitError = 0x0301,               // per-texel ASG fit error
   ClusterLabels = 0x0400,             // visibility cluster label map
   ClusterMeanVisibility = 0x0401,     // per-cluster mean visibility
+  ClusterVisibilityBasis = 0x0402,    // per-cluster principal components of the visibility (1.6)
   RadianceRawTables = 0x0500,         // Integral-Radiance SATs (lobe, cluster, half-vector bin)
   RadianceCompressedTables = 0x0501,  // C-PCA compressed Integral-Radiance tables
   // 0x0502..0x05FF: reserved for parts of the compressed tables (basis, means, quantisation).

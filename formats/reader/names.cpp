@@ -29,6 +29,7 @@ constexpr SectionName kSectionNames[] = {
     {SectionType::AsgFitError, "asg_fit_error"},
     {SectionType::ClusterLabels, "cluster_labels"},
     {SectionType::ClusterMeanVisibility, "cluster_mean_visibility"},
+    {SectionType::ClusterVisibilityBasis, "cluster_visibility_basis"},
     {SectionType::RadianceRawTables, "radiance_tables"},
     {SectionType::RadianceCompressedTables, "radiance_compressed"},
     {SectionType::BinMap, "bin_map"},

@@ -538,6 +538,22 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
       check_resolution("cluster_labels", clusters.resolution());
     }
   }
+  if (has_type(asset, SectionType::ClusterVisibilityBasis)) {
+    VisibilityBasisView basis;
+    const Status s = basis.open(asset);
+    if (!s.ok()) {
+      r.report_status(s, kNoSection);
+    } else {
+      if (basis.rank() > 0) check_resolution("cluster_visibility_basis", basis.resolution());
+      if (have_clusters && basis.cluster_count() != clusters.cluster_count())
+        r.report(Check::CrossSection, kNoSection,
+                 "cluster_visibility_basis has %u clusters, the label map %u",
+                 unsigned(basis.cluster_count()), unsigned(clusters.cluster_count()));
+      else if (!have_clusters)
+        r.report(Check::MissingSection, kNoSection,
+                 "cluster_visibility_basis is present but there are no cluster sections");
+    }
+  }
   SectionInfo labels_info;
   ArrayView<uint8_t> labels;
   if (have_clusters && (!asset.find(SectionType::ClusterLabels, 0, &labels_info).ok() ||

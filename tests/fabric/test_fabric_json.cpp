@@ -18,6 +18,8 @@ BakeSettings unusual_settings() {
   b.visibility_dirs = 11;
   b.radiance_dirs = 13;
   b.clusters = 5;
+  b.clusters_by_yarn = false;
+  b.visibility_rank = 9;
   b.compress = false;
   b.compress_clusters = 3;
   b.compress_rank = 7;
@@ -34,6 +36,8 @@ TEST(BakeSettingsJson, HoldsEveryFieldUnderItsTomlKey) {
                                    {"visibility_dirs", 11},
                                    {"radiance_dirs", 13},
                                    {"clusters", 5},
+                                   {"clusters_by_yarn", false},
+                                   {"visibility_rank", 9},
                                    {"compress", false},
                                    {"compress_clusters", 3},
                                    {"compress_rank", 7},

@@ -211,14 +211,14 @@ TEST_F(ValidateTables, ResolutionsThatDisagreeAreE016) {
 }
 
 TEST_F(ValidateTables, TablesWithAnotherClusterCountAreCrossSectionErrors) {
-  // The compressed info record says 4 clusters, the label map has 3.
+  // The compressed info record says one cluster more than the label map has.
   auto s = *packed_;
   formats::Section* info = find(s, SectionType::RadianceCompressedTables, 0);
   ASSERT_NE(info, nullptr);
   reader::CompressedTableInfoRecord record;
   std::memcpy(&record, info->payload.data(), sizeof record);
-  ASSERT_EQ(record.cluster_count, 3u);
-  record.cluster_count = 4;
+  ASSERT_GT(record.cluster_count, 1u);
+  record.cluster_count += 1;
   std::memcpy(info->payload.data(), &record, sizeof record);
   Findings f = validate(s);
   EXPECT_TRUE(f.has("CBK-E022")) << f.all();
@@ -229,7 +229,7 @@ TEST_F(ValidateTables, TablesWithAnotherClusterCountAreCrossSectionErrors) {
   ASSERT_NE(raw_info, nullptr);
   reader::RadianceTableInfoRecord raw_record;
   std::memcpy(&raw_record, raw_info->payload.data(), sizeof raw_record);
-  raw_record.cluster_count = 4;
+  raw_record.cluster_count += 1;
   std::memcpy(raw_info->payload.data(), &raw_record, sizeof raw_record);
   f = validate(r);
   EXPECT_TRUE(f.has("CBK-E022")) << f.all();

@@ -408,9 +408,9 @@ TEST_F(Cli, CompressionOptionsDecideWhichTablesAreWritten) {
   EXPECT_EQ(counts["asg_fit_error"], 0);
   EXPECT_EQ(metadata["parameters"]["visibility"]["fit_error_section"], false);
   EXPECT_GT(metadata["parameters"]["visibility"]["max_fit_error"].get<double>(), 0.0);
-  // The hierarchical parallax (payload version 2 of parallax_entropy) makes the asset format 1.5
-  // (beside the feature maps at reduced precision of 1.4).
-  EXPECT_EQ(metadata["format_version"], "1.5");
+  // The clusters' visibility basis makes the asset format 1.6 (beside the hierarchical parallax of
+  // 1.5 and the feature maps at reduced precision of 1.4).
+  EXPECT_EQ(metadata["format_version"], "1.6");
   r = run({"validate", "@default.cbk"});
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   r = run({"verify", "@default.cbk", "--fabric", "@c.toml", "--json"});

@@ -198,7 +198,7 @@ TEST_F(QueryRadianceCli, BadArgumentsExitOneNamingTheOption) {
       {"--lobe specular_reflection --h 0,0,1", "--rect"},
       {"--lobe specular --h 0,0,1 --rect 0,0,1,1", "--lobe"},
       {"--lobe sheen --h 0,0,1 --rect 0,0,1,1", "--lobe"},
-      {"--lobe specular_reflection --cluster 3 --h 0,0,1 --rect 0,0,1,1", "--cluster"},
+      {"--lobe specular_reflection --cluster 250 --h 0,0,1 --rect 0,0,1,1", "--cluster"},
       {"--lobe specular_reflection --h 0,0,0 --rect 0,0,1,1", "--h"},
       {"--lobe specular_reflection --h 0,nan,1 --rect 0,0,1,1", "--h"},
       {"--lobe specular_reflection --h 0,1 --rect 0,0,1,1", "--h"},

@@ -67,8 +67,25 @@ TEST(TablesStages, ProduceReadableSectionsDeterministically) {
   ASSERT_TRUE(asset.open_memory(b1.data(), b1.size()).ok());
   reader::VisibilityClusterView clusters;
   ASSERT_TRUE(clusters.open(asset).ok());
-  EXPECT_EQ(clusters.cluster_count(), 4u);
+  // Four visibility types, each split into its warp and its weft texels (clusters_by_yarn): no
+  // cluster mixes yarns.
+  EXPECT_EQ(clusters.cluster_count(), 8u);
   EXPECT_EQ(clusters.visibility_dirs(), 8u);
+  const pipeline::Artifacts inputs = seeded(0.3);
+  const Fabric& fabric = inputs.get<Fabric>("fabric");
+  std::vector<int> yarn_of(8, -1);
+  for (int t = 0; t < 16 * 16; ++t) {
+    int& y = yarn_of[clusters.label(t % 16, t / 16)];
+    if (y < 0) y = fabric.maps.yarn_id[t];
+    EXPECT_EQ(y, fabric.maps.yarn_id[t]) << "texel " << t;
+  }
+  // The visibility basis: rank 4 of the clusters' 8^2-bin visibility, a coefficient per texel.
+  reader::VisibilityBasisView basis;
+  ASSERT_TRUE(basis.open(asset).ok());
+  EXPECT_EQ(basis.cluster_count(), 8u);
+  EXPECT_EQ(basis.rank(), 4u);
+  EXPECT_EQ(basis.dirs(), 8u);
+  EXPECT_EQ(basis.resolution(), 16u);
   reader::RawRadianceTables spec;
   ASSERT_TRUE(spec.open(asset, reader::RadianceTableKind::Specular).ok());
   EXPECT_EQ(spec.bins_per_side(), 8u);
@@ -78,7 +95,7 @@ TEST(TablesStages, ProduceReadableSectionsDeterministically) {
   EXPECT_EQ(meta["resolved"], true);  // 8^2 bins resolve roughness 0.3 (2-sigma rule: n >= 5)
   EXPECT_EQ(meta["radiance_dirs_needed"], 5);
   const auto& cmeta = r1.artifacts.get<nlohmann::json>("metadata/clusters");
-  EXPECT_EQ(cmeta["clusters"], 4);
+  EXPECT_EQ(cmeta["clusters"], 8);
   EXPECT_GT(cmeta["explained_fraction"].get<double>(), 0.99);  // four exact visibility types
   // A satin-like roughness against 8^2 bins: recorded as unresolved, with the bins it needs.
   const auto narrow = pipeline::run_pipeline({"tables"}, seeded(0.05), two, stages);
