@@ -10,11 +10,13 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
                  uint32_t spp, Rng& rng, Estimate* out) noexcept {
   Rgb sums[model::kLobeCount];
   TexelShading shading;
+  // One view bin per estimate, drawn with its weight (the model's average over the four bins).
+  const int bin = draw_view_bin(frame, rng.uniform());
   stratified_points(footprint, spp, rng, [&](double x, double y) {
-    // Eq. 2 with the depth of the texel containing p, then every factor at the texel of x'.
-    const double r = texel_depth(data, frame, int64_t(std::floor(x)), int64_t(std::floor(y)));
-    const double xp = x + r * frame.offset_per_depth[0], yp = y + r * frame.offset_per_depth[1];
-    shade_texel(data, frame, int64_t(std::floor(xp)), int64_t(std::floor(yp)), &shading);
+    // Eq. 2 with the bin's depth of the texel containing p, then every factor at the texel of x'.
+    int64_t tx = 0, ty = 0;
+    bin_destination(data, frame, bin, x, y, &tx, &ty);
+    shade_texel(data, frame, tx, ty, &shading);
     for (int l = 0; l < model::kLobeCount; ++l)
       sums[l] += shading.lobes[l];
   });

@@ -1,5 +1,5 @@
-// Clustered control variates over a footprint, in the paper's form and in the unbiased form
-// (methods.hpp; docs/evaluator.md, "Multi-scale").
+// Clustered control variates over a footprint in the paper's form, Eq. 8-10 as printed
+// (methods.hpp; docs/evaluator.md, "Multi-scale as printed").
 #include <cmath>
 
 #include "eval/footprint_samples.hpp"
@@ -13,10 +13,10 @@ using model::Lobe;
 
 constexpr double kInvPi = 0.318309886183790671537767526745028724;
 
-// The per-footprint constants of the control variate g (docs/evaluator.md, "Multi-scale"):
-//   specular  g(q) = s_c G |i_z| T_sheen v_c(q) T_c(q)(q, h)   (T: the table value, I D binned;
-//                    s_c = kbar_c, the mean of k over cluster c's texels in the tile; the paper
-//                    form uses the footprint mean kbar for every cluster)
+// The per-footprint constants of the control variate g (docs/evaluator.md, "Multi-scale as
+// printed"):
+//   specular  g(q) = kbar G |i_z| T_sheen v_c(q) T_c(q)(q, h)  (T: the table value, I D binned;
+//                    kbar the footprint mean of k)
 //   diffuse   g(q) = |i_z| / pi T_sheen v_c(q) I(q) R(q)       (R = R_d or T_d times the colour)
 //   sheen     g(q) = colour sheen(i, o) |i_z| v_c(q)
 //   delta     g(q) = T_sheen v_c(q) T_gap(q)                   (T_gap = 1 - I, from its table)
@@ -33,21 +33,15 @@ struct Constants {
   }
 };
 
-// g of every active lobe at texel q (integer coordinates, any: the tile wraps). The specular part
-// is skipped when `with_specular` is false (the paper form's residual has its own).
+// g of every active lobe but the specular one at texel q (integer coordinates, any: the tile
+// wraps); the specular lobe has its own residual, Eq. 9's.
 void control_variate(const EvalData& data, const ShadingFrame& frame, const Constants& k,
-                     int64_t qx, int64_t qy, bool with_specular, Rgb g[model::kLobeCount]) {
+                     int64_t qx, int64_t qy, Rgb g[model::kLobeCount]) {
   const uint64_t t = data.texel(qx, qy);
   const uint32_t x = uint32_t(t % data.n), y = uint32_t(t / data.n);
   const uint32_t label = data.clusters.label(x, y);
   const double vbar = frame.mean_visibility[label];
   const double gap = data.maps.gap[t];
-  if (k.specular && with_specular) {
-    int cluster = -1;
-    const double value = data.specular.texel_value(k.h_bins, x, y, label, &cluster);
-    g[int(k.specular_lobe)] =
-        cluster < 0 ? Rgb() : k.scale(uint32_t(cluster)) * (frame.mean_visibility[cluster] * value);
-  }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
     const float* colour = data.maps.albedo.data + 3 * t;
@@ -87,18 +81,15 @@ Rgb visibility_weighted_rgb(const ShadingFrame& frame, uint32_t clusters, const 
 
 }  // namespace
 
-Status control_variates(const EvalData& data, const ShadingFrame& frame, const Footprint& p,
-                        uint32_t spp, Rng& rng, bool paper_form, double weight,
-                        Estimate* out) noexcept {
+Status paper_control_variates(const EvalData& data, const ShadingFrame& frame, const Footprint& p,
+                              uint32_t spp, Rng& rng, Estimate* out) noexcept {
   const uint32_t n = data.n, clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
 
-  // The parallax transition (Sec. 5.2): one shift of P by its mean offset for o. The paper form
-  // takes the exact footprint mean from the parallax SATs; the unbiased form may shift by any
-  // constant and takes the mean of the block-constant depth (parallax_blocks.hpp), which reads a
-  // table small enough to stay in cache.
+  // The parallax transition (Sec. 5.2): one shift of P by its mean offset for o, the exact
+  // footprint mean from the parallax SATs.
   double dx = 0.0, dy = 0.0;
-  if (paper_form) {
+  {
     const double view[3] = {frame.view.x, frame.view.y, frame.view.z};
     reader::ParallaxSample mean;
     Status status = data.parallax.footprint_depth(p, view, &mean);
@@ -106,11 +97,6 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     const double shift = data.options.parallax ? double(n) : 0.0;
     dx = mean.offset[0] * shift;
     dy = mean.offset[1] * shift;
-  } else if (data.options.parallax) {
-    const double r =
-        data.parallax_blocks.mean_depth(p, frame.parallax_bins.index, frame.parallax_bins.weight);
-    dx = r * frame.offset_per_depth[0];
-    dy = r * frame.offset_per_depth[1];
   }
   const Footprint shifted{p.x0 + dx, p.y0 + dy, p.x1 + dx, p.y1 + dy};
   reader::FootprintPlan plan;
@@ -141,40 +127,19 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
   double values[3 * reader::kMaxVisibilityClusters];
   if (k.specular) {
     // Eq. 9-11: kbar G-bar (v-bar F), G-bar the SpongeCake attenuation f / (alpha D) of the centre
-    // texel; kbar the footprint mean of k (paper form) or kbar_c the tile mean over cluster c's
-    // texels (unbiased form: any per-cluster constant keeps the control variate exact, and the
-    // clusters' own means follow the yarn colours at no footprint query).
+    // texel and kbar the footprint mean of k.
     const double d_h = centre.sggx().D(frame.h);
     const double f = reflect ? model::spongecake_reflection(
                                    centre.sggx(), centre.optical_thickness(), frame.wi, frame.wo)
                              : model::spongecake_transmission(
                                    centre.sggx(), centre.optical_thickness(), frame.wi, frame.wo);
     const double g_bar = d_h > 0.0 ? f / d_h : 0.0;
-    const Rgb common = t_sheen * (g_bar * cos_i);
-    Rgb footprint_scale;
-    if (paper_form) {
-      data.sums.integral(plan, data.sums.layout().albedo(), 3, values);
-      footprint_scale = Rgb(values[0], values[1], values[2]) / area * common;
-      out->counters.table_queries += 1;
-    }
-    // The unbiased form's G-bar_c: the SpongeCake attenuation at cluster c's representative texel
-    // (fibre directions, hence the projected areas of Eq. 10, differ by cluster far more than
-    // within one).
-    auto attenuation = [&](const model::ClothBsdf<double>& b) {
-      const double dh = b.sggx().D(frame.h);
-      const double fv =
-          reflect
-              ? model::spongecake_reflection(b.sggx(), b.optical_thickness(), frame.wi, frame.wo)
-              : model::spongecake_transmission(b.sggx(), b.optical_thickness(), frame.wi, frame.wo);
-      return dh > 0.0 ? fv / dh : 0.0;
-    };
-    for (uint32_t c = 0; c < clusters; ++c) {
-      const Rgb scale = paper_form ? footprint_scale
-                                   : data.cluster_albedo[c] * t_sheen *
-                                         (attenuation(data.cluster_bsdf[c]) * cos_i);
+    data.sums.integral(plan, data.sums.layout().albedo(), 3, values);
+    const Rgb scale = Rgb(values[0], values[1], values[2]) / area * (t_sheen * (g_bar * cos_i));
+    out->counters.table_queries += 1;
+    for (uint32_t c = 0; c < clusters; ++c)
       for (int ch = 0; ch < 3; ++ch)
         k.specular_scale[3 * c + ch] = scale[ch];
-    }
     if (!data.specular.tables->try_query_all(shifted, h, values))
       return Status::error(reader::ErrorCode::InvalidArgument, reader::Check::None,
                            "specular tables: footprint query failed");
@@ -216,60 +181,25 @@ Status control_variates(const EvalData& data, const ShadingFrame& frame, const F
     out->counters.table_queries += 1;
   }
 
-  // The residual: spp stratified points p in P (and, in the unbiased form, the warp's own points).
-  const uint64_t warp_total = paper_form ? 0 : uint64_t(spp) * data.options.warp_samples_per_sample;
-  const uint32_t warp_samples = warp_total > (1u << 24) ? (1u << 24) : uint32_t(warp_total);
+  // The residual at spp stratified points p in P, everything at p + mean offset: f - g for the
+  // lobes whose g is exact per texel, and Eq. 9's kbar G-bar I D (V - v_c) for the specular lobe.
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   stratified_points(p, spp, rng, [&](double x, double y) {
     const int64_t qx = int64_t(std::floor(x + dx)), qy = int64_t(std::floor(y + dy));
     Rgb g[model::kLobeCount];
-    if (paper_form) {
-      // Everything at p + mean offset: f - g for the lobes whose g is exact per texel, and Eq. 9's
-      // kbar G-bar I D (V - v_c) for the specular lobe.
-      shade_texel(data, frame, qx, qy, &shading);
-      control_variate(data, frame, k, qx, qy, false, g);
-      for (int l = 0; l < model::kLobeCount; ++l)
-        residual[l] += shading.lobes[l] - g[l];
-      if (k.specular) {
-        const int s = int(k.specular_lobe);
-        const double deviation = shading.visibility - frame.mean_visibility[shading.label];
-        residual[s] += k.scale(0) * (shading.gap * shading.sggx_d * deviation) - shading.lobes[s];
-      }
-      return;
-    }
-    // f at the sample's own x'(p) (Eq. 2, per-texel depth); g at the same destination texel when
-    // the warp has its own samples (two-level residual), else at p + mean offset.
-    const double r = texel_depth(data, frame, int64_t(std::floor(x)), int64_t(std::floor(y)));
-    const double xp = x + r * frame.offset_per_depth[0], yp = y + r * frame.offset_per_depth[1];
-    const int64_t tx = int64_t(std::floor(xp)), ty = int64_t(std::floor(yp));
-    shade_texel(data, frame, tx, ty, &shading);
-    if (warp_samples > 0)
-      control_variate(data, frame, k, tx, ty, true, g);
-    else
-      control_variate(data, frame, k, qx, qy, true, g);
+    shade_texel(data, frame, qx, qy, &shading);
+    control_variate(data, frame, k, qx, qy, g);
     for (int l = 0; l < model::kLobeCount; ++l)
-      residual[l] += shading.lobes[l] - g[l] * weight;
+      residual[l] += shading.lobes[l] - g[l];
+    if (k.specular) {
+      const int s = int(k.specular_lobe);
+      const double deviation = shading.visibility - frame.mean_visibility[shading.label];
+      residual[s] += k.scale(0) * (shading.gap * shading.sggx_d * deviation) - shading.lobes[s];
+    }
   });
-  // The warp term E_p[g(x'(p)) - g(p + mean offset)]: cheap, no BSDF, its own stratified points.
-  Rgb warp[model::kLobeCount];
-  if (!paper_form && warp_samples > 0)
-    stratified_points(p, warp_samples, rng, [&](double x, double y) {
-      const double r = texel_depth(data, frame, int64_t(std::floor(x)), int64_t(std::floor(y)));
-      const double xp = x + r * frame.offset_per_depth[0], yp = y + r * frame.offset_per_depth[1];
-      Rgb at_destination[model::kLobeCount], shifted[model::kLobeCount];
-      control_variate(data, frame, k, int64_t(std::floor(xp)), int64_t(std::floor(yp)), true,
-                      at_destination);
-      control_variate(data, frame, k, int64_t(std::floor(x + dx)), int64_t(std::floor(y + dy)),
-                      true, shifted);
-      for (int l = 0; l < model::kLobeCount; ++l)
-        warp[l] += at_destination[l] - shifted[l];
-    });
-  // weight * base + mean(f - weight g) (+ weight * the warp term): unbiased for any weight.
-  for (int l = 0; l < model::kLobeCount; ++l) {
-    out->lobes[l] += base[l] * weight + residual[l] / double(spp);
-    if (warp_samples > 0) out->lobes[l] += warp[l] * weight / double(warp_samples);
-  }
+  for (int l = 0; l < model::kLobeCount; ++l)
+    out->lobes[l] += base[l] + residual[l] / double(spp);
   out->counters.samples += spp;
   out->counters.texel_evals += spp;
   return {};

@@ -8,7 +8,7 @@
 
 #include "eval/evaluator.hpp"
 #include "eval/footprint_sums.hpp"
-#include "eval/parallax_blocks.hpp"
+#include "eval/pushforward_sums.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -51,22 +51,41 @@ struct EvalData {
   model::Rgb<double> sheen_color;
   double sheen_roughness = 0.5;
   reader::ParallaxView parallax;
-  ParallaxBlockMeans parallax_blocks;  // the unbiased form's shift (parallax_blocks.hpp)
   reader::VisibilityAsgView visibility;
   reader::VisibilityClusterView clusters;
+  // The clusters' visibility basis (format 1.6; not open for older assets, whose control variate
+  // then has rank 0 with the stored cluster means).
+  reader::VisibilityBasisView basis;
   TableSource specular, gap;
   // A scene-planned asset (format 1.2): what its bake left out (planned false: nothing).
   reader::ScenePlanRecord plan{};
   bool planned = false;
-  FootprintSums sums;
-  std::vector<Rgb> cluster_albedo;  // mean specular albedo k of each cluster's texels (tile)
-  // A representative texel per cluster: the one whose fibre (tangent line and roughness) is
-  // nearest the cluster's mean, where the unbiased form evaluates the cluster's G-bar.
-  std::vector<uint64_t> cluster_texel;
-  std::vector<model::ClothBsdf<double>> cluster_bsdf;  // the BSDF of each cluster_texel
+  FootprintSums sums;                  // multiscale-paper's footprint sums
+  std::vector<Rgb> cluster_albedo;     // mean specular albedo k of each cluster's texels (tile)
+  std::vector<uint32_t> cluster_yarn;  // the yarn of most of each cluster's texels
+  // Per yarn, the parameters of its representative texel: the one whose fibre (tangent line and
+  // roughness) is nearest the yarn's mean; the unbiased form evaluates Eq. 10's attenuation there
+  // with the tangent turned normal to h.
+  std::vector<model::TexelParams<double>> yarn_fibre;
+  std::vector<uint32_t> image_cluster;  // per compressed specular image: its cluster
+  PushforwardSums pushforward;  // the unbiased form's whole-tile sums (pushforward_sums.hpp)
+  uint32_t visibility_rank() const { return basis.is_open() ? basis.rank() : 0; }
+  // e_0 = 1 and the texel's visibility basis coefficients e_1..e_M into e[0..M].
+  void visibility_coefficients(uint64_t t, double* e) const {
+    e[0] = 1.0;
+    const uint32_t m = visibility_rank();
+    if (m == 0) return;
+    const float* c = basis.coefficients(t);
+    for (uint32_t k = 0; k < m; ++k)
+      e[k + 1] = c[k];
+  }
 
   uint32_t cluster_count() const { return clusters.cluster_count(); }
   uint64_t texel(int64_t x, int64_t y) const {
+    if ((n & (n - 1)) == 0) {  // a power of two: the two's complement mask is the residue
+      const uint64_t mask = uint64_t(n) - 1;
+      return (uint64_t(y) & mask) * n + (uint64_t(x) & mask);
+    }
     const int64_t nn = int64_t(n);
     int64_t xm = x % nn, ym = y % nn;
     if (xm < 0) xm += nn;

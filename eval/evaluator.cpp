@@ -89,10 +89,9 @@ uint64_t Evaluator::derived_bytes() const noexcept {
 
 Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) noexcept {
   data_.reset();
-  if (!(options.cv_min_side_per_offset_range >= 0.0) ||
-      !std::isfinite(options.cv_min_side_per_offset_range))
+  if (!(options.remainder_sample_scale > 0.0) || !std::isfinite(options.remainder_sample_scale))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "cv_min_side_per_offset_range must be finite and >= 0");
+                         "remainder_sample_scale must be finite and > 0");
   if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "direct_max_side must be finite and >= 0");
@@ -206,53 +205,95 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   });
   if (!built)
     return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate the footprint sums");
-  // Each cluster's mean specular albedo over the tile: the per-cluster constants of the unbiased
-  // control variate.
-  std::vector<double> count(clusters, 0.0);
-  d->cluster_albedo.assign(clusters, Rgb());
-  for (uint64_t t = 0; t < uint64_t(d->n) * d->n; ++t) {
-    const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
-    const float* colour = d->maps.albedo.data + 3 * t;
-    d->cluster_albedo[label] +=
-        d->yarns[d->maps.yarn_id[t]].specular_albedo * Rgb(colour[0], colour[1], colour[2]);
-    count[label] += 1.0;
+  // The visibility basis (format 1.6): optional; it must describe the label map's clusters.
+  s = d->basis.open(asset);
+  if (s.code() == ErrorCode::NotFound) {
+    d->basis = reader::VisibilityBasisView();
+    s = {};
   }
-  for (uint32_t c = 0; c < clusters; ++c)
-    if (count[c] > 0) d->cluster_albedo[c] = d->cluster_albedo[c] / count[c];
-  // The representative texel of each cluster: nearest to the cluster mean of (t t^T, roughness),
-  // t t^T being the sign-free description of a fibre line.
-  std::vector<std::array<double, 7>> mean(clusters, std::array<double, 7>{});
-  auto fibre = [&](uint64_t t) {
-    const float* v = d->maps.tangent.data + 3 * t;
-    const double len = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
-    const double x = len > 0 ? v[0] / len : 0, y = len > 0 ? v[1] / len : 0,
-                 z = len > 0 ? v[2] / len : 1;
-    return std::array<double, 7>{
-        x * x, y * y, z * z, x * y, x * z, y * z, d->yarns[d->maps.yarn_id[t]].roughness};
-  };
+  if (!s.ok()) return s;
+  if (d->basis.is_open()) {
+    if (d->basis.cluster_count() != clusters)
+      return cross_section("cluster_visibility_basis cluster count", d->basis.cluster_count(),
+                           clusters);
+    if (d->basis.rank() > 0 && d->basis.resolution() != d->n)
+      return cross_section("cluster_visibility_basis resolution", d->basis.resolution(), d->n);
+  }
+  // Each cluster's mean specular albedo over the tile and its most frequent yarn: the per-cluster
+  // constants of the unbiased control variate.
   const uint64_t texels = uint64_t(d->n) * d->n;
-  for (uint64_t t = 0; t < texels; ++t) {
-    const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
-    const auto f = fibre(t);
-    for (int k = 0; k < 7; ++k)
-      mean[label][k] += f[k] / count[label];
-  }
-  std::vector<double> best(clusters, INFINITY);
-  d->cluster_texel.assign(clusters, 0);
-  for (uint64_t t = 0; t < texels; ++t) {
-    const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
-    const auto f = fibre(t);
-    double dist = 0;
-    for (int k = 0; k < 7; ++k)
-      dist += (f[k] - mean[label][k]) * (f[k] - mean[label][k]);
-    if (dist < best[label]) best[label] = dist, d->cluster_texel[label] = t;
-  }
-  d->cluster_bsdf.clear();
-  for (uint32_t c = 0; c < clusters; ++c)
-    d->cluster_bsdf.emplace_back(d->texel_params(d->cluster_texel[c]));
-  if (!d->parallax_blocks.init(&d->parallax, d->n))
+  const uint32_t yarn_count = uint32_t(d->yarns.size());
+  try {
+    std::vector<double> count(clusters, 0.0);
+    std::vector<uint64_t> cluster_yarn_count(uint64_t(clusters) * yarn_count, 0);
+    d->cluster_albedo.assign(clusters, Rgb());
+    for (uint64_t t = 0; t < texels; ++t) {
+      const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
+      const float* colour = d->maps.albedo.data + 3 * t;
+      d->cluster_albedo[label] +=
+          d->yarns[d->maps.yarn_id[t]].specular_albedo * Rgb(colour[0], colour[1], colour[2]);
+      count[label] += 1.0;
+      ++cluster_yarn_count[uint64_t(label) * yarn_count + d->maps.yarn_id[t]];
+    }
+    d->cluster_yarn.assign(clusters, 0);
+    for (uint32_t c = 0; c < clusters; ++c) {
+      if (count[c] > 0) d->cluster_albedo[c] = d->cluster_albedo[c] / count[c];
+      const uint64_t* row = &cluster_yarn_count[uint64_t(c) * yarn_count];
+      d->cluster_yarn[c] = uint32_t(std::max_element(row, row + yarn_count) - row);
+    }
+    // The representative texel of each yarn: nearest to the yarn's mean of (t t^T, roughness),
+    // t t^T being the sign-free description of a fibre line.
+    std::vector<std::array<double, 7>> mean(yarn_count, std::array<double, 7>{});
+    std::vector<double> yarn_texels(yarn_count, 0.0);
+    auto fibre = [&](uint64_t t) {
+      const float* v = d->maps.tangent.data + 3 * t;
+      const double len = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+      const double x = len > 0 ? v[0] / len : 0, y = len > 0 ? v[1] / len : 0,
+                   z = len > 0 ? v[2] / len : 1;
+      return std::array<double, 7>{
+          x * x, y * y, z * z, x * y, x * z, y * z, d->yarns[d->maps.yarn_id[t]].roughness};
+    };
+    for (uint64_t t = 0; t < texels; ++t) {
+      const auto f = fibre(t);
+      const uint32_t y = d->maps.yarn_id[t];
+      for (int k = 0; k < 7; ++k)
+        mean[y][k] += f[k];
+      yarn_texels[y] += 1.0;
+    }
+    for (uint32_t y = 0; y < yarn_count; ++y)
+      for (double& m : mean[y])
+        m /= std::max(yarn_texels[y], 1.0);
+    std::vector<double> best(yarn_count, INFINITY);
+    std::vector<uint64_t> representative(yarn_count, 0);
+    for (uint64_t t = 0; t < texels; ++t) {
+      const uint32_t y = d->maps.yarn_id[t];
+      const auto f = fibre(t);
+      double dist = 0;
+      for (int k = 0; k < 7; ++k)
+        dist += (f[k] - mean[y][k]) * (f[k] - mean[y][k]);
+      if (dist < best[y]) best[y] = dist, representative[y] = t;
+    }
+    d->yarn_fibre.clear();
+    for (uint32_t y = 0; y < yarn_count; ++y)
+      d->yarn_fibre.push_back(d->texel_params(representative[y]));
+    // The unbiased form's push-forward sums (compressed specular tables only).
+    if (d->specular.present() && d->specular.is_compressed()) {
+      const reader::CompressedRadianceTables& tables = d->specular.compressed;
+      d->image_cluster.resize(tables.image_count());
+      for (uint32_t i = 0; i < tables.image_count(); ++i)
+        d->image_cluster[i] = tables.image_cluster(i);
+      PushforwardChannels layout;
+      layout.images = tables.image_count();
+      layout.clusters = clusters;
+      layout.rank = d->visibility_rank();
+      if (!d->pushforward.init(d.get(), d->parallax.dirs() * d->parallax.dirs(), layout))
+        return Status::error(ErrorCode::Unsupported, Check::None,
+                             "cannot allocate the push-forward bookkeeping");
+    }
+  } catch (const std::bad_alloc&) {
     return Status::error(ErrorCode::Unsupported, Check::None,
-                         "cannot allocate the block-mean parallax tables");
+                         "cannot allocate the control variate's constants");
+  }
   data_ = std::move(d);
   return {};
 }
@@ -304,21 +345,18 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
   const double direct_side = data_->options.direct_max_side;
   const bool direct = !(w > 0.0 && h > 0.0) || (multiscale && w < direct_side && h < direct_side);
-  // The unbiased form's control-variate weight (Eq. 7's alpha): 0 where the parallax offsets vary
-  // by more than the footprint, 1 where the footprint is twice as wide, a linear ramp between
-  // (EvalOptions::cv_min_side_per_offset_range).
-  double cv_weight = 1.0;
-  if (method == Method::Multiscale && !direct && data_->options.parallax &&
-      data_->options.cv_min_side_per_offset_range > 0.0) {
-    const double range =
-        data_->parallax_blocks.depth_range(frame.parallax_bins.index, frame.parallax_bins.weight) *
-        std::hypot(frame.offset_per_depth[0], frame.offset_per_depth[1]);
-    const double start = data_->options.cv_min_side_per_offset_range * range;
-    if (start > 0.0) cv_weight = std::clamp(std::min(w, h) / start - 1.0, 0.0, 1.0);
-  }
-  const bool without_cv = cv_weight == 0.0;
-  if (multiscale && !direct &&
-      !without_cv) {  // a scene-planned asset answers only the half vectors it kept
+  // The unbiased form needs the compressed tables' images, and a whole period of the tile in both
+  // axes of the footprint: narrower footprints are sampled exactly as brute force (the same
+  // random numbers: the view bin, then the points).
+  if (method == Method::Multiscale && !direct && !data_->specular.is_compressed())
+    return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                         "method multiscale needs compressed Integral-Radiance tables (the raw "
+                         "ones have no images to integrate under the parallax); use "
+                         "multiscale-paper, brute or reference with raw tables");
+  const double tile = double(data_->n);
+  const bool without_cv = method == Method::Multiscale && !direct && (w < tile || h < tile);
+  if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
+                                               // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
     if (!data_->specular.tables->covers_bins(hv))
       return Status::error(ErrorCode::OutOfPlan, Check::None,
@@ -334,9 +372,10 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   } else if (method == Method::Brute || without_cv) {
     out->counters.without_control_variate = without_cv;
     brute_force(*data_, frame, footprint, spp, rng, out);
+  } else if (method == Method::MultiscalePaper) {
+    s = paper_control_variates(*data_, frame, footprint, spp, rng, out);
   } else {
-    s = control_variates(*data_, frame, footprint, spp, rng, method == Method::MultiscalePaper,
-                         cv_weight, out);
+    s = pushforward_control_variates(*data_, frame, footprint, spp, rng, out);
   }
   if (!s.ok()) return s;
   sum_value(out);

@@ -4,16 +4,19 @@
 //
 //   value(P, i, o) = (1/|P|) integral over P of f^(x'(p), i, o) V(x'(p), i) |i_z| dp       (Eq. 5)
 //
-// P is a footprint rectangle in texel units (any size and position; the tile wraps), x'(p) is Eq. 2
-// applied to p with the parallax depth r of the texel containing p, and every other factor (the
-// BSDF parameters of Eq. 4, the ASG visibility V) is that of the texel containing x'. The delta
-// transmission lobe is a Dirac term: it contributes its footprint-averaged weight exactly when
-// i = -o, and 0 otherwise.
+// P is a footprint rectangle in texel units (any size and position; the tile wraps). The parallax
+// interpolates results between the four view bins of the table nearest to o: with their bilinear
+// weights w_k, value = sum_k w_k (average over P of the integrand at x'_k(p)), x'_k(p) Eq. 2
+// applied to p with bin k's depth of the texel containing p and bin k's centre direction. Every
+// other factor (the BSDF parameters of Eq. 4, the ASG visibility V) is that of the texel containing
+// x'. The delta transmission lobe is a Dirac term: it contributes its footprint-averaged weight
+// exactly when i = -o, and 0 otherwise.
 //
 // Methods (Method):
-//   Multiscale      clustered control variates used without approximation: the SAT base term plus
-//                   a Monte Carlo residual whose control variate integrates exactly to the base, so
-//                   the estimate is unbiased (docs/evaluator.md, "Unbiased multi-scale").
+//   Multiscale      clustered control variates with each texel's low-rank visibility, at each
+//                   sample's own destination, whose mean over the footprint's whole periods is
+//                   exact (per-view-bin push-forward sums): unbiased (docs/evaluator.md, "Unbiased
+//                   multi-scale"); footprints without a whole period are sampled as brute force.
 //   MultiscalePaper Eq. 8-10 as printed: one parallax shift per footprint, k-bar and G-bar at the
 //                   footprint, residual D (V - v_c) (biased where those approximations fail).
 //   Brute           the paper's "w/o multi-scale": stratified samples p in P, per-sample parallax,
@@ -28,11 +31,11 @@
 // derived footprint sums (docs/evaluator.md, "Memory") and never throws: allocation failure is a
 // Status. estimate() allocates only on first use or for large footprints (docs/evaluator.md,
 // "Allocation in estimate()"): the Reference method's dense weight map of N x N doubles for
-// footprints of more than 64 source texels, the unbiased form's block-mean parallax table of a
-// direction bin on its first use, and in the reader a compressed parallax table's per-direction SAT
-// (MultiscalePaper's footprint mean) or an entropy-coded direction's decoded plane; a failed map or
-// SAT is Unsupported. It is noexcept, thread-safe (const), and safe for any argument values (bad
-// ones give InvalidArgument). The Asset must outlive the Evaluator.
+// footprints of more than 64 source texels, the unbiased form's push-forward sums of a view bin on
+// its first use, and in the reader a compressed parallax table's per-direction SAT
+// (MultiscalePaper's footprint mean) or an entropy-coded direction's decoded plane; a failed map,
+// sum or SAT is Unsupported. It is noexcept, thread-safe (const), and safe for any argument values
+// (bad ones give InvalidArgument). The Asset must outlive the Evaluator.
 #pragma once
 
 #include <cstdint>
@@ -82,22 +85,11 @@ struct EvalOptions {
   // false: the model without parallax (x'(p) = p, no footprint shift): for measuring what the
   // parallax offsets are worth (the near-field report, docs/rendering.md).
   bool parallax = true;
-  // The unbiased multi-scale form's cheap samples of the parallax warp (docs/evaluator.md,
-  // "Two-level residual"): this many per sample of spp, each two evaluations of the control
-  // variate and one per-texel depth, no BSDF. 0 (the default): the one-level residual
-  // f(x'(p)) - g(p + mean offset). Any value keeps the estimate unbiased; 6 cuts the variance at a
-  // given spp by a third to a half but doubles the cost, so per unit time it does not pay on the
-  // example fabrics (docs/performance.md, "Evaluator").
-  uint32_t warp_samples_per_sample = 0;
-  // The unbiased multi-scale form weights its control variate by alpha (Eq. 7) from the footprint's
-  // shorter side s against the parallax offset range D of its view (the tile's max - min of the
-  // per-texel depth times the offset per unit depth, texels) and this k: alpha = 0 for s <= k D
-  // (sampled exactly as brute force), rising linearly to 1 at s = 2 k D. Below that width the
-  // shifted footprint the tables integrate and the samples' own destinations cover different parts
-  // of the pattern, and the full control variate adds variance instead of removing it
-  // (docs/evaluator.md, "Footprints the control variate does not help"). 0: alpha = 1 always. The
-  // estimate stays unbiased for any alpha.
-  double cv_min_side_per_offset_range = 2.0;
+  // The unbiased multi-scale form's cheap samples of g over the part B of a footprint outside its
+  // whole periods (docs/evaluator.md, "Unbiased multi-scale"): ceil(scale (|B| / |P|)
+  // sqrt(spp (spp + 2))) of them, at least 1 when B is not empty, at most 65536. Any value > 0
+  // keeps the estimate unbiased; this one balances their cost against their variance.
+  double remainder_sample_scale = 32.0;
   // The sheen table of every texel's BSDF (model/sheen.hpp, docs/sheen.md): the published one of
   // Zeltner et al. by default, as renderers ship it; Converged for the layer's exact albedo. The
   // asset stores only the sheen colour and roughness, so this is the evaluator's choice.
@@ -110,13 +102,13 @@ using Rng = model::SplitMix64;
 
 // What one estimate cost.
 struct Counters {
-  uint32_t samples = 0;        // Monte Carlo samples drawn over the footprint
-  uint32_t texel_evals = 0;    // per-texel BSDF evaluations (f^ V at one texel)
-  uint32_t table_queries = 0;  // footprint queries on SATs (radiance, parallax, footprint sums)
-  bool direct = false;         // answered by the exact sum (footprint below direct_max_side)
-  bool without_control_variate = false;  // multiscale: sampled as brute force (alpha = 0: the
-                                         // footprint below cv_min_side_per_offset_range times the
-                                         // offset range)
+  uint32_t samples = 0;            // Monte Carlo samples drawn over the footprint
+  uint32_t texel_evals = 0;        // per-texel BSDF evaluations (f^ V at one texel)
+  uint32_t table_queries = 0;      // footprint queries on SATs (radiance, parallax, footprint sums)
+  uint32_t remainder_samples = 0;  // multiscale: cheap samples of g outside the whole periods
+  bool direct = false;             // answered by the exact sum (footprint below direct_max_side)
+  bool without_control_variate = false;  // multiscale: sampled as brute force (the footprint holds
+                                         // no whole period of the tile in one of its axes)
 };
 
 struct Estimate {

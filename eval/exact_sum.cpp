@@ -94,7 +94,7 @@ class WeightMap {
   }
 
  private:
-  static constexpr uint32_t kCapacity = kSmallExactSources * 4;
+  static constexpr uint32_t kCapacity = kSmallExactSources * 16;  // 4 pieces x 4 view bins
   uint32_t n_;
   uint32_t count_ = 0;
   uint64_t texel_[kCapacity];
@@ -112,16 +112,18 @@ double exact_source_count(const EvalData& data, const Footprint& p) noexcept {
 Status exact_average(const EvalData& data, const ShadingFrame& frame, const Footprint& p,
                      uint32_t supersampling, Estimate* out) noexcept {
   TexelShading shading;
+  const model::BinBilinear<double>& bins = frame.parallax_bins;
   if (!(p.x1 > p.x0) || !(p.y1 > p.y0)) {
-    // A point: the integrand at x'(p0).
-    const double qx = std::floor(p.x0), qy = std::floor(p.y0);
-    const double r = texel_depth(data, frame, int64_t(qx), int64_t(qy));
-    const double xp = p.x0 + r * frame.offset_per_depth[0];
-    const double yp = p.y0 + r * frame.offset_per_depth[1];
-    shade_texel(data, frame, int64_t(std::floor(xp)), int64_t(std::floor(yp)), &shading);
-    for (int l = 0; l < model::kLobeCount; ++l)
-      out->lobes[l] += shading.lobes[l];
-    out->counters.texel_evals += 1;
+    // A point: the integrand at x'_k(p0) of each view bin k, weighted.
+    for (int k = 0; k < 4; ++k) {
+      if (!(bins.weight[k] > 0.0)) continue;
+      int64_t tx = 0, ty = 0;
+      bin_destination(data, frame, k, p.x0, p.y0, &tx, &ty);
+      shade_texel(data, frame, tx, ty, &shading);
+      for (int l = 0; l < model::kLobeCount; ++l)
+        out->lobes[l] += shading.lobes[l] * bins.weight[k];
+      out->counters.texel_evals += 1;
+    }
     return {};
   }
 
@@ -134,31 +136,38 @@ Status exact_average(const EvalData& data, const ShadingFrame& frame, const Foot
 
   axis_pieces(p.y0, p.y1, data.n, [&](const AxisPiece& py) {
     axis_pieces(p.x0, p.x1, data.n, [&](const AxisPiece& px) {
-      const double mult = px.mult * py.mult;
-      const double r = texel_depth(data, frame, px.index, py.index);
-      const double dx = r * frame.offset_per_depth[0], dy = r * frame.offset_per_depth[1];
-      const double x0 = double(px.index) + px.lo + dx, x1 = double(px.index) + px.hi + dx;
-      const double y0 = double(py.index) + py.lo + dy, y1 = double(py.index) + py.hi + dy;
-      if (supersampling > 0) {
-        const double s = double(supersampling);
-        const double cell = mult * (x1 - x0) * (y1 - y0) / (s * s);
-        for (uint32_t b = 0; b < supersampling; ++b) {
-          const double y = y0 + (double(b) + 0.5) / s * (y1 - y0);
-          for (uint32_t a = 0; a < supersampling; ++a) {
-            const double x = x0 + (double(a) + 0.5) / s * (x1 - x0);
-            weights.add(data.texel(int64_t(std::floor(x)), int64_t(std::floor(y))), cell);
+      for (int k = 0; k < 4; ++k) {
+        if (!(bins.weight[k] > 0.0)) continue;
+        const double mult = px.mult * py.mult * bins.weight[k];
+        const double r = data.options.parallax
+                             ? data.parallax.bin_depth(uint32_t(bins.index[k]), px.index, py.index)
+                             : 0.0;
+        const double dx = r * frame.bin_offset_per_depth[k][0];
+        const double dy = r * frame.bin_offset_per_depth[k][1];
+        const double x0 = double(px.index) + px.lo + dx, x1 = double(px.index) + px.hi + dx;
+        const double y0 = double(py.index) + py.lo + dy, y1 = double(py.index) + py.hi + dy;
+        if (supersampling > 0) {
+          const double s = double(supersampling);
+          const double cell = mult * (x1 - x0) * (y1 - y0) / (s * s);
+          for (uint32_t b = 0; b < supersampling; ++b) {
+            const double y = y0 + (double(b) + 0.5) / s * (y1 - y0);
+            for (uint32_t a = 0; a < supersampling; ++a) {
+              const double x = x0 + (double(a) + 0.5) / s * (x1 - x0);
+              weights.add(data.texel(int64_t(std::floor(x)), int64_t(std::floor(y))), cell);
+            }
           }
+          continue;
         }
-        return;
+        // The moved piece is at most one texel wide: it overlaps columns c and c + 1, rows d, d
+        // + 1.
+        const double c = std::floor(x0), d = std::floor(y0);
+        const double wx[2] = {std::fmin(x1, c + 1.0) - x0, x1 > c + 1.0 ? x1 - (c + 1.0) : 0.0};
+        const double wy[2] = {std::fmin(y1, d + 1.0) - y0, y1 > d + 1.0 ? y1 - (d + 1.0) : 0.0};
+        for (int j = 0; j < 2; ++j)
+          for (int i = 0; i < 2; ++i)
+            if (wx[i] > 0.0 && wy[j] > 0.0)
+              weights.add(data.texel(int64_t(c) + i, int64_t(d) + j), mult * wx[i] * wy[j]);
       }
-      // The moved piece is at most one texel wide: it overlaps columns c and c + 1, rows d, d + 1.
-      const double c = std::floor(x0), d = std::floor(y0);
-      const double wx[2] = {std::fmin(x1, c + 1.0) - x0, x1 > c + 1.0 ? x1 - (c + 1.0) : 0.0};
-      const double wy[2] = {std::fmin(y1, d + 1.0) - y0, y1 > d + 1.0 ? y1 - (d + 1.0) : 0.0};
-      for (int j = 0; j < 2; ++j)
-        for (int i = 0; i < 2; ++i)
-          if (wx[i] > 0.0 && wy[j] > 0.0)
-            weights.add(data.texel(int64_t(c) + i, int64_t(d) + j), mult * wx[i] * wy[j]);
     });
   });
 

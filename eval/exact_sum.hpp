@@ -1,10 +1,11 @@
 // The exact footprint average of Eq. 5 under the piecewise-constant texel model (the Reference
 // method and the direct path of the multi-scale methods; docs/evaluator.md, "Reference").
 //
-// Within one source texel q the parallax depth r_q is constant, so x'(p) = p + delta_q moves the
-// part of q that P covers rigidly; that moved rectangle (at most one texel wide) overlaps at most
-// 2 x 2 destination texels t, on each of which the integrand g(t) is constant. Hence
-//   value = (1/|P|) sum_t W(t) g(t),   W(t) = area of {p in P : x'(p) in t},
+// In view bin k, within one source texel q the parallax depth r_kq is constant, so
+// x'_k(p) = p + delta_kq moves the part of q that P covers rigidly; that moved rectangle (at most
+// one texel wide) overlaps at most 2 x 2 destination texels t, on each of which the integrand g(t)
+// is constant. Hence, with the view's bilinear bin weights w_k,
+//   value = (1/|P|) sum_t W(t) g(t),   W(t) = sum_k w_k area of {p in P : x'_k(p) in t},
 // computed exactly from the overlaps. A footprint wider than a tile is folded: every source column
 // (row) index modulo N enters once with its multiplicity, so the cost is O(min(|P|, N^2)) texels.
 //

@@ -13,16 +13,26 @@ namespace clothbake::eval {
 void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprint& footprint,
                  uint32_t spp, Rng& rng, Estimate* out) noexcept;
 
-// Clustered control variates (Eq. 8-11): base terms from the Integral-Radiance tables and the
+// Eq. 8-10 as printed (MultiscalePaper): base terms from the Integral-Radiance tables and the
 // footprint sums over the footprint shifted by its mean parallax offset, plus a residual of spp
-// samples. paper_form: Eq. 8-10 as printed (residual k G D (V - v_c) at the shifted samples);
-// otherwise the unbiased form (residual f(x'(p)) - g(p + mean offset)). P has positive area; the
-// specular tables are open. weight in (0, 1]: the unbiased form's control-variate coefficient
-// (Eq. 7's alpha: weight * base + residual of f - weight * g; any value keeps it unbiased); the
-// paper form must be given 1 (its residual is not weighted). Errors: InvalidArgument from the
-// parallax footprint query.
-Status control_variates(const EvalData& data, const ShadingFrame& frame, const Footprint& footprint,
-                        uint32_t spp, Rng& rng, bool paper_form, double weight,
-                        Estimate* out) noexcept;
+// samples k G D (V - v_c) at p + mean offset. P has positive area; the specular tables are open.
+// Errors: InvalidArgument from the parallax footprint query.
+Status paper_control_variates(const EvalData& data, const ShadingFrame& frame,
+                              const Footprint& footprint, uint32_t spp, Rng& rng,
+                              Estimate* out) noexcept;
+
+// The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
+// each texel's low-rank visibility at every sample's own destination; its mean over the whole
+// periods of P from the bin's push-forward sums, over the rest from remainder_samples() cheap
+// samples. P has positive area; the compressed specular tables are open. Errors: Unsupported when
+// the bin's push-forward sums cannot be allocated.
+Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
+                                    const Footprint& footprint, uint32_t spp, Rng& rng,
+                                    Estimate* out) noexcept;
+
+inline constexpr uint32_t kMaxRemainderSamples = 1u << 16;
+// The cheap samples of g the unbiased form draws outside P's whole periods for spp samples
+// (EvalOptions::remainder_sample_scale); 0 when P is made of whole periods.
+uint32_t remainder_samples(const EvalData& data, const Footprint& footprint, uint32_t spp) noexcept;
 
 }  // namespace clothbake::eval

@@ -52,6 +52,12 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   const model::DirectionGrid<double> parallax_grid{int(data.parallax.dirs()),
                                                    data.parallax.info().min_cos};
   f.parallax_bins = parallax_grid.bilinear_fast(f.view);
+  for (int k = 0; k < 4; ++k) {
+    const int b = f.parallax_bins.index[k];
+    const model::Vec3d c = parallax_grid.bin_center(b % parallax_grid.n, b / parallax_grid.n);
+    f.bin_offset_per_depth[k][0] = on * c.x / c.z;
+    f.bin_offset_per_depth[k][1] = on * c.y / c.z;
+  }
   // A scene-planned asset answers only what its scene can ask (never a number for the rest).
   for (int k = 0; k < 4; ++k)
     if (data.options.parallax && f.parallax_bins.weight[k] > 0.0 &&
@@ -85,6 +91,29 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
 
 double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept {
   return data.parallax.weighted_depth(frame.parallax_bins.index, frame.parallax_bins.weight, x, y);
+}
+
+int draw_view_bin(const ShadingFrame& frame, double u) noexcept {
+  double cumulative = 0.0;
+  int last = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (!(frame.parallax_bins.weight[k] > 0.0)) continue;
+    cumulative += frame.parallax_bins.weight[k];
+    last = k;
+    if (u < cumulative) return k;
+  }
+  return last;
+}
+
+void bin_destination(const EvalData& data, const ShadingFrame& frame, int k, double x, double y,
+                     int64_t* tx, int64_t* ty) noexcept {
+  const double r =
+      data.options.parallax
+          ? data.parallax.bin_depth_at(uint32_t(frame.parallax_bins.index[k]),
+                                       data.texel(int64_t(std::floor(x)), int64_t(std::floor(y))))
+          : 0.0;
+  *tx = int64_t(std::floor(x + r * frame.bin_offset_per_depth[k][0]));
+  *ty = int64_t(std::floor(y + r * frame.bin_offset_per_depth[k][1]));
 }
 
 void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>& f,

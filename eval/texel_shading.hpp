@@ -27,10 +27,14 @@ struct ShadingFrame {
   double cos_i = 0;       // |i_z|
   bool delta = false;     // i == -o exactly: the delta lobe contributes
   LobeMask mask = kAllLobes;
-  // Eq. 2 in texel units: the offset of a texel with depth r is r * offset_per_depth.
+  // Eq. 2 in texel units for the view itself: r * offset_per_depth (multiscale-paper's shift).
   double offset_per_depth[2] = {0, 0};
   // Bilinear weights of the parallax view direction over the table's bins.
   model::BinBilinear<double> parallax_bins;
+  // Eq. 2 in texel units at the centre direction of each of those four bins: a texel of depth
+  // r_k in bin k moves by r_k * bin_offset_per_depth[k] (the model interpolates the results of
+  // the four bins, docs/evaluator.md "The integral"). 0 without parallax.
+  double bin_offset_per_depth[4][2] = {};
   // v_c(i) per cluster (Eq. 8), for the mirrored light direction.
   double mean_visibility[reader::kMaxVisibilityClusters];  // the first C entries are set
 };
@@ -43,8 +47,17 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
                 ShadingFrame* frame, Status* status) noexcept;
 
 // The parallax depth r of texel (x, y) for the frame's view (bilinear between bins, as
-// reader::ParallaxView::depth).
+// reader::ParallaxView::depth): what multiscale-paper's footprint mean approximates.
 double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept;
+
+// The view bin k in [0, 4) of frame.parallax_bins drawn with its weight by u in [0, 1): the first k
+// whose cumulative weight exceeds u (the last with a positive weight if rounding leaves none).
+int draw_view_bin(const ShadingFrame& frame, double u) noexcept;
+
+// The destination texel of point p = (x, y) in view bin k (Eq. 2 with the bin's depth of the
+// texel containing p at the bin's centre direction): floor(p + r_k(floor(p)) * factor_k).
+void bin_destination(const EvalData& data, const ShadingFrame& frame, int k, double x, double y,
+                     int64_t* tx, int64_t* ty) noexcept;
 
 // What one texel contributes.
 struct TexelShading {

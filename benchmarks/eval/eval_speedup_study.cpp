@@ -7,9 +7,10 @@
 // eps^2), eps = 1 % of the mean reference over the footprints.
 //
 //   eval_speedup_study ASSET [--footprints N] [--repeats K] [--min-side S] [--max-side S]
-//                      [--warp M] [--cv-min-side K] [--per-footprint] [--seed S]
+//                      [--remainder-scale K] [--per-footprint] [--seed S]
 //                      [--tables raw|compressed]
-// --cv-min-side: EvalOptions::cv_min_side_per_offset_range (0: the control variate everywhere).
+// --remainder-scale: EvalOptions::remainder_sample_scale. Besides the time, the equal-error ratio
+// in samples: brute force's spp at the multi-scale error (log-log interpolation) over 2.
 // Exit 2 on a bad argument or asset.
 #include <algorithm>
 #include <chrono>
@@ -42,7 +43,7 @@ struct Point {
   std::fprintf(stderr,
                "eval_speedup_study: %s\nusage: eval_speedup_study ASSET [--footprints N] "
                "[--repeats K] [--min-side S] [--max-side S] [--seed S] [--tables raw|compressed] "
-               "[--warp M] [--cv-min-side K] [--per-footprint]\n",
+               "[--remainder-scale K] [--per-footprint]\n",
                why);
   std::exit(2);
 }
@@ -71,7 +72,8 @@ Point measure(const Evaluator& ev, const std::vector<Config>& configs, Method me
   for (const Config& c : configs) {
     Estimate e;
     Rng warm(seed ^ 0x9e3779b97f4a7c15ull);
-    (void)ev.estimate(c.footprint, c.wi, c.wo, method, spp, warm, kAllLobes, &e);
+    for (int k = 0; k < 16; ++k)  // every view bin the estimates may draw
+      (void)ev.estimate(c.footprint, c.wi, c.wo, method, spp, warm, kAllLobes, &e);
   }
   double sq = 0, bias2 = 0;
   const auto t0 = std::chrono::steady_clock::now();
@@ -101,16 +103,18 @@ Point measure(const Evaluator& ev, const std::vector<Config>& configs, Method me
 
 // Brute force's time at relMSE `target`, log-log interpolated on the sweep; negative when the
 // sweep never gets there (the caller reports a lower bound).
-double time_at_error(const std::vector<Point>& sweep, double target) {
+// The sweep's `field` (seconds or spp) at relMSE `target`, log-log interpolated; -1 when the sweep
+// does not reach the target.
+double at_error(const std::vector<Point>& sweep, double target, double Point::*field) {
   for (size_t k = 1; k < sweep.size(); ++k) {
     const Point &a = sweep[k - 1], &b = sweep[k];
     if (a.relmse >= target && b.relmse <= target) {
       const double u =
           (std::log(target) - std::log(a.relmse)) / (std::log(b.relmse) - std::log(a.relmse));
-      return std::exp(std::log(a.seconds) + u * (std::log(b.seconds) - std::log(a.seconds)));
+      return std::exp(std::log(a.*field) + u * (std::log(b.*field) - std::log(a.*field)));
     }
   }
-  if (!sweep.empty() && sweep.front().relmse <= target) return sweep.front().seconds;
+  if (!sweep.empty() && sweep.front().relmse <= target) return sweep.front().*field;
   return -1;
 }
 
@@ -139,12 +143,8 @@ int main(int argc, char** argv) {
       max_side = number(v, "--max-side");
     else if (opt == "--seed")
       seed = number(v, "--seed");
-    else if (opt == "--warp")  // 0 allowed: the one-level residual
-      options.warp_samples_per_sample =
-          std::strcmp(v, "0") == 0 ? 0u : uint32_t(number(v, "--warp"));
-    else if (opt == "--cv-min-side")  // 0 allowed: the control variate on every footprint
-      options.cv_min_side_per_offset_range =
-          std::strcmp(v, "0") == 0 ? 0.0 : number(v, "--cv-min-side");
+    else if (opt == "--remainder-scale")
+      options.remainder_sample_scale = number(v, "--remainder-scale");
     else if (opt == "--tables") {
       if (std::strcmp(v, "raw") == 0)
         options.tables = TableChoice::Raw;
@@ -216,10 +216,12 @@ int main(int argc, char** argv) {
   }
   for (Method m : {Method::Multiscale, Method::MultiscalePaper}) {
     const Point p = measure(ev, configs, m, 2, repeats, 7);
-    const double tb = time_at_error(brute, p.relmse);
-    std::printf("%-17s %6d %12.3f %12.4g %12.3g   equal-error speedup %s%.1fx\n", method_name(m), 2,
-                p.seconds * 1e6, p.relmse, p.bias2, tb < 0 ? ">" : "",
-                (tb < 0 ? brute.back().seconds : tb) / p.seconds);
+    const double tb = at_error(brute, p.relmse, &Point::seconds);
+    const double sb = at_error(brute, p.relmse, &Point::spp);
+    std::printf("%-17s %6d %12.3f %12.4g %12.3g   equal-error speedup %s%.1fx time, %s%.1fx spp\n",
+                method_name(m), 2, p.seconds * 1e6, p.relmse, p.bias2, tb < 0 ? ">" : "",
+                (tb < 0 ? brute.back().seconds : tb) / p.seconds, sb < 0 ? ">" : "",
+                (sb < 0 ? brute.back().spp : sb) / 2.0);
   }
   return 0;
 }

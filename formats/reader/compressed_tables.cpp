@@ -435,6 +435,33 @@ double CompressedRadianceTables::texel_value(const BinWeights& weights, uint32_t
   return v;
 }
 
+uint32_t CompressedRadianceTables::texel_image_weights(uint32_t x, uint32_t y,
+                                                       uint32_t* first_image,
+                                                       double* weights) const noexcept {
+  *first_image = 0;
+  if (!is_open() || x >= n_ || y >= n_) return 0;
+  return texel_image_weights_at(uint64_t(y) * n_ + x, first_image, weights);
+}
+
+uint32_t CompressedRadianceTables::texel_image_weights_at(uint64_t t, uint32_t* first_image,
+                                                          double* weights) const noexcept {
+  *first_image = 0;
+  if (!is_open() || t >= uint64_t(n_) * n_) return 0;
+  const TexelWeights tw = texel_weights(uint32_t(t % n_), uint32_t(t / n_));
+  if (tw.rank < 0) return 0;
+  *first_image = tw.first_image;
+  for (int j = 0; j <= tw.rank; ++j)
+    weights[j] = double(tw.weight(j));
+  return uint32_t(tw.rank + 1);
+}
+
+uint32_t CompressedRadianceTables::image_cluster(uint32_t image) const noexcept {
+  uint32_t c = 0;
+  while (c + 1 < cluster_count_ && image_begin_[c + 1] <= image)
+    ++c;
+  return c;
+}
+
 int CompressedRadianceTables::decode_texel(uint32_t x, uint32_t y, float* out) const noexcept {
   if (!is_open() || out == nullptr || x >= n_ || y >= n_) return -1;
   const uint32_t bins = bins_per_side_ * bins_per_side_;

@@ -76,6 +76,23 @@ class CompressedRadianceTables final : public RadianceTables {
   // make_bin_weights(bins_per_side(), ...); anything else gives 0 and cluster -1.
   double texel_value(const BinWeights& weights, uint32_t x, uint32_t y,
                      int* cluster) const noexcept;
+  // The image weights of texel (x, y) (x, y < N): its images are first_image .. first_image + count
+  // - 1 (count = rank + 1 of its cell; 0 for a texel without a cell), image first_image + j
+  // weighted by weights[j] (1 for the cell mean, the stored coefficient for basis image j), so that
+  // texel_value(w, x, y) = sum_j weights[j] sum_k w.weight[k] image_basis(first_image + j,
+  // w.bin[k]). `weights` must hold kMaxCompressedRank + 1 values. Returns count.
+  uint32_t texel_image_weights(uint32_t x, uint32_t y, uint32_t* first_image,
+                               double* weights) const noexcept;
+  // The same for texel index t = y N + x (t < N^2).
+  uint32_t texel_image_weights_at(uint64_t t, uint32_t* first_image,
+                                  double* weights) const noexcept;
+  // The scaled basis value of image `image` (< image_count()) in bin `bin` (< bins): what the
+  // queries multiply the image's footprint sum with.
+  float image_basis(uint32_t image, uint32_t bin) const noexcept {
+    return basis_[uint64_t(bin) * images_ + image];
+  }
+  // The visibility cluster whose tables image `image` (< image_count()) belongs to.
+  uint32_t image_cluster(uint32_t image) const noexcept;
   // Every bin of one texel at once (out: bins floats, zeros for a texel without a cell); returns
   // the texel's cluster or -1. O(bins x (1 + rank)): for full decompression (verify, export).
   int decode_texel(uint32_t x, uint32_t y, float* out) const noexcept;

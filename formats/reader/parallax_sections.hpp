@@ -192,6 +192,10 @@ class ParallaxView {
   // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2 and
   // covers(bin) (an uncovered bin gives 0).
   double bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept;
+  // The same for texel index t = y N + x (t < N^2, no wrapping): the evaluator's hot path.
+  double bin_depth_at(uint32_t bin, uint64_t t) const noexcept {
+    return covers(bin) ? -double(code(bin, t)) * depth_step(bin) : 0.0;
+  }
   // sum over k < 4 with weight[k] > 0 of weight[k] * bin_depth(bin[k], x, y), wrapping (x, y)
   // once: the per-texel depth for bilinear weights computed once per view (the evaluator's hot
   // path). Precondition: every bin with a positive weight < dirs^2.

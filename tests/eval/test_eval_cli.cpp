@@ -122,7 +122,7 @@ TEST(EvalCli, BadInputHasItsExitCode) {
   EXPECT_EQ(code(with({"eval", twill, "--rect", "0,0,4,4", "--method", "fast"})), 1);
   EXPECT_EQ(code(with({"eval", twill + ".missing", "--rect", "0,0,4,4"})), 2);
   EXPECT_EQ(code(with({"eval", assets().bare, "--rect", "0,0,4,4"})), 2);  // no tables
-  EXPECT_EQ(code(with({"eval", assets().flat, "--rect", "0,0,4,4", "--tables", "compressed"})), 2);
+  EXPECT_EQ(code(with({"eval", assets().flat, "--rect", "0,0,4,4", "--tables", "raw"})), 2);
   // A corrupted byte: invalid asset.
   const auto bad = assets().dir / "corrupt.cbk";
   std::filesystem::copy_file(assets().flat, bad, std::filesystem::copy_options::overwrite_existing);

@@ -152,9 +152,9 @@ TEST(Render, ImagesAreIdenticalForAnyThreadCount) {
 // A renderer reused for another method, spp and seed renders the image a new one renders (what its
 // evaluators built on earlier renders, of this method with another seed included, changes no bit),
 // and refuses evaluator options of its own. Near (1.5 tiles per unit: pixels a few texels wide,
-// some sampled without the control variate, most with a partial weight) and far (6: with it).
+// sampled without the control variate) and far (24: footprints of a tile and more, with it).
 TEST(Render, AReusedRendererRendersWhatANewOneRenders) {
-  for (const double tiles : {1.5, 6.0}) {
+  for (const double tiles : {1.5, 24.0}) {
     const Scene s = lit_twill_plane(tiles);
     RenderOptions first;
     first.method = eval::Method::Brute;
@@ -205,7 +205,7 @@ double relmse(const RenderResult& a, const RenderResult& ref) {
 TEST(Render, MultiscaleAndBruteForceConvergeAtTheMonteCarloRate) {
   Scene s = plane_scene(24, 24);
   s.objects[0].asset = assets().twill;
-  s.objects[0].tiles_per_unit = 12;  // far field: footprints of tens of texels
+  s.objects[0].tiles_per_unit = 32;  // far field: footprints of a tile (64 texels) and more
   Light point;
   point.position = {0.4, 0.6, 1.6};
   point.intensity = Rgb(3);

@@ -1,0 +1,302 @@
+// The unbiased multi-scale estimate: a clustered control variate at each sample's own destination,
+// integrated exactly under the parallax push-forward of the footprint's whole periods
+// (methods.hpp; docs/evaluator.md, "Unbiased multi-scale").
+#include <algorithm>
+#include <cmath>
+#include <new>
+#include <vector>
+
+#include "eval/footprint_samples.hpp"
+#include "eval/methods.hpp"
+#include "model/spongecake.hpp"
+
+namespace clothbake::eval {
+namespace {
+
+using model::Lobe;
+
+constexpr double kInvPi = 0.318309886183790671537767526745028724;
+constexpr uint32_t kMaxRank = reader::kMaxVisibilityBasisRank;
+constexpr uint32_t kStackImages = 1024;
+
+// What g needs per estimate (docs/evaluator.md, "Unbiased multi-scale"):
+//   g(t) = sum over the lobes asked for of
+//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table
+//     diffuse   |i_z| / pi T_sheen I(t) R(t) v(t)
+//     sheen     colour sheen(i, o) |i_z| v(t)
+//     delta     T_sheen (1 - I(t)) v(t)     (when i = -o)
+//   v(t) = sum_j b_cj(i) e_j(t), c = cluster of t, b_cj the visibility basis at the light.
+struct Constants {
+  bool specular = false, diffuse = false, sheen = false, delta = false;
+  Lobe specular_lobe = Lobe::SpecularReflection, diffuse_lobe = Lobe::DiffuseReflection;
+  Rgb diffuse_scale, sheen_scale, delta_scale;
+  reader::BinWeights h_bins;
+  uint32_t rank = 0;
+  // Per cluster: b_cj(i), j = 0..M (plain arrays: the 255-cluster capacity costs nothing).
+  double vis[reader::kMaxVisibilityClusters][kMaxRank + 1];
+  Rgb specular_scale[reader::kMaxVisibilityClusters];  // s_c
+  // Per compressed image i: sum_b w_b(h) basis_i(b), the image's value at h (the table value of a
+  // texel is the sum of its image weights times these).
+  const double* image_at_h = nullptr;
+};
+
+// v(t) of texel index t in cluster c.
+double texel_visibility(const EvalData& data, const Constants& k, uint64_t t, uint32_t c) {
+  const double* b = k.vis[c];
+  double v = b[0];
+  if (k.rank > 0) {
+    const float* e = data.basis.coefficients(t);
+    for (uint32_t j = 0; j < k.rank; ++j)
+      v += b[j + 1] * double(e[j]);
+  }
+  return v;
+}
+
+// g of every lobe asked for at texel (x, y) (any integers: the tile wraps), added to g[].
+void control_variate(const EvalData& data, const Constants& k, int64_t qx, int64_t qy,
+                     Rgb g[model::kLobeCount]) {
+  const uint64_t t = data.texel(qx, qy);
+  const uint32_t c = data.clusters.label_at(t);
+  const double v = texel_visibility(data, k, t, c);
+  const double gap = data.maps.gap[t];
+  if (k.specular) {
+    uint32_t first = 0;
+    double weights[reader::kMaxCompressedRank + 1];
+    const uint32_t count = data.specular.compressed.texel_image_weights_at(t, &first, weights);
+    if (count > 0) {
+      double value = 0.0;
+      for (uint32_t j = 0; j < count; ++j)
+        value += weights[j] * k.image_at_h[first + j];
+      g[int(k.specular_lobe)] += k.specular_scale[data.image_cluster[first]] * (value * v);
+    }
+  }
+  if (k.diffuse) {
+    const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
+    const float* colour = data.maps.albedo.data + 3 * t;
+    const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
+                                                                  : yarn.diffuse_transmittance) *
+                       Rgb(colour[0], colour[1], colour[2]);
+    g[int(k.diffuse_lobe)] += k.diffuse_scale * albedo * (gap * v);
+  }
+  if (k.sheen) g[int(Lobe::Sheen)] += k.sheen_scale * v;
+  if (k.delta) g[int(Lobe::DeltaTransmission)] += k.delta_scale * ((1.0 - gap) * v);
+}
+
+// Eq. 10's attenuation f_s / D for the fibre `params` with its tangent turned normal to h: the
+// fibres of a yarn that mirror i into o have t . h = 0, and their projected areas, not those of
+// the yarn's mean fibre, set the attenuation of the light they reflect (docs/evaluator.md).
+double attenuation(model::TexelParams<double> params, const ShadingFrame& frame, bool reflect) {
+  const double hh = dot(frame.h, frame.h);
+  if (hh > 0.0) {
+    const model::Vec3d t = params.tangent - frame.h * (dot(params.tangent, frame.h) / hh);
+    if (dot(t, t) > 1e-12 * dot(params.tangent, params.tangent)) params.tangent = t;
+  }
+  const auto sggx = model::FibreSggx<double>::make(params.tangent, params.roughness);
+  const double d = sggx.D(frame.h);
+  if (!(d > 0.0)) return 0.0;
+  const double thickness = params.optical_thickness > 0.0 ? params.optical_thickness : 0.0;
+  const double f = reflect ? model::spongecake_reflection(sggx, thickness, frame.wi, frame.wo)
+                           : model::spongecake_transmission(sggx, thickness, frame.wi, frame.wo);
+  return f / d;
+}
+
+}  // namespace
+
+uint32_t remainder_samples(const EvalData& data, const Footprint& p, uint32_t spp) noexcept {
+  const double n = double(data.n);
+  const double w = p.x1 - p.x0, h = p.y1 - p.y0;
+  const double whole = std::floor(w / n) * std::floor(h / n) * n * n;
+  const double remainder = 1.0 - whole / (w * h);  // |B| / |P|
+  if (!(remainder > 0.0)) return 0;
+  // Cost-optimal: with a cost c0 per estimate, a per sample and c1 per cheap sample, the product of
+  // the cost c0 + a spp + c1 m and the variance var(f - g) / spp + (|B|/|P|)^2 var(g) / m is least
+  // at m = (|B|/|P|) sqrt(spp (c0 + a spp) var(g) / (c1 var(f - g))): linear in spp at high spp
+  // (so the estimate converges at the Monte Carlo rate), about sqrt(spp) at low spp. c0 is about
+  // two samples' cost (docs/evaluator.md, "Unbiased multi-scale").
+  const double s = double(spp);
+  const double m =
+      std::ceil(data.options.remainder_sample_scale * remainder * std::sqrt(s * (s + 2.0)));
+  return uint32_t(std::clamp(m, 1.0, double(kMaxRemainderSamples)));
+}
+
+Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
+                                    const Footprint& p, uint32_t spp, Rng& rng,
+                                    Estimate* out) noexcept {
+  const uint32_t n = data.n, clusters = data.cluster_count();
+  const double w = p.x1 - p.x0, h = p.y1 - p.y0, area = w * h;
+  // One view bin for the estimate, then the whole-period block A at P's corner: any N-long window
+  // covers every texel column once, so A's push-forward is kx ky times the tile's.
+  const int bin = draw_view_bin(frame, rng.uniform());
+  const double kx = std::floor(w / double(n)), ky = std::floor(h / double(n));
+  const double ax = kx * double(n), ay = ky * double(n);
+  const double* sums = data.pushforward.bin_sums(uint32_t(frame.parallax_bins.index[bin]));
+  if (sums == nullptr)
+    return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
+                         "cannot allocate the push-forward sums of a view bin");
+  const PushforwardChannels& layout = data.pushforward.layout();
+
+  Constants k;
+  const bool reflect = frame.wi.z * frame.wo.z > 0.0, transmit = frame.wi.z * frame.wo.z < 0.0;
+  const LobeMask mask = frame.mask;
+  const double h_vec[3] = {frame.h.x, frame.h.y, frame.h.z};
+  k.specular_lobe = reflect ? Lobe::SpecularReflection : Lobe::SpecularTransmission;
+  k.diffuse_lobe = reflect ? Lobe::DiffuseReflection : Lobe::DiffuseTransmission;
+  k.specular = (reflect || transmit) && (mask & lobe_bit(k.specular_lobe)) &&
+               reader::make_bin_weights(data.specular.tables->bins_per_side(), h_vec, &k.h_bins);
+  k.diffuse = (reflect || transmit) && (mask & lobe_bit(k.diffuse_lobe));
+  k.sheen = (mask & lobe_bit(Lobe::Sheen)) != 0;
+  k.delta = frame.delta && (mask & lobe_bit(Lobe::DeltaTransmission));
+  k.rank = data.visibility_rank();
+
+  // The visibility basis at the light (the stored cluster means when the asset has no basis).
+  if (data.basis.is_open()) {
+    const model::DirectionGrid<double> grid{int(data.basis.dirs()), 0.0};
+    const model::BinBilinear<double> b = grid.bilinear(frame.wi_light);
+    for (uint32_t c = 0; c < clusters; ++c)
+      for (uint32_t j = 0; j <= k.rank; ++j) {
+        double v = 0.0;
+        for (int q = 0; q < 4; ++q)
+          v += b.weight[q] * double(data.basis.component(c, j, uint32_t(b.index[q])));
+        k.vis[c][j] = v;
+      }
+  } else {
+    for (uint32_t c = 0; c < clusters; ++c)
+      k.vis[c][0] = frame.mean_visibility[c];
+  }
+  const model::ClothBsdf<double> any_texel(data.texel_params(0));
+  const Rgb t_sheen = any_texel.sheen_transmittance(frame.wo);  // the fabric's, every texel's
+  const double cos_i = frame.cos_i;
+  if (k.specular) {
+    double yarn_attenuation[64];
+    const std::size_t yarns = std::min<std::size_t>(data.yarn_fibre.size(), 64);
+    for (std::size_t y = 0; y < yarns; ++y)
+      yarn_attenuation[y] = -1.0;  // not evaluated yet: only the yarns of the clusters are
+    for (uint32_t c = 0; c < clusters; ++c) {
+      const uint32_t y = data.cluster_yarn[c];
+      double g = 0.0;
+      if (y < yarns) {
+        if (yarn_attenuation[y] < 0.0)
+          yarn_attenuation[y] = attenuation(data.yarn_fibre[y], frame, reflect);
+        g = yarn_attenuation[y];
+      } else {
+        g = attenuation(data.yarn_fibre[y], frame, reflect);
+      }
+      k.specular_scale[c] = data.cluster_albedo[c] * t_sheen * (g * cos_i);
+    }
+  }
+  if (k.diffuse) k.diffuse_scale = t_sheen * (cos_i * kInvPi);
+  if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
+  if (k.delta) k.delta_scale = t_sheen;
+
+  // Each image's value at h, once per estimate (on the stack up to kStackImages images, which every
+  // example fabric stays under; beyond, one allocation per estimate).
+  double stack_images[kStackImages];
+  std::vector<double> heap_images;
+  double* image_at_h = stack_images;
+  if (k.specular) {
+    const reader::CompressedRadianceTables& tables = data.specular.compressed;
+    if (layout.images > kStackImages) {
+      try {
+        heap_images.resize(layout.images);
+      } catch (const std::bad_alloc&) {
+        return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
+                             "cannot allocate the images' values at h");
+      }
+      image_at_h = heap_images.data();
+    }
+    for (uint32_t i = 0; i < layout.images; ++i) {
+      double basis = 0.0;
+      for (uint32_t q = 0; q < k.h_bins.count; ++q)
+        basis += k.h_bins.weight[q] * double(tables.image_basis(i, k.h_bins.bin[q]));
+      image_at_h[i] = basis;
+    }
+    k.image_at_h = image_at_h;
+  }
+
+  // The base over A: the per-estimate coefficients dotted with the bin's whole-tile sums.
+  Rgb base[model::kLobeCount];
+  const uint32_t r1 = k.rank + 1;
+  if (kx * ky > 0.0) {
+    if (k.specular) {
+      double per_cluster[reader::kMaxVisibilityClusters] = {};
+      for (uint32_t i = 0; i < layout.images; ++i) {
+        const double basis = image_at_h[i];
+        if (basis == 0.0) continue;
+        const uint32_t c = data.image_cluster[i];
+        const double* s = sums + layout.spec(i, 0);
+        double v = 0.0;
+        for (uint32_t j = 0; j < r1; ++j)
+          v += k.vis[c][j] * s[j];
+        per_cluster[c] += basis * v;
+      }
+      Rgb sum;
+      for (uint32_t c = 0; c < clusters; ++c)
+        sum += k.specular_scale[c] * per_cluster[c];
+      base[int(k.specular_lobe)] = sum;
+    }
+    const uint32_t diffuse_offset = k.diffuse_lobe == Lobe::DiffuseReflection ? 0 : 3;
+    Rgb diffuse;
+    double sheen = 0.0, delta = 0.0;
+    for (uint32_t c = 0; c < clusters; ++c)
+      for (uint32_t j = 0; j < r1; ++j) {
+        const double* s = sums + layout.lobe(c, j);
+        const double b = k.vis[c][j];
+        if (k.diffuse)
+          diffuse += Rgb(s[diffuse_offset], s[diffuse_offset + 1], s[diffuse_offset + 2]) * b;
+        sheen += s[6] * b;
+        delta += s[7] * b;
+      }
+    if (k.diffuse) base[int(k.diffuse_lobe)] = k.diffuse_scale * diffuse;
+    if (k.sheen) base[int(Lobe::Sheen)] = k.sheen_scale * sheen;
+    if (k.delta) base[int(Lobe::DeltaTransmission)] = k.delta_scale * delta;
+    for (Rgb& b : base)
+      b = b * (kx * ky);
+    out->counters.table_queries += 1;
+  }
+
+  // The residual f - g at spp stratified points over P, both at the sample's destination.
+  Rgb residual[model::kLobeCount];
+  TexelShading shading;
+  stratified_points(p, spp, rng, [&](double x, double y) {
+    int64_t tx = 0, ty = 0;
+    bin_destination(data, frame, bin, x, y, &tx, &ty);
+    shade_texel(data, frame, tx, ty, &shading);
+    Rgb g[model::kLobeCount];
+    control_variate(data, k, tx, ty, g);
+    for (int l = 0; l < model::kLobeCount; ++l)
+      residual[l] += shading.lobes[l] - g[l];
+  });
+  // The integral of g over the rest B = P \ A by cheap samples, stratified over B's two rectangles
+  // (the column [x0 + ax, x1) x [y0, y1) and the row [x0, x0 + ax) x [y0 + ay, y1)) in proportion
+  // to their areas, each rectangle's mean times its area.
+  const uint32_t m = remainder_samples(data, p, spp);
+  Rgb remainder[model::kLobeCount];
+  if (m > 0) {
+    const Footprint pieces[2] = {{p.x0 + ax, p.y0, p.x1, p.y1}, {p.x0, p.y0 + ay, p.x0 + ax, p.y1}};
+    const double areas[2] = {(w - ax) * h, ax * (h - ay)};
+    const double total = areas[0] + areas[1];
+    uint32_t first = areas[1] > 0.0 ? uint32_t(std::lround(double(m) * areas[0] / total)) : m;
+    if (areas[0] > 0.0 && first == 0) first = 1;
+    if (areas[1] > 0.0 && first == m) first = m > 1 ? m - 1 : m;
+    const uint32_t counts[2] = {first, m - first};
+    for (int r = 0; r < 2; ++r) {
+      if (counts[r] == 0 || !(areas[r] > 0.0)) continue;
+      Rgb piece[model::kLobeCount];
+      stratified_points(pieces[r], counts[r], rng, [&](double x, double y) {
+        int64_t tx = 0, ty = 0;
+        bin_destination(data, frame, bin, x, y, &tx, &ty);
+        control_variate(data, k, tx, ty, piece);
+      });
+      for (int l = 0; l < model::kLobeCount; ++l)
+        remainder[l] += piece[l] * (areas[r] / double(counts[r]));
+    }
+  }
+  for (int l = 0; l < model::kLobeCount; ++l)
+    out->lobes[l] += (base[l] + remainder[l]) / area + residual[l] / double(spp);
+  out->counters.samples += spp;
+  out->counters.texel_evals += spp;
+  out->counters.remainder_samples += m;
+  return {};
+}
+
+}  // namespace clothbake::eval
