@@ -344,7 +344,12 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
 
   const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
   const double direct_side = data_->options.direct_max_side;
-  const bool direct = !(w > 0.0 && h > 0.0) || (multiscale && w < direct_side && h < direct_side);
+  // A zero-area footprint is a point: the exact value over the four view bins, except in brute
+  // force, which samples it like any footprint (one view bin drawn per estimate: one BSDF
+  // evaluation per sample, what a path tracer pays per ray).
+  const bool point = !(w > 0.0 && h > 0.0);
+  const bool direct = (point && method != Method::Brute) ||
+                      (multiscale && w < direct_side && h < direct_side);
   // The unbiased form needs the compressed tables' images, and a whole period of the tile in both
   // axes of the footprint: narrower footprints are sampled exactly as brute force (the same
   // random numbers: the view bin, then the points).
@@ -354,7 +359,8 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
                          "ones have no images to integrate under the parallax); use "
                          "multiscale-paper, brute or reference with raw tables");
   const double tile = double(data_->n);
-  const bool without_cv = method == Method::Multiscale && !direct && (w < tile || h < tile);
+  const bool without_cv =
+      method == Method::Multiscale && !direct && (w < tile || h < tile);
   if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
                                                // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};

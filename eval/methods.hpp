@@ -8,8 +8,9 @@
 
 namespace clothbake::eval {
 
-// Brute force (the paper's "w/o multi-scale"): spp stratified points p in P, each shaded at its own
-// x'(p) (per-texel parallax, Eq. 2). P has positive area.
+// Brute force (the paper's "w/o multi-scale"): one view bin drawn with its weight, then spp
+// stratified points p in P, each shaded at its own x'_k(p) (per-texel parallax, Eq. 2). A
+// zero-area P is the point (x0, y0): every sample there.
 void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprint& footprint,
                  uint32_t spp, Rng& rng, Estimate* out) noexcept;
 

@@ -128,10 +128,11 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   Counters counters;
   const uint32_t spp = pass_options.spp;
 
-  // One pixel sample of pass `pass`: the primary hit's direct lighting.
-  auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
-    eval::Rng rng(pixel_seed(pass_options.seed, pass, uint64_t(py) * w + px));
-    const CameraRay cr = impl.camera.generate(px + 0.5, py + 0.5);
+  // The direct lighting at the primary hit of camera ray (x, y) (image coordinates), with `spp`
+  // evaluator samples over the pixel's footprint, or at the hit's point when path tracing.
+  auto shade_ray = [&](double x, double y, uint32_t samples, bool point, eval::Rng& rng,
+                       bool first_pass) -> Rgb {
+    const CameraRay cr = impl.camera.generate(x, y);
     const SurfaceHit hit = intersect_scene(cr.ray, scene.objects, 0.0, INFINITY);
     if (!hit.hit()) return impl.background ? impl.background->radiance(cr.ray.direction) : Rgb();
     const Object& object = scene.objects[std::size_t(hit.object)];
@@ -142,10 +143,11 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     const double wo_arr[3] = {wo.x, wo.y, wo.z};
     reader::Footprint fp{};
     if (m.cloth) {
-      fp = footprint_rectangle(hit.u * m.texels_per_unit, hit.v * m.texels_per_unit,
-                               surface_differentials(cr, hit), m.texels_per_unit);
-      counters.cloth_pixels.fetch_add(pass == 0 ? 1 : 0, std::memory_order_relaxed);
-      if (pass == 0) {
+      const double tu = hit.u * m.texels_per_unit, tv = hit.v * m.texels_per_unit;
+      fp = point ? reader::Footprint{tu, tv, tu, tv}
+                 : footprint_rectangle(tu, tv, surface_differentials(cr, hit), m.texels_per_unit);
+      counters.cloth_pixels.fetch_add(first_pass ? 1 : 0, std::memory_order_relaxed);
+      if (first_pass) {
         const double texels = (fp.x1 - fp.x0) * (fp.y1 - fp.y0);
         std::lock_guard lock(counters.mutex);
         counters.min_texels = std::min(counters.min_texels, texels);
@@ -203,15 +205,15 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
         if (!(dist > 0)) continue;
         const Vec3 wi = to / dist;
         if (occluded({shadow_origin(wi), wi}, scene.objects, 0.0, dist * (1 - 1e-9))) continue;
-        radiance += bsdf(wi, kContinuousLobes, spp) * light.intensity / (dist * dist);
+        radiance += bsdf(wi, kContinuousLobes, samples) * light.intensity / (dist * dist);
       } else if (light.type == LightType::Directional) {
         const Vec3 wi = -light.direction;
         if (occluded({shadow_origin(wi), wi}, scene.objects, 0.0, INFINITY)) continue;
-        radiance += bsdf(wi, kContinuousLobes, spp) * light.irradiance;
+        radiance += bsdf(wi, kContinuousLobes, samples) * light.irradiance;
       } else {
         const Environment& env = *impl.environments[li];
         Rgb sum_env;
-        for (uint32_t k = 0; k < spp; ++k) {
+        for (uint32_t k = 0; k < samples; ++k) {
           // Light sample, weighted by the balance heuristic against the BSDF density.
           double p_light = 0;
           const Vec3 wl = env.sample(rng.uniform(), rng.uniform(), &p_light);
@@ -246,14 +248,25 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
             sum_env += bsdf(wb, kContinuousLobes, 1) * env.radiance(wb) / (pl + p_bsdf);
           }
         }
-        radiance += sum_env / double(spp);
+        radiance += sum_env / double(samples);
         // The delta lobe: the environment straight through the gaps, V T_sheen (1 - I) L(-o).
         if (m.cloth &&
             !occluded({shadow_origin(-wo_world), -wo_world}, scene.objects, 0.0, INFINITY))
-          radiance += bsdf(-wo_world, kDeltaBit, spp) * env.radiance(-wo_world);
+          radiance += bsdf(-wo_world, kDeltaBit, samples) * env.radiance(-wo_world);
       }
     }
     return radiance;
+  };
+  // One pixel of pass `pass`: the pixel centre's footprint, or spp jittered rays.
+  auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
+    eval::Rng rng(pixel_seed(pass_options.seed, pass, uint64_t(py) * w + px));
+    if (!pass_options.path_traced) return shade_ray(px + 0.5, py + 0.5, spp, false, rng, pass == 0);
+    Rgb sum;
+    for (uint32_t k = 0; k < spp; ++k) {
+      const double u = rng.uniform(), v = rng.uniform();
+      sum += shade_ray(px + u, py + v, 1, true, rng, pass == 0 && k == 0);
+    }
+    return sum / double(spp);
   };
 
   std::atomic<uint64_t> rows_done{0};

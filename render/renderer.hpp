@@ -31,6 +31,11 @@ struct RenderOptions {
   uint64_t seed = 1;
   double time_budget = 0;  // seconds: render passes of `spp` until the budget is spent (at least
                            // one); 0: one pass
+  // Path tracing instead of footprints: each of the spp samples is a camera ray jittered over the
+  // pixel, with its own hit, its own shadow rays and the method evaluated at the hit's point (one
+  // sample: brute force then pays one BSDF evaluation per ray), as a path tracer without a
+  // multi-scale model renders (docs/rendering.md, "Path-traced brute force").
+  bool path_traced = false;
   eval::TableChoice tables = eval::TableChoice::Auto;
   bool parallax = true;  // false: the model without parallax offsets (near-field comparison)
   // The sheen table (docs/sheen.md): the published one by default, as other renderers use.

@@ -125,7 +125,8 @@ Action setup_report(CLI::App& app) {
   app.add_flag("--large", *large,
                "stability: bake the table case at 2048^2 instead of 256^2 (minutes, ~2 GB)");
   auto et = std::make_shared<ErrorTimeOptions>();
-  std::string methods = "multiscale,multiscale-paper,brute", spp = "1,2,4,8,16,32,64";
+  std::string methods = "multiscale,multiscale-paper,brute,brute-path",
+              spp = "1,2,4,8,16,32,64,128,256";
   auto m = std::make_shared<std::string>(methods);
   auto s = std::make_shared<std::string>(spp);
   app.add_option("--methods", *m, "error-time: methods to compare (default " + methods + ")");

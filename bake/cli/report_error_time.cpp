@@ -96,13 +96,23 @@ void write_error_png(const fs::path& path, const render::RenderResult& a,
 }  // namespace
 
 int run_error_time_report(const ErrorTimeOptions& o) {
-  std::vector<eval::Method> methods;
+  // A rendered method: the evaluator's, over the pixel footprint, or brute force path-traced.
+  struct Method {
+    std::string name;
+    eval::Method method;
+    bool path_traced;
+  };
+  std::vector<Method> methods;
   for (const std::string& name : o.methods) {
     eval::Method m;
-    if (!eval::parse_method(name.c_str(), &m) || m == eval::Method::Reference)
-      throw CLI::ValidationError(
-          "--methods", "unknown method '" + name + "' (multiscale, multiscale-paper, brute)");
-    methods.push_back(m);
+    if (name == "brute-path")
+      methods.push_back({name, eval::Method::Brute, true});
+    else if (eval::parse_method(name.c_str(), &m) && m != eval::Method::Reference)
+      methods.push_back({name, m, false});
+    else
+      throw CLI::ValidationError("--methods", "unknown method '" + name +
+                                                  "' (multiscale, multiscale-paper, brute, "
+                                                  "brute-path)");
   }
   if (methods.empty()) throw CLI::ValidationError("--methods", "no method given");
   if (o.spp.empty()) throw CLI::ValidationError("--spp", "no spp given");
@@ -198,22 +208,24 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   // Each method's first render at 1 spp, untimed in the rows: it builds what the method reads on
   // first use (its time is reported as `warmup`).
   nlohmann::json warmup = nlohmann::json::object();
-  for (eval::Method m : methods) {
+  for (const Method& m : methods) {
     render::RenderOptions ro;
-    ro.method = m;
+    ro.method = m.method;
+    ro.path_traced = m.path_traced;
     ro.spp = 1;
     ro.seed = o.seed + 31337;
-    warmup[eval::method_name(m)] = renderer.render(ro).stats.seconds;
+    warmup[m.name] = renderer.render(ro).stats.seconds;
   }
   std::vector<Row> rows;
-  for (eval::Method m : methods)
+  for (const Method& m : methods)
     for (uint32_t spp : o.spp) {
       render::RenderOptions ro;
-      ro.method = m;
+      ro.method = m.method;
+      ro.path_traced = m.path_traced;
       ro.spp = spp;
       ro.seed = o.seed;
       Row row;
-      row.method = eval::method_name(m);
+      row.method = m.name;
       row.spp = spp;
       row.image = renderer.render(ro);
       row.seconds = row.image.stats.seconds;
@@ -221,17 +233,18 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       rows.push_back(std::move(row));
     }
   // Each method's bias: its largest-spp render against a second one with another seed.
-  for (eval::Method m : methods) {
+  for (const Method& m : methods) {
     const Row* last = nullptr;
     for (const Row& r : rows)
-      if (r.method == eval::method_name(m) && (!last || r.spp > last->spp)) last = &r;
+      if (r.method == m.name && (!last || r.spp > last->spp)) last = &r;
     render::RenderOptions ro;
-    ro.method = m;
+    ro.method = m.method;
+    ro.path_traced = m.path_traced;
     ro.spp = last->spp;
     ro.seed = o.seed + 7777;
     const double bias = bias_estimate(last->image, renderer.render(ro), reference);
     for (Row& r : rows)
-      if (r.method == eval::method_name(m)) r.bias = bias;
+      if (r.method == m.name) r.bias = bias;
   }
   auto curve = [&](const std::string& method) {
     std::vector<std::pair<double, double>> pts;  // (seconds, relmse) by seconds
@@ -249,56 +262,66 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   nlohmann::json summary = nlohmann::json::object();
   const auto brute = curve("brute");
   nlohmann::json grid = nlohmann::json::array();
+  // A baseline's cost at a target error: interpolated inside its sweep (log-log on the error axis);
+  // outside, a bound: its cheapest render when even that is more accurate (an upper bound of the
+  // speedup), its costliest when even that is less accurate (a lower bound). `field` picks the
+  // cost: seconds or spp.
+  struct AtError {
+    double cost;
+    const char* bound;  // "none", "upper" or "lower" (of the speedup)
+  };
+  auto baseline_at = [&](const std::string& baseline, double target, bool spp) -> AtError {
+    std::vector<std::pair<double, double>> pts;  // (cost, relmse) by decreasing error
+    for (const Row& r : rows)
+      if (r.method == baseline) pts.push_back({spp ? double(r.spp) : r.seconds, r.relmse});
+    std::sort(pts.begin(), pts.end(),
+              [](const auto& x, const auto& y) { return x.second > y.second; });
+    const double c = loglog_at(pts, target, true);
+    if (std::isfinite(c)) return {c, "none"};
+    double worst = 0, cheapest = INFINITY, costliest = 0;
+    for (const auto& [cost, err] : pts) {
+      worst = std::max(worst, err);
+      cheapest = std::min(cheapest, cost);
+      costliest = std::max(costliest, cost);
+    }
+    return worst <= target ? AtError{cheapest, "upper"} : AtError{costliest, "lower"};
+  };
   if (operating && !brute.empty()) {
-    // Brute force's time at the operating point's error (log-log on the error axis), and its
-    // error at the operating point's time.
-    std::vector<std::pair<double, double>> by_error = brute;
-    std::sort(by_error.begin(), by_error.end(),
-              [](const auto& a, const auto& b) { return a.second > b.second; });
-    // Brute force's time at a target error: interpolated inside its sweep; outside, a bound: its
-    // fastest render when even that is more accurate (an upper bound of the speedup), its slowest
-    // when even that is less accurate (a lower bound).
-    struct AtError {
-      double seconds;
-      const char* bound;  // "none", "upper" or "lower" (of the speedup)
-    };
-    auto brute_time_at = [&](double target) -> AtError {
-      const double t = loglog_at(by_error, target, true);
-      if (std::isfinite(t)) return {t, "none"};
-      double worst = 0, fastest = INFINITY, slowest = 0;
-      for (const auto& [sec, err] : brute) {
-        worst = std::max(worst, err);
-        fastest = std::min(fastest, sec);
-        slowest = std::max(slowest, sec);
-      }
-      return worst <= target ? AtError{fastest, "upper"} : AtError{slowest, "lower"};
-    };
-    const AtError at = brute_time_at(operating->relmse);
+    const AtError at = baseline_at("brute", operating->relmse, false);
     const double e_equal_time = loglog_at(brute, operating->seconds, false);
     summary["operating_point"] = {{"method", "multiscale"},
                                   {"spp", operating->spp},
                                   {"seconds", operating->seconds},
                                   {"relmse", operating->relmse}};
+    // Every other method at the operating spp against each brute-force baseline present: the
+    // equal-error ratio in time and in samples per pixel (the paper's Table 1 columns), and the
+    // error ratio at equal time.
     summary["pairs"] = nlohmann::json::array();
-    for (const Row& r : rows) {
-      if (r.method == "brute" || r.spp != operating->spp) continue;
-      const AtError a = brute_time_at(r.relmse);
-      const double e = loglog_at(brute, r.seconds, false);
-      summary["pairs"].push_back(
-          {{"method", r.method},
-           {"against", "brute"},
-           {"spp", r.spp},
-           {"equal_error_speedup", a.seconds / r.seconds},
-           {"equal_error_speedup_bound", a.bound},
-           {"equal_time_error_ratio",
-            std::isfinite(e) ? nlohmann::json(e / r.relmse) : nlohmann::json(nullptr)}});
+    for (const std::string& baseline : {std::string("brute"), std::string("brute-path")}) {
+      if (curve(baseline).empty()) continue;
+      for (const Row& r : rows) {
+        if (r.method == "brute" || r.method == "brute-path" || r.spp != operating->spp) continue;
+        const AtError t = baseline_at(baseline, r.relmse, false);
+        const AtError n = baseline_at(baseline, r.relmse, true);
+        const double e = loglog_at(curve(baseline), r.seconds, false);
+        summary["pairs"].push_back(
+            {{"method", r.method},
+             {"against", baseline},
+             {"spp", r.spp},
+             {"equal_error_speedup", t.cost / r.seconds},
+             {"equal_error_speedup_bound", t.bound},
+             {"equal_error_spp_ratio", n.cost / double(r.spp)},
+             {"equal_error_spp_ratio_bound", n.bound},
+             {"equal_time_error_ratio",
+              std::isfinite(e) ? nlohmann::json(e / r.relmse) : nlohmann::json(nullptr)}});
+      }
     }
-    summary["equal_error_speedup"] = at.seconds / operating->seconds;
+    summary["equal_error_speedup"] = at.cost / operating->seconds;
     // "none": interpolated; "lower": brute force never reached the error within the sweep (the
     // speedup is at least this); "upper": even its fastest render was more accurate (at most this).
     summary["equal_error_speedup_bound"] = at.bound;
     summary["brute_at_equal_error"] = {
-        {"seconds", std::string(at.bound) == "none" ? nlohmann::json(at.seconds) : nullptr}};
+        {"seconds", std::string(at.bound) == "none" ? nlohmann::json(at.cost) : nullptr}};
     summary["equal_time_error_ratio"] = std::isfinite(e_equal_time)
                                             ? nlohmann::json(e_equal_time / operating->relmse)
                                             : nlohmann::json(nullptr);
@@ -341,7 +364,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   if (o.raw_tables) {
     const uint32_t spp = *std::max_element(o.spp.begin(), o.spp.end());
     tables = {{"spp", spp}, {"methods", nlohmann::json::object()}};
-    for (eval::Method m : methods) {
+    for (const Method& method : methods) {
+      const eval::Method m = method.method;
       if (m == eval::Method::Brute) continue;  // reads no table
       render::RenderOptions ro;
       ro.method = m;
@@ -448,6 +472,19 @@ int run_error_time_report(const ErrorTimeOptions& o) {
                 : bound == "lower" ? " (brute force never got there in the sweep)"
                                    : "");
   }
+  if (summary.contains("pairs"))
+    for (const auto& pair : summary["pairs"]) {
+      if (pair["method"] != "multiscale") continue;
+      auto bound = [&](const char* key) {
+        const std::string b = pair[key].get<std::string>();
+        return b == "lower" ? ">" : b == "upper" ? "<" : "";
+      };
+      std::printf("  multi-scale at %u spp against %s at equal error: %s%.3gx in time, %s%.3gx in "
+                  "samples per pixel\n",
+                  pair["spp"].get<uint32_t>(), pair["against"].get<std::string>().c_str(),
+                  bound("equal_error_speedup_bound"), pair["equal_error_speedup"].get<double>(),
+                  bound("equal_error_spp_ratio_bound"), pair["equal_error_spp_ratio"].get<double>());
+    }
   if (!tables.is_null())
     for (const auto& [name, t] : tables["methods"].items())
       std::printf(

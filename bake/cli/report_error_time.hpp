@@ -14,8 +14,10 @@ namespace clothbake::cli {
 
 struct ErrorTimeOptions {
   std::string scene, output, cache;
-  std::vector<std::string> methods = {"multiscale", "multiscale-paper", "brute"};
-  std::vector<uint32_t> spp = {1, 2, 4, 8, 16, 32, 64};
+  // brute-path: brute force path-traced (render::RenderOptions::path_traced), as a renderer without
+  // a multi-scale model pays it: a camera ray, a hit and shadow rays per sample.
+  std::vector<std::string> methods = {"multiscale", "multiscale-paper", "brute", "brute-path"};
+  std::vector<uint32_t> spp = {1, 2, 4, 8, 16, 32, 64, 128, 256};
   uint32_t reference_spp = 256;  // light samples of the reference with environment lights
   int width = 0, height = 0;     // > 0: render at this size instead of the scene camera's
   uint64_t seed = 1;

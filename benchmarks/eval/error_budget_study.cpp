@@ -9,10 +9,11 @@
 // E[g] / E[f] - 1, the bias a shading that kept only the base term would have. Stages of g, each
 // adding one approximation to the one before, all at the sample's own destination t = x'(p):
 //
-//   V        f with V(t, i) replaced by the cluster mean v_c(i) (every lobe: V multiplies all)
+//   V        f with V(t, i) replaced by the cluster's visibility: the mean v_c(i), or the low-rank
+//            form (--ranks) (every lobe: V multiplies all)
 //   V,kG     ... and the specular lobe's k(t) G(t) by per-cluster constants: k_c the cluster's mean
-//            albedo, G_c Eq. 10's attenuation at the cluster's representative texel (its fibre
-//            nearest the cluster mean), for this (i, o)
+//            albedo, G_c Eq. 10's attenuation at a representative fibre (variants below), for
+//            this (i, o)
 //   V,kG,D   ... and I(t) D_t(h) by the Integral-Radiance table value T(t, h) (binned, 4 bins)
 //
 // and the couplings of the last g, i.e. where it is evaluated for a sample p:
@@ -22,15 +23,26 @@
 //            whole tiles is then a per-bin table (the push-forward of each bin), exact
 //   nearest  the same with the bin of largest weight (no extra randomness)
 //   4 bins   the weighted sum of g at the four bins' destinations (4 evaluations of g)
-//   shift    p + the footprint's mean offset (today's unbiased form: the footprint tables)
+//   shift    p + the footprint's mean offset (the unbiased form before format 1.6)
 //   split    "bin" on the whole-tile block A of P (the largest block of whole periods at P's
 //            corner), "shift" on the rest: what a footprint of any size can integrate exactly
 //
-// Clusterings: the asset's (its stored v_c grid, the evaluator's k_c and representative texels),
-// and the asset's split by yarn (label x yarn id; v_c the exact cluster mean of V at i).
+// Clusterings: the asset's (its stored v_c grid), the asset's split by yarn (label x yarn id; v_c
+// the exact cluster mean of V at i), and those of --ranks and --yarn-ranks.
+//   block B  g averaged over the destinations of the B x B source block containing p (drawn bin):
+//            a pull-back exactly integrable over any footprint from block prefix sums
 //
 //   error_budget_study ASSET... [--samples N] [--positions K] [--lobes all|specular|both]
-//                               [--sizes a,b,...] [--detail]
+//                               [--sizes a,b,...] [--ranks r,...] [--yarn-ranks r,...]
+//                               [--depth-model] [--untilted-g] [--g-per-cluster] [--oracle-g]
+//                               [--shipped] [--estimates K] [--detail]
+// Defaults are the shipped estimator's choices: f with results interpolated between view bins
+// (--depth-model: the depth interpolated, the model before format 1.6), G at the yarn's
+// representative fibre turned normal to h (--untilted-g: not turned; --g-per-cluster: the
+// cluster's fibre; --oracle-g: the least-squares constant). --ranks adds clusterings split by yarn
+// with a visibility basis of these ranks fitted here, --yarn-ranks the same with one cluster per
+// yarn. The last section measures the shipped estimator itself (Method::Multiscale against
+// Method::Brute at 1 spp, K estimates per pair and position; --shipped: only that section).
 // Footprints: the tile and squares of the given sides (default 32,128,384,512), each at K random
 // positions (default 8; 1 for whole multiples of the tile). The 16 (i, o) pairs: lights (0,0,1),
 // (0.3,0.1,0.95), (0.6,0.3,0.74), (0.85,0.2,0.49) x views (-0.1,0.1,0.99), (-0.4,0.1,0.85),
@@ -256,7 +268,7 @@ struct Config {
   bool detail = false;
   int estimates = 4000;         // --estimates: per pair and position, for the shipped section
   bool only_shipped = false;    // --shipped: only the shipped estimator's section
-  bool result_model = false;    // f interpolates results between parallax view bins
+  bool result_model = true;     // results interpolated between view bins (--depth-model: depths)
   std::vector<int> ranks;       // low-rank visibility variants (yarn-split clusters)
   std::vector<int> yarn_ranks;  // the same with one cluster per yarn
 };
@@ -277,11 +289,10 @@ struct PairTables {
 };
 constexpr int kBlockSizes[4] = {1, 4, 8, 16};
 
-bool oracle_g = false;
-bool projected_g = false;
-bool g_per_yarn = false;  // --g-per-yarn: the representative fibre of the cluster's yarn  //
-                          // --projected-g: G_c at the representative fibre turned normal to h  //
-                          // --oracle-g: the least-squares k G constant per cluster and (i, o)
+// Variants of the control variate's G (the defaults are the shipped estimator's):
+bool oracle_g = false;    // --oracle-g: the least-squares k G constant per cluster and (i, o)
+bool projected_g = true;  // the representative fibre turned normal to h (--untilted-g: as is)
+bool g_per_yarn = true;   // the yarn's representative fibre (--g-per-cluster: the cluster's)
 
 PairTables make_tables(const EvalData& d, const Clustering& cl, const double wi[3],
                        const double wo[3], LobeMask mask) {
@@ -709,16 +720,16 @@ int main(int argc, char** argv) {
     const std::string opt = argv[a];
     if (opt == "--detail") {
       cfg.detail = true;
-    } else if (opt == "--g-per-yarn") {
-      g_per_yarn = true;
-    } else if (opt == "--projected-g") {
-      projected_g = true;
+    } else if (opt == "--g-per-cluster") {
+      g_per_yarn = false;
+    } else if (opt == "--untilted-g") {
+      projected_g = false;
     } else if (opt == "--oracle-g") {
       oracle_g = true;
     } else if (opt == "--shipped") {
       cfg.only_shipped = true;
-    } else if (opt == "--result-model") {
-      cfg.result_model = true;
+    } else if (opt == "--depth-model") {
+      cfg.result_model = false;
     } else if (opt.rfind("--", 0) == 0 && a + 1 < argc) {
       const char* value = argv[++a];
       if (opt == "--samples" && (cfg.samples = std::atoi(value)) > 0) continue;
@@ -762,7 +773,9 @@ int main(int argc, char** argv) {
   if (assets.empty()) {
     std::fprintf(stderr,
                  "usage: error_budget_study ASSET... [--samples N] [--positions K] "
-                 "[--lobes all|specular|both] [--sizes a,b,...] [--detail]\n");
+                 "[--lobes all|specular|both] [--sizes a,b,...] [--ranks r,...] "
+                 "[--yarn-ranks r,...] [--depth-model] [--untilted-g] [--g-per-cluster] "
+                 "[--oracle-g] [--shipped] [--estimates K] [--detail]\n");
     return 2;
   }
   for (const std::string& path : assets) {

@@ -141,7 +141,15 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   const auto info =
       test_support::detail::spawn({"/usr/bin/oiiotool", "--info", (out / "grid.png").string()});
   EXPECT_EQ(info.code, 0) << info.err;
-  EXPECT_EQ(j["rows"].size(), 3u * 4u);
+  EXPECT_EQ(j["rows"].size(), 4u * 4u);  // four methods (brute-path too) at four spp
+  // Multi-scale against both brute-force baselines, in time and in samples per pixel.
+  int pairs = 0;
+  for (const auto& p : j["summary"]["pairs"])
+    if (p["method"] == "multiscale") {
+      ++pairs;
+      EXPECT_GT(p["equal_error_spp_ratio"].get<double>(), 0.0) << p.dump();
+    }
+  EXPECT_EQ(pairs, 2);
   const double speedup = j["summary"]["equal_error_speedup"].get<double>();
   EXPECT_TRUE(std::isfinite(speedup) && speedup > 0) << speedup;
   for (const auto& row : j["rows"])

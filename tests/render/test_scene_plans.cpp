@@ -147,8 +147,8 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   const nlohmann::json report = nlohmann::json::parse(run.out);
   EXPECT_EQ(report["scene_plan"]["half_vector_bins_kept"], used);
   const nlohmann::json info = info_of(out);
-  // The planned hierarchical parallax (format 1.5).
-  EXPECT_EQ(info["format"]["minor"], 5);
+  // The planned hierarchical parallax (format 1.5) and the clusters' visibility basis (1.6).
+  EXPECT_EQ(info["format"]["minor"], 6);
   EXPECT_TRUE(info["scene_plan"]["transmission_left_out"].get<bool>());
   EXPECT_EQ(info["scene_plan"]["half_vector_bins_kept"], used);
   std::map<std::string, int> count;
@@ -199,13 +199,14 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
 // The renderer: a planned asset rendered with another light than its plan's falls back to brute
 // force for the estimates outside the plan and counts them; the scene of the plan needs none.
 TEST(ScenePlanBake, TheRendererCountsItsOutOfPlanFallbacks) {
-  const fs::path scene = write_scene("fallback.toml", plane_scene("[0, 0, 3]", kFrontLight, 2));
+  // Footprints of two tiles: multiscale reads the tables there (narrower ones are brute force).
+  const fs::path scene = write_scene("fallback.toml", plane_scene("[0, 0, 3]", kFrontLight, 20));
   const std::string asset = (assets().dir / "fallback.cbk").string();
   ASSERT_EQ(
       run_clothbake({"bake", twill_toml(), "--scene", scene.string(), "-o", asset, "--quiet"}).code,
       0);
   auto render = [&](const char* light) {
-    std::string text = plane_scene("[0, 0, 3]", light, 2);
+    std::string text = plane_scene("[0, 0, 3]", light, 20);
     text = std::regex_replace(text, std::regex("fabric = \"[^\"]*\""), "asset = \"" + asset + "\"");
     const fs::path s = write_scene("fallback-render.toml", text);
     const auto r = run_clothbake(
@@ -313,17 +314,18 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
       // The plan does not make the picture worse: the planned render is as far from the reference
       // as the full one, within the budget (relative), where the per-texel visibility is the
       // full asset's (the two renders then share their noise). With fewer visibility directions
-      // the expected picture is the same (above) but the noise is not shared and differs: a few
-      // per cent more per sample on the far swatch (docs/scene-plans.md), and over this test's
-      // ~100 pixels the two relMSE estimates scatter by tens of per cent, so only a gross loss
-      // is an error here.
+      // the expected picture is the same (above) but the noise is not shared and differs: the
+      // ASGs fitted on 12^2 directions are less low-rank, so the multi-scale control variate's
+      // residual grows (2.3 times the variance on this test's far swatch, docs/scene-plans.md),
+      // and over this test's ~100 pixels the two relMSE estimates scatter by tens of per cent, so
+      // only a gross loss is an error here.
       bool fewer_visibility_directions = false;
       for (const auto& what : f["left_out"])
         fewer_visibility_directions |=
             what.get<std::string>().find("visibility light directions") != std::string::npos;
       EXPECT_LE(f["relmse"]["planned_vs_reference"].get<double>(),
                 f["relmse"]["full_vs_reference"].get<double>() *
-                    (fewer_visibility_directions ? 2.0 : 1 + f["budget"].get<double>()))
+                    (fewer_visibility_directions ? 3.0 : 1 + f["budget"].get<double>()))
           << name << ": " << f.dump();
       EXPECT_TRUE(f["relmse"].contains("full_vs_reference"));
       EXPECT_TRUE(f["relmse"].contains("planned_vs_reference"));
