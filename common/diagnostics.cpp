@@ -12,6 +12,12 @@ namespace {
 std::mutex g_mutex;
 std::vector<std::string> g_warnings;
 std::atomic<bool> g_quiet{false};
+std::atomic<std::string (*)(std::string_view)> g_filter{nullptr};
+
+std::string shown(const std::string& message) {
+  const auto filter = g_filter.load();
+  return filter ? filter(message) : message;
+}
 
 spdlog::logger& logger() {
   static std::shared_ptr<spdlog::logger> instance = [] {
@@ -31,15 +37,19 @@ void warn(const std::string& message) {
     std::lock_guard lock(g_mutex);
     g_warnings.push_back(message);
   }
-  if (!g_quiet) logger().warn("warning: {}", message);
+  if (!g_quiet) logger().warn("warning: {}", shown(message));
 }
 
 void info(const std::string& message) {
-  if (!g_quiet) logger().info("{}", message);
+  if (!g_quiet) logger().info("{}", shown(message));
 }
 
 void report_error(const std::string& message) {
-  logger().error("error: {}", message);
+  logger().error("error: {}", shown(message));
+}
+
+void set_message_filter(std::string (*filter)(std::string_view)) {
+  g_filter = filter;
 }
 
 void set_quiet(bool quiet) {

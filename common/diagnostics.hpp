@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace clothbake {
@@ -13,6 +14,10 @@ void warn(const std::string& message);
 void info(const std::string& message);
 // Prints "clothbake: error: MESSAGE" on stderr, always.
 void report_error(const std::string& message);
+// Every message that warn(), info() and report_error() print passes through `filter` first
+// (recorded warnings stay as given); nullptr prints them as given. clothbake's main() sets
+// cli::terminal_safe, so that control bytes in file names and keys never reach a terminal raw.
+void set_message_filter(std::string (*filter)(std::string_view));
 // Suppresses warn()/info() output (warnings are still recorded).
 void set_quiet(bool quiet);
 bool is_quiet();

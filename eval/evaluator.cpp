@@ -344,10 +344,12 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
 
   const double w = footprint.x1 - footprint.x0, h = footprint.y1 - footprint.y0;
   const double direct_side = data_->options.direct_max_side;
-  // A zero-area footprint is a point: the exact value over the four view bins, except in brute
-  // force, which samples it like any footprint (one view bin drawn per estimate: one BSDF
-  // evaluation per sample, what a path tracer pays per ray).
-  const bool point = !(w > 0.0 && h > 0.0);
+  // A zero-area footprint is a point (below 1e-12 texel^2 a footprint is its corner point for
+  // every method: its area weights would lose their digits; a 1e-150 square gave 0, a 5e-324 one
+  // NaN; docs/hardening.md): the exact value over the four view bins, except in brute force, which
+  // samples it like any footprint (one view bin drawn per estimate: one BSDF evaluation per
+  // sample, what a path tracer pays per ray).
+  const bool point = !(w * h >= 1e-12);
   const bool direct = (point && method != Method::Brute) ||
                       (multiscale && w < direct_side && h < direct_side);
   // The unbiased form needs the compressed tables' images, and a whole period of the tile in both
@@ -372,12 +374,14 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   }
   if (direct) {
     out->counters.direct = true;
-    s = exact_average(*data_, frame, footprint, 0, out);
+    const Footprint corner{footprint.x0, footprint.y0, footprint.x0, footprint.y0};
+    s = exact_average(*data_, frame, point ? corner : footprint, 0, out);
   } else if (method == Method::Reference) {
     s = exact_average(*data_, frame, footprint, 0, out);
   } else if (method == Method::Brute || without_cv) {
     out->counters.without_control_variate = without_cv;
-    brute_force(*data_, frame, footprint, spp, rng, out);
+    const Footprint corner{footprint.x0, footprint.y0, footprint.x0, footprint.y0};
+    brute_force(*data_, frame, point ? corner : footprint, spp, rng, out);
   } else if (method == Method::MultiscalePaper) {
     s = paper_control_variates(*data_, frame, footprint, spp, rng, out);
   } else {

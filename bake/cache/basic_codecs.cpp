@@ -5,6 +5,7 @@
 
 #include "bake/cache/codec.hpp"
 #include "fabric/fabric.hpp"
+#include "formats/reader/metadata_limits.hpp"
 #include "formats/writer/asset_writer.hpp"
 
 namespace clothbake::cache {
@@ -159,9 +160,45 @@ std::vector<formats::Section> decode_sections(ByteReader& r) {
     } else {
       s.payload.assign(bytes.begin(), bytes.end());
     }
+    // Checked as the writer would check it, but as bad input (a corrupt entry), not a bug.
+    if (const std::string problem = formats::section_problem(s); !problem.empty())
+      throw_input_error("section " + formats::section_label(s.type, s.instance) + ": " + problem);
     out.push_back(std::move(s));
   }
   return out;
+}
+
+// Refuses (Error(Input)) CBOR nested deeper than an asset's metadata may be
+// (reader::kMaxMetadataDepth arrays and maps: stage parameters end up there), before the recursive
+// decoder sees it: a SAX pass that stops at the first level too deep.
+void check_cbor_nesting(const std::vector<uint8_t>& cbor) {
+  struct DepthLimit : nlohmann::json_sax<nlohmann::json> {
+    std::size_t depth = 0;
+    bool too_deep = false;
+    bool open() {
+      too_deep = ++depth > reader::kMaxMetadataDepth;
+      return !too_deep;
+    }
+    bool null() override { return true; }
+    bool boolean(bool) override { return true; }
+    bool number_integer(number_integer_t) override { return true; }
+    bool number_unsigned(number_unsigned_t) override { return true; }
+    bool number_float(number_float_t, const string_t&) override { return true; }
+    bool string(string_t&) override { return true; }
+    bool binary(binary_t&) override { return true; }
+    bool start_object(std::size_t) override { return open(); }
+    bool key(string_t&) override { return true; }
+    bool end_object() override { return --depth, true; }
+    bool start_array(std::size_t) override { return open(); }
+    bool end_array() override { return --depth, true; }
+    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+      return false;
+    }
+  } sax;
+  nlohmann::json::sax_parse(cbor, &sax, nlohmann::json::input_format_t::cbor);
+  if (sax.too_deep)
+    throw_input_error("JSON nested deeper than " + std::to_string(reader::kMaxMetadataDepth) +
+                      " levels");
 }
 
 }  // namespace
@@ -178,7 +215,7 @@ void add_basic_codecs(Codecs& codecs) {
           w.str(s);
       },
       [](ByteReader& r) {
-        std::vector<std::string> v(std::size_t(r.pod<uint64_t>()));
+        std::vector<std::string> v(r.count(sizeof(uint64_t)));  // each at least its length
         for (auto& s : v)
           s = r.str();
         return v;
@@ -187,7 +224,11 @@ void add_basic_codecs(Codecs& codecs) {
   codecs.add<nlohmann::json>(
       "json/cbor",
       [](const nlohmann::json& j, ByteWriter& w) { w.vec(nlohmann::json::to_cbor(j)); },
-      [](ByteReader& r) { return nlohmann::json::from_cbor(r.vec<uint8_t>()); });
+      [](ByteReader& r) {
+        const std::vector<uint8_t> cbor = r.vec<uint8_t>();
+        check_cbor_nesting(cbor);  // nlohmann's CBOR reader recurses once per level
+        return nlohmann::json::from_cbor(cbor);
+      });
   codecs.add<std::vector<formats::Section>>("sections/2", encode_sections, decode_sections);
   codecs.add<Fabric>("fabric/1", encode_fabric, decode_fabric);
 }

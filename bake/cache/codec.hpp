@@ -129,6 +129,14 @@ class ByteReader {
     p_ += n * sizeof(T);
     return v;
   }
+  // A u64 count of items that each take at least `min_bytes` of what is left: refused
+  // (Error(Input) "truncated") when they cannot fit, so that a claimed count never allocates more
+  // than the entry's own size.
+  std::size_t count(std::size_t min_bytes) {
+    const uint64_t n = pod<uint64_t>();
+    if (min_bytes > 0 && n > uint64_t(end_ - p_) / min_bytes) throw_input_error("truncated value");
+    return std::size_t(n);
+  }
   bool done() const { return p_ == end_; }
 
  private:

@@ -190,12 +190,15 @@ void DiskCache::release(const std::string& stage) {
 // checks the header, index and trailer; a payload is read and checked when a stage reads it.
 bool DiskCache::read_entry(const std::string& path, const pipeline::Stage& stage, const Key& key,
                            pipeline::Artifacts& out) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
+  // Non-blocking: a FIFO in place of an entry must not stop the bake (it is refused below).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0 && errno == ENOENT) return false;
   std::string problem;
   try {
+    if (fd < 0) throw_input_error("cannot open it: " + errno_text());
     struct stat st {};
     if (::fstat(fd, &st) != 0) throw_input_error(errno_text());
+    if (!S_ISREG(st.st_mode)) throw_input_error("not a regular file");
     const uint64_t size = uint64_t(st.st_size);
     auto read_at = [&](uint64_t offset, uint64_t n) {
       if (offset > size || n > size - offset) throw_input_error("truncated");
@@ -216,10 +219,19 @@ bool DiskCache::read_entry(const std::string& path, const pipeline::Stage& stage
     const uint64_t sum = t.pod<uint64_t>();
     if (index_offset < 32 || index_offset > size - 24 || index_size != size - 24 - index_offset)
       throw_input_error("bad trailer");
-    std::vector<std::byte> head = read_at(0, 32);
+    // The declared size is checked before anything is allocated for it.
+    if (index_size > kMaxEntryIndexBytes)
+      throw_input_error("an index of " + std::to_string(index_size) + " bytes (at most " +
+                        std::to_string(kMaxEntryIndexBytes) + ")");
+    const std::vector<std::byte> head = read_at(0, 32);
     const std::vector<std::byte> index = read_at(index_offset, index_size);
-    head.insert(head.end(), index.begin(), index.end());
-    if (XXH3_64bits(head.data(), head.size()) != sum) throw_input_error("checksum mismatch");
+    XXH3_state_t* state = XXH3_createState();
+    XXH3_64bits_reset(state);
+    XXH3_64bits_update(state, head.data(), head.size());
+    XXH3_64bits_update(state, index.data(), index.size());
+    const uint64_t computed = XXH3_64bits_digest(state);
+    XXH3_freeState(state);
+    if (computed != sum) throw_input_error("checksum mismatch");
     ByteReader r(head.data(), 32);
     char magic[8];
     for (char& c : magic)
@@ -245,10 +257,11 @@ bool DiskCache::read_entry(const std::string& path, const pipeline::Stage& stage
       values.put_deferred(name, *codec->type, [=](pipeline::Artifacts& into) {
         std::string why;
         try {
-          const int f = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+          const int f = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
           if (f < 0) throw_input_error("it was removed");
           struct stat fst {};
-          if (::fstat(f, &fst) != 0 || uint64_t(fst.st_size) < offset + bytes) {
+          if (::fstat(f, &fst) != 0 || !S_ISREG(fst.st_mode) ||
+              uint64_t(fst.st_size) < offset + bytes) {
             ::close(f);
             throw_input_error("'" + name + "' is truncated");
           }
@@ -335,7 +348,21 @@ bool DiskCache::load(const pipeline::Stage& stage, const pipeline::Artifacts& av
   ::utimensat(AT_FDCWD, path.c_str(), nullptr, 0);  // most recently used
   publish(stage, *key);
   ++counts_->hits;
+  hit_paths_.insert(path);
   return true;
+}
+
+bool DiskCache::discard_hits(const std::string& why) {
+  const bool any = !hit_paths_.empty();
+  for (const std::string& path : hit_paths_) {
+    std::error_code ec;
+    fs::remove(path, ec);
+    ++counts_->corrupt;
+    warn("cache entry " + path + " is corrupt (its values fail a check: " + why +
+         "): removed, recomputing");
+  }
+  hit_paths_.clear();
+  return any;
 }
 
 bool DiskCache::store(const pipeline::Stage& stage, const pipeline::Artifacts& available,

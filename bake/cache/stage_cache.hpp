@@ -16,7 +16,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
+#include <vector>
 
 #include "bake/cache/codec.hpp"
 #include "bake/pipeline/stage.hpp"
@@ -24,7 +26,10 @@
 namespace clothbake::cache {
 
 inline constexpr uint64_t kDefaultCacheMaxBytes = uint64_t(10) << 30;  // 10 GiB
-inline constexpr uint32_t kCacheSchema = 3;  // bump when the entry layout or a codec changes
+inline constexpr uint32_t kCacheSchema = 4;  // bump when the entry layout or a codec changes
+// Largest index an entry may declare (its outputs' names, tags, offsets and checksums: a few
+// hundred bytes in practice); checked before anything is read or allocated for it.
+inline constexpr uint64_t kMaxEntryIndexBytes = uint64_t(1) << 20;
 // Subfolder of finished assets that scene renders keep beside the entries (bake/cli/scene_bake):
 // counted by cache_info as stage "asset" and bounded with the entries (least recently used out).
 inline constexpr const char* kAssetFolder = "assets";
@@ -48,6 +53,8 @@ struct CacheCounts {
   int unstored = 0;  // ran, could not be stored (no codec, cache not writable)
 };
 
+// Serves exactly one bake: it memoises the digests of artifacts by name as the bake runs, so a
+// second bake (another fabric) needs a DiskCache of its own; any number may share one folder.
 class DiskCache final : public pipeline::StageCache {
  public:
   // Creates the folder if needed. A folder that cannot be created or written is warned about
@@ -62,6 +69,7 @@ class DiskCache final : public pipeline::StageCache {
             pipeline::Artifacts& produced) override;
   bool store(const pipeline::Stage& stage, const pipeline::Artifacts& available,
              const pipeline::Artifacts& produced) override;
+  bool discard_hits(const std::string& why) override;
   const CacheCounts& counts() const { return *counts_; }
   // Keys of the stages seen so far (stage name -> 32 hex digits); the last one of a bake (the
   // compress stage's, or any stage's) identifies the bake's computed content.
@@ -93,6 +101,7 @@ class DiskCache final : public pipeline::StageCache {
   std::map<std::string, std::optional<Key>> content_;   // memoised content digests
   std::map<std::string, std::pair<Key, int>> pending_;  // stage -> key, lock fd
   std::map<std::string, std::string> keys_;
+  std::set<std::string> hit_paths_;  // entries answered from since the last discard_hits
 };
 
 struct CacheInfo {

@@ -113,32 +113,6 @@ compress::CompressRequest compress_request(const BakeOptions& o) {
   return r;
 }
 
-// The bake's peak memory estimated from the fabric's settings alone, before any map is decoded
-// (bake/stages/memory_estimate.hpp); throws Error(Input) naming the [bake] keys when it exceeds
-// max_memory. Nullopt when the settings cannot be read: the load reports that.
-std::optional<stages::MemoryEstimate> check_memory(const BakeOptions& o,
-                                                   const compress::CompressRequest& compression,
-                                                   uint64_t max_memory) {
-  const auto peek = peek_fabric_settings(o.fabric);
-  if (!peek) return std::nullopt;
-  stages::MemoryEstimateInput in;
-  in.bake = peek->bake;
-  in.compression = compress::resolve_compress_settings(peek->bake, compression);
-  in.image_maps = peek->image_maps;
-  in.threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  const auto list = stages::bake_stages();
-  try {
-    for (const pipeline::Stage* s :
-         pipeline::plan_stages(list, o.stages, {"fabric_path", "output"}))
-      in.stages.push_back(s->name);
-  } catch (const Error&) {
-    in.stages.clear();  // an unknown stage name: every stage (the bake reports the name after)
-  }
-  stages::MemoryEstimate estimate = stages::estimate_bake_memory(in);
-  stages::check_memory_estimate(estimate, in.bake, double(max_memory), o.fabric);
-  return estimate;
-}
-
 void print_stage_list(bool json) {
   // The explicit list: the order in which a full bake runs the stages.
   const auto list = stages::bake_stages();
@@ -234,7 +208,7 @@ Action setup_bake(CLI::App& app) {
     // Before any map is decoded or generated: a bake that cannot fit is refused in milliseconds
     // instead of failing (or being killed) after minutes.
     const std::optional<stages::MemoryEstimate> estimate =
-        check_memory(*o, compression, max_memory);
+        stages::check_fabric_memory(o->fabric, compression, o->stages, o->threads, max_memory);
 
     pipeline::BakeRequest request;
     request.fabric_path = o->fabric;
@@ -268,6 +242,9 @@ Action setup_bake(CLI::App& app) {
       stage_cache = std::make_unique<cache::DiskCache>(cache_options, stages::artifact_codecs());
       request.run.cache = stage_cache.get();
     }
+    // The asset is renamed into place last, after the report, the depfile and stdout succeeded:
+    // a command that fails leaves no asset (and the previous one intact).
+    request.defer_commit = true;
     const pipeline::BakeResult result = pipeline::bake(request, stages::bake_stages());
 
     nlohmann::json report = pipeline::bake_report_json(request, result);
@@ -293,6 +270,19 @@ Action setup_bake(CLI::App& app) {
         estimate ? stages::memory_estimate_json(*estimate) : nlohmann::json(nullptr);
     report["memory_estimate"]["max_memory_bytes"] = max_memory;
     report["warnings"] = take_warnings();
+    std::string depfile;  // its text first: a path no depfile can hold fails before any write
+    if (!o->depfile.empty()) {
+      std::vector<std::string> deps;
+      for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
+        deps.push_back(input.path);
+      if (planned) deps.push_back(o->scene);
+      if (const std::string exe = current_executable(); !exe.empty()) deps.push_back(exe);
+      depfile = depfile_text(o->depfile_target.empty() ? o->output : o->depfile_target, deps);
+    }
+    if (o->json) {
+      print_json(report);
+      require_stdout_written();
+    }
     if (!o->report.empty()) {
       const std::string text =
           report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
@@ -300,15 +290,8 @@ Action setup_bake(CLI::App& app) {
           o->report, [&](formats::Sink& sink) { sink.write(text.data(), text.size()); },
           report_output);
     }
-    if (!o->depfile.empty()) {
-      std::vector<std::string> deps;
-      for (const auto& input : result.run.artifacts.get<Fabric>("fabric").inputs)
-        deps.push_back(input.path);
-      if (planned) deps.push_back(o->scene);
-      if (const std::string exe = current_executable(); !exe.empty()) deps.push_back(exe);
-      write_depfile(o->depfile, o->depfile_target.empty() ? o->output : o->depfile_target, deps);
-    }
-    if (o->json) print_json(report);
+    if (!o->depfile.empty()) formats::write_text_atomically(o->depfile, depfile);
+    if (result.asset.pending) result.asset.pending->commit();
     // An unchanged asset is not rewritten, so no TempFile cleaned up after a killed earlier bake.
     if (result.asset.unchanged) formats::remove_stale_temp_files(result.asset.path);
     if (result.asset.unchanged)

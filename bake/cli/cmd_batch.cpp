@@ -7,6 +7,7 @@
 // and never more than fit in --max-memory by their measured peaks. Exit 0 when every fabric is
 // baked or up to date, 2 when any failed (after all ran), 1 for a bad command line.
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -25,9 +26,11 @@
 #include <thread>
 
 #include "bake/cache/stage_cache.hpp"
+#include "bake/cli/batch_stamp.hpp"
 #include "bake/cli/command.hpp"
 #include "bake/cli/depfile.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_files.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -68,10 +71,6 @@ struct Job {
   std::chrono::steady_clock::time_point start;
 };
 
-int64_t mtime_ns(const struct stat& st) {
-  return int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
-}
-
 std::string state_dir(const BatchOptions& o) {
   return (fs::path(o.output_dir) / ".clothbake-batch").string();
 }
@@ -82,6 +81,9 @@ std::string options_key(const BatchOptions& o) {
   return o.scene.empty() ? "bake defaults" : "bake --scene " + fs::absolute(o.scene).string();
 }
 
+// Largest fabric list read: 16 MiB (some 100 000 paths); checked before reading.
+constexpr std::size_t kMaxListBytes = std::size_t(16) << 20;
+
 std::vector<Job> list_jobs(const BatchOptions& o) {
   std::vector<std::string> fabrics;
   std::error_code ec;
@@ -91,8 +93,8 @@ std::vector<Job> list_jobs(const BatchOptions& o) {
     if (ec) throw_input_error("cannot list " + o.source + ": " + ec.message());
     std::sort(fabrics.begin(), fabrics.end());
   } else {
-    std::ifstream in(o.source);
-    if (!in) throw_input_error("cannot read the fabric list " + o.source);
+    // A regular file of bounded size: a FIFO, /dev/zero or a device is refused at once.
+    std::istringstream in(inputs::read_file_bytes(o.source, "fabric list", kMaxListBytes));
     const fs::path base = fs::path(o.source).parent_path();
     std::string line;
     while (std::getline(in, line)) {
@@ -122,95 +124,50 @@ std::vector<Job> list_jobs(const BatchOptions& o) {
         jobs[i].status = "failed";
         jobs[i].note = "two fabrics map to " + output + ": also " + others + " (rename one)";
       }
-  for (auto& j : jobs)
-    if (j.status == "pending" && !fs::is_regular_file(j.fabric, ec)) {
+  for (auto& j : jobs) {
+    if (j.status != "pending") continue;
+    try {  // a missing file, a directory, a FIFO or device: each named as what it is
+      inputs::require_regular_file(j.fabric);
+    } catch (const Error& e) {
       j.status = "failed";
-      j.note = j.fabric + " does not exist";
+      j.note = e.what();
     }
+  }
   return jobs;
 }
 
-std::string stamp_path(const BatchOptions& o, const Job& j) {
+std::string stamp_file(const BatchOptions& o, const Job& j) {
   return (fs::path(state_dir(o)) / (j.name + ".stamp.json")).string();
 }
 
-// Up to date: a stamp of the same tool and options, the output unchanged since (size, mtime),
-// every input unchanged (size and mtime, or else the same content hash). Fills j.peak.
+StampKey stamp_key(const BatchOptions& o, const Job& j) {
+  return {CLOTHBAKE_VERSION_STRING, current_executable(), options_key(o), j.fabric, j.output};
+}
+
+// Up to date: the fabric's stamp holds (batch_stamp.hpp). Fills j.peak and j.size.
 bool up_to_date(const BatchOptions& o, Job& j, std::string* why) {
-  std::ifstream in(stamp_path(o, j));
-  if (!in) {
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(stamp_file(o, j), ec))) {
     *why = "never baked";
     return false;
   }
-  nlohmann::json stamp;
-  try {
-    stamp = nlohmann::json::parse(in);
-  } catch (...) {
-    *why = "unreadable stamp";
-    return false;
+  StampCheck check;
+  try {  // a stamp that is not a regular file of bounded size reads as unreadable
+    check = check_stamp(inputs::read_file_bytes(stamp_file(o, j), "stamp", kMaxListBytes),
+                        stamp_key(o, j));
+  } catch (const Error&) {
+    check.why = "unreadable stamp";
   }
-  j.peak = stamp.value("peak_rss_bytes", uint64_t(0));
-  if (stamp.value("tool", "") != CLOTHBAKE_VERSION_STRING ||
-      stamp.value("exe", "") != current_executable()) {
-    *why = "another clothbake";
-    return false;
-  }
-  if (stamp.value("options", "") != options_key(o) || stamp.value("fabric", "") != j.fabric) {
-    *why = "other options";
-    return false;
-  }
-  struct stat st {};
-  if (::stat(j.output.c_str(), &st) != 0 || uint64_t(st.st_size) != stamp["output"]["size"] ||
-      mtime_ns(st) != stamp["output"]["mtime_ns"].get<int64_t>()) {
-    *why = "output missing or changed";
-    return false;
-  }
-  j.size = uint64_t(st.st_size);
-  for (const auto& input : stamp["inputs"]) {
-    const std::string path = input["path"];
-    if (::stat(path.c_str(), &st) != 0) {
-      *why = path + " is gone";
-      return false;
-    }
-    if (uint64_t(st.st_size) == input["size"] && mtime_ns(st) == input["mtime_ns"].get<int64_t>())
-      continue;
-    // Touched: the content decides.
-    std::string hash;
-    try {
-      hash = inputs::hash_file(path, path);
-    } catch (const Error&) {
-    }
-    if (hash != input["xxh64"]) {
-      *why = path + " changed";
-      return false;
-    }
-  }
-  return true;
+  j.peak = check.peak_rss_bytes;
+  j.size = check.output_size;
+  *why = check.why;
+  return check.up_to_date;
 }
 
 void write_stamp(const BatchOptions& o, const Job& j, const nlohmann::json& report) {
-  nlohmann::json stamp;
-  stamp["tool"] = CLOTHBAKE_VERSION_STRING;
-  stamp["exe"] = current_executable();
-  stamp["options"] = options_key(o);
-  stamp["fabric"] = j.fabric;
-  stamp["peak_rss_bytes"] = report["total"]["peak_rss_bytes"];
-  stamp["seconds"] = report["total"]["wall_seconds"];
-  struct stat st {};
-  ::stat(j.output.c_str(), &st);
-  stamp["output"] = {{"size", uint64_t(st.st_size)}, {"mtime_ns", mtime_ns(st)}};
-  nlohmann::json files = nlohmann::json::array();
-  for (const auto& input : report["inputs"]) {
-    const std::string path = input["path"];
-    struct stat ist {};
-    ::stat(path.c_str(), &ist);
-    files.push_back({{"path", path},
-                     {"size", uint64_t(ist.st_size)},
-                     {"mtime_ns", mtime_ns(ist)},
-                     {"xxh64", input["xxh64"]}});
-  }
-  stamp["inputs"] = files;
-  formats::write_text_atomically(stamp_path(o, j), stamp.dump(1) + "\n");
+  formats::write_text_atomically(
+      stamp_file(o, j),
+      make_stamp(stamp_key(o, j), o.scene.empty() ? "" : fs::absolute(o.scene).string(), report));
 }
 
 std::vector<std::string> bake_arguments(const BatchOptions& o, const Job& j, int threads,
@@ -316,7 +273,8 @@ int emit_slurm(const BatchOptions& o, const std::vector<Job>& jobs, uint64_t pea
   int failed = 0;
   for (const auto& j : jobs)
     if (j.status == "failed") {
-      std::cerr << "clothbake: " << j.fabric << ": " << j.note << "\n";
+      std::cerr << "clothbake: " << terminal_safe(j.fabric) << ": " << terminal_safe(j.note)
+                << "\n";
       ++failed;
     }
   if (o.json) {
@@ -327,8 +285,8 @@ int emit_slurm(const BatchOptions& o, const std::vector<Job>& jobs, uint64_t pea
                 {"cpus_per_task", cpus},
                 {"failed", failed}});
   } else {
-    std::cout << "wrote " << script << " (" << todo.size() << " tasks); submit with: sbatch "
-              << script << "\n";
+    std::cout << "wrote " << terminal_safe(script) << " (" << todo.size()
+              << " tasks); submit with: sbatch " << terminal_safe(script) << "\n";
   }
   return failed ? int(ExitCode::Input) : 0;
 }
@@ -356,11 +314,12 @@ Action setup_batch(CLI::App& app) {
     const uint64_t max_memory = max_memory_option(o->max_memory, 0.8);
     if (!o->cache_max_size.empty()) (void)cache::parse_size(o->cache_max_size, "--cache-max-size");
     if (!o->scene.empty()) inputs::require_regular_file(o->scene, "--scene");
+    // The list first: a source that names no fabric leaves no OUTDIR behind.
+    std::vector<Job> jobs = list_jobs(*o);
     std::error_code ec;
     fs::create_directories(state_dir(*o), ec);
     if (ec)
       throw_input_error("cannot create the output folder " + o->output_dir + ": " + ec.message());
-    std::vector<Job> jobs = list_jobs(*o);
     uint64_t known_peak = 0;
     for (auto& j : jobs) {
       if (j.status != "pending") continue;
@@ -459,18 +418,19 @@ Action setup_batch(CLI::App& app) {
                   {"max_memory_bytes", max_memory},
                   {"wall_seconds", wall}});
     } else {
+      // Names and notes hold paths: escaped for the terminal (docs/cli.md).
       std::size_t width = 6;
       for (const auto& j : jobs)
-        width = std::max(width, j.name.size());
+        width = std::max(width, terminal_safe(j.name).size());
       std::cout << std::left << std::setw(int(width) + 2) << "fabric" << std::setw(12) << "status"
                 << std::setw(10) << "seconds" << std::setw(12) << "size"
                 << "note\n";
       for (const auto& j : jobs) {
         std::ostringstream secs;
         secs << std::fixed << std::setprecision(2) << j.seconds;
-        std::cout << std::left << std::setw(int(width) + 2) << j.name << std::setw(12) << j.status
-                  << std::setw(10) << secs.str() << std::setw(12)
-                  << (j.size ? human_size(j.size) : "-") << j.note << "\n";
+        std::cout << std::left << std::setw(int(width) + 2) << terminal_safe(j.name)
+                  << std::setw(12) << j.status << std::setw(10) << secs.str() << std::setw(12)
+                  << (j.size ? human_size(j.size) : "-") << terminal_safe(j.note) << "\n";
       }
       std::cout << baked << " baked, " << fresh << " up to date, " << failed << " failed in "
                 << std::fixed << std::setprecision(2) << wall << " s\n";

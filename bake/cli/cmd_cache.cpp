@@ -7,6 +7,7 @@
 #include "bake/cache/stage_cache.hpp"
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "common/error.hpp"
 
 namespace clothbake::cli {
@@ -50,11 +51,12 @@ Action setup_cache(CLI::App& app) {
                     {"temporary_files", i.temporary_files},
                     {"stages", stages}});
       } else {
-        std::cout << dir << ": " << i.entries << " entries, " << i.bytes << " bytes";
+        std::cout << terminal_safe(dir) << ": " << i.entries << " entries, " << i.bytes << " bytes";
         if (i.temporary_files) std::cout << ", " << i.temporary_files << " temporary files";
         std::cout << '\n';
         for (const auto& [stage, v] : i.per_stage)
-          std::cout << "  " << stage << ": " << v.first << " entries, " << v.second << " bytes\n";
+          std::cout << "  " << terminal_safe(stage) << ": " << v.first << " entries, " << v.second
+                    << " bytes\n";
       }
       return 0;
     }

@@ -73,6 +73,10 @@ int run_eval(const EvalCliOptions& o) {
     throw CLI::ValidationError("--method", "unknown method '" + o.method + "'");
   if (o.spp == 0) throw CLI::ValidationError("--spp", "must be at least 1");
   if (o.repeat == 0) throw CLI::ValidationError("--repeat", "must be at least 1");
+  if (double(o.spp) * double(o.repeat) > kMaxEvalSamples)
+    throw CLI::ValidationError("--repeat", "--spp " + std::to_string(o.spp) + " x --repeat " +
+                                               std::to_string(o.repeat) +
+                                               " samples: at most 2^32 (4294967296) are accepted");
   const std::array<double, 4> r = parse_rect(o.rect);
   const std::array<double, 3> wi = parse_direction(o.wi, "--wi");
   const std::array<double, 3> wo = parse_direction(o.wo, "--wo");

@@ -6,6 +6,7 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_report.hpp"
 #include "bake/inputs/map_stats.hpp"
@@ -33,7 +34,7 @@ Action setup_inspect(CLI::App& app) {
       doc["fabric"] = options->fabric;
       print_json(doc);
     } else {
-      std::cout << inspect_text(loaded, stats, warnings);
+      std::cout << terminal_safe_lines(inspect_text(loaded, stats, warnings));
       std::cout.flush();
     }
     return 0;

@@ -11,6 +11,7 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_report.hpp"
 #include "bake/inputs/fabric_write.hpp"
@@ -98,9 +99,9 @@ Action setup_pattern(CLI::App& app) {
     } else {
       std::cout << fmt::format("wrote {} files ({}x{} maps of '{}') to {}\n", files.size(),
                                loaded.fabric.maps.resolution, loaded.fabric.maps.resolution,
-                               loaded.fabric.name, o->output);
+                               terminal_safe(loaded.fabric.name), terminal_safe(o->output));
       for (const auto& f : files)
-        std::cout << "  " << f.path << "\n";
+        std::cout << "  " << terminal_safe(f.path) << "\n";
       std::cout.flush();
     }
     return 0;

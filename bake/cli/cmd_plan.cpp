@@ -13,6 +13,7 @@
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/cli/scene_plan.hpp"
+#include "bake/cli/terminal_text.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -29,19 +30,21 @@ int run_plan(const PlanCliOptions& o) {
     print_json(plan_json(plan));
     return 0;
   }
-  std::printf("plan for %s (error budget %.3g %%)\n", plan.scene.c_str(), 100 * plan.max_error);
+  std::printf("plan for %s (error budget %.3g %%)\n", terminal_safe(plan.scene).c_str(),
+              100 * plan.max_error);
   if (plan.fabrics.empty()) std::printf("  no object names a fabric: nothing to plan\n");
   for (const FabricPlan& p : plan.fabrics) {
     const render::ObjectUsage& u = p.usage;
-    std::printf("%s: %s (%d^2 texels)\n", p.object_name.c_str(), p.fabric_path.c_str(),
-                p.resolution);
+    std::printf("%s: %s (%d^2 texels)\n", terminal_safe(p.object_name).c_str(),
+                terminal_safe(p.fabric_path).c_str(), p.resolution);
     std::printf(
         "  %llu pixels; footprints %.3g / %.3g / %.3g / %.3g texels (min / 5%% / median / "
         "max)\n",
         static_cast<unsigned long long>(u.pixels), u.footprint_min, u.footprint_p05,
         u.footprint_median, u.footprint_max);
     for (const auto& d : p.decisions)
-      std::printf("  %-28s %-9s %s\n", d.item.c_str(), d.decision.c_str(), d.reason.c_str());
+      std::printf("  %-28s %-9s %s\n", d.item.c_str(), d.decision.c_str(),
+                  terminal_safe(d.reason).c_str());
     std::printf(
         "  estimate: %.3g MB and %.3g s baked with the plan, %.3g MB and %.3g s without "
         "(%.1fx smaller, %.1fx faster; sizes before entropy coding, measured stage rates)\n",
@@ -50,7 +53,7 @@ int run_plan(const PlanCliOptions& o) {
         double(p.estimate.full_bytes) / double(std::max<uint64_t>(p.estimate.planned_bytes, 1)),
         p.estimate.full_seconds / std::max(p.estimate.planned_seconds, 1e-9));
     for (const auto& w : p.warnings)
-      std::printf("  warning: %s\n", w.c_str());
+      std::printf("  warning: %s\n", terminal_safe(w).c_str());
   }
   return 0;
 }

@@ -20,6 +20,7 @@
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/cli/scene_bake.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/scene_load.hpp"
 #include "common/error.hpp"
 #include "render/image_output.hpp"
@@ -66,12 +67,13 @@ int run_render(const RenderCliOptions& o) {
   if (!eval::parse_method(o.method.c_str(), &method))
     throw CLI::ValidationError("--method", "unknown method '" + o.method + "'");
   if (o.spp == 0) throw CLI::ValidationError("--spp", "must be at least 1");
-  if (!(o.time_budget >= 0) || !std::isfinite(o.time_budget))
-    throw CLI::ValidationError("--time-budget", "must be a finite number of seconds >= 0");
+  if (!(o.time_budget >= 0) || !(o.time_budget <= kMaxTimeBudgetSeconds))
+    throw CLI::ValidationError("--time-budget", "must be a number of seconds in [0, 86400]");
   if (o.threads < 0) throw CLI::ValidationError("--threads", "must be >= 0 (0: all cores)");
   render::check_output_path(o.output);
 
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
+  check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp, "--spp");
   bake_scene_fabrics(loaded, o.cache, /*quiet=*/true);
   std::unique_ptr<tbb::global_control> limit;
   if (o.threads > 0)
@@ -113,12 +115,13 @@ int run_render(const RenderCliOptions& o) {
                 {"footprint_texels", {s.footprint_texels_min, s.footprint_texels_max}}});
     return 0;
   }
-  std::printf("rendered %s: %dx%d, %s, %u spp x %u pass(es), %.3g s\n", o.scene.c_str(),
-              result.width, result.height, eval::method_name(method), o.spp, s.passes, s.seconds);
+  std::printf("rendered %s: %dx%d, %s, %u spp x %u pass(es), %.3g s\n",
+              terminal_safe(o.scene).c_str(), result.width, result.height,
+              eval::method_name(method), o.spp, s.passes, s.seconds);
   std::printf("  cloth pixels %llu, footprints %.3g to %.3g texels, %llu estimates\n",
               static_cast<unsigned long long>(s.cloth_pixels), s.footprint_texels_min,
               s.footprint_texels_max, static_cast<unsigned long long>(s.estimates));
-  std::printf("  %s\n  %s\n", files.exr.c_str(), files.png.c_str());
+  std::printf("  %s\n  %s\n", terminal_safe(files.exr).c_str(), terminal_safe(files.png).c_str());
   return 0;
 }
 

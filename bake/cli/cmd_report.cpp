@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -69,7 +70,8 @@ std::vector<T> positive_list(const std::string& text, const std::string& option)
                         {.expected = integers ? "a comma-separated list of positive integers"
                                               : "a comma-separated list of positive numbers",
                          .integers = integers,
-                         .positive = true});
+                         .positive = true,
+                         .max = integers ? double(std::numeric_limits<int>::max()) : 1e308});
   return std::vector<T>(values.begin(), values.end());
 }
 

@@ -7,6 +7,7 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "common/diagnostics.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/metadata_json.hpp"
@@ -76,9 +77,10 @@ Action setup_validate(CLI::App& app) {
                   {"findings", list}});
     } else {
       for (const auto& f : findings)
-        std::cout << f.id << (f.warning ? " warning: " : " error: ") << f.message << '\n';
-      std::cout << *path << ": " << (errors ? "INVALID" : "valid") << " (" << errors << " errors, "
-                << warnings << " warnings)\n";
+        std::cout << f.id << (f.warning ? " warning: " : " error: ") << terminal_safe(f.message)
+                  << '\n';
+      std::cout << terminal_safe(*path) << ": " << (errors ? "INVALID" : "valid") << " (" << errors
+                << " errors, " << warnings << " warnings)\n";
       std::cout.flush();
     }
     return errors ? int(ExitCode::InvalidAsset) : 0;

@@ -5,17 +5,21 @@
 #include <set>
 
 #include "common/error.hpp"
-#include "formats/writer/atomic_file.hpp"
 
 namespace clothbake::cli {
 
 std::string escape_depfile_path(const std::string& path) {
   std::string out;
   std::size_t backslashes = 0;  // run of backslashes just copied
-  for (char c : path) {
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const char c = path[i];
     if (c == '\n' || c == '\r')
       throw_input_error("cannot name '" + path + "' in a depfile: the path holds a line break");
-    if (c == ' ' || c == '\t' || c == '#') {
+    if (c == ':' && (backslashes > 0 || i + 1 == path.size()))
+      throw_input_error("cannot name '" + path +
+                        "' in a depfile: GNU Make and Ninja read a ':' at the end of a path or "
+                        "after a backslash differently");
+    if (c == ' ' || c == '\t' || c == '#' || c == ':') {
       out.append(backslashes, '\\');  // double the run: it stays literal
       out.push_back('\\');
       out.push_back(c);
@@ -49,11 +53,6 @@ std::string current_executable() {
   if (n <= 0 || std::size_t(n) >= buffer.size()) return "";
   buffer.resize(std::size_t(n));
   return buffer;
-}
-
-void write_depfile(const std::string& path, const std::string& target,
-                   const std::vector<std::string>& deps) {
-  formats::write_text_atomically(path, depfile_text(target, deps));
 }
 
 }  // namespace clothbake::cli

@@ -7,10 +7,11 @@
 
 namespace clothbake::cli {
 
-// One path escaped for a depfile as both Ninja and GNU Make parse it: space and tab -> "\ " /
-// "\<tab>", '#' -> "\#", '$' -> "$$", and a run of backslashes before a space, tab or '#' doubled
-// (so that it stays literal). Throws Error(Input) naming the path for a newline or carriage
-// return, which no depfile syntax can hold.
+// One path escaped for a depfile as both Ninja (1.11) and GNU Make (4.3) parse it: space and tab
+// -> "\ " / "\<tab>", '#' -> "\#", ':' -> "\:", '$' -> "$$", and a run of backslashes before a
+// space, tab or '#' doubled (so that it stays literal). Throws Error(Input) naming the path for a
+// newline or carriage return, which no depfile syntax can hold, and for a ':' that ends the path
+// or follows a backslash, which the two read differently (Ninja keeps "\:" before a blank).
 std::string escape_depfile_path(const std::string& path);
 
 // "TARGET: \\\n  DEP \\\n  DEP\n", dependencies in the given order without duplicates, then an
@@ -19,9 +20,5 @@ std::string depfile_text(const std::string& target, const std::vector<std::strin
 
 // Path of the running executable (/proc/self/exe), or "" when it cannot be read.
 std::string current_executable();
-
-// Writes depfile_text atomically to `path` (Error(Input) when it cannot be written).
-void write_depfile(const std::string& path, const std::string& target,
-                   const std::vector<std::string>& deps);
 
 }  // namespace clothbake::cli

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/temp_registry.hpp"
@@ -41,17 +42,26 @@ void print_json(const nlohmann::json& value) {
   std::cout.flush();
 }
 
-int checked_stdout(int code) {
+void require_stdout_written() {
   // A command's output that did not reach stdout (a full disk, /dev/full, a closed pipe) is an
   // I/O error, not a success (docs/cli.md, exit code 2).
   std::cout.flush();
   errno = 0;
   const bool failed = std::cout.fail() || std::fflush(stdout) != 0 || std::ferror(stdout);
-  if (!failed) return code;
+  if (!failed) return;
   const int err = errno;
-  report_error(std::string("cannot write to standard output") +
-               (err ? std::string(": ") + std::strerror(err) : std::string()));
-  return code != 0 ? code : int(ExitCode::Input);
+  throw Error(ExitCode::Input, std::string("cannot write to standard output") +
+                                   (err ? std::string(": ") + std::strerror(err) : std::string()));
+}
+
+int checked_stdout(int code) {
+  try {
+    require_stdout_written();
+  } catch (const Error& e) {
+    report_error(e.what());
+    return code != 0 ? code : int(e.code());
+  }
+  return code;
 }
 
 }  // namespace clothbake::cli
@@ -60,6 +70,8 @@ int main(int argc, char** argv) {
   using namespace clothbake;
   // First: a Ctrl-C at any later point must not leave a temporary output file behind.
   install_temp_file_signal_handlers();
+  // Diagnostics name files and keys as given: escape what a terminal would interpret (docs/cli.md).
+  set_message_filter(&cli::terminal_safe);
   CLI::App app{
       "clothbake: offline precompute and asset baking for the multi-scale cloth appearance model"};
   app.set_version_flag("--version", std::string("clothbake ") + CLOTHBAKE_VERSION_STRING);

@@ -9,8 +9,10 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/cli/render_error.hpp"
 #include "bake/cli/scene_plan.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/scene_load.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/stages.hpp"
@@ -59,6 +61,9 @@ int run_plan_report(const PlanReportOptions& o) {
     loaded.scene.camera.width = o.width;
     loaded.scene.camera.height = o.height;
   }
+  check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp, "--spp");
+  check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.reference_spp,
+                       "--reference-spp");
   const fs::path out(o.output);
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
@@ -252,11 +257,12 @@ int run_plan_report(const PlanReportOptions& o) {
   if (o.json) {
     print_json(doc);
   } else {
-    std::printf("plan report for %s (budget %.3g %%, %dx%d, %u spp)\n", o.scene.c_str(),
-                100 * budget, w, h, unsigned(o.spp));
+    std::printf("plan report for %s (budget %.3g %%, %dx%d, %u spp)\n",
+                terminal_safe(o.scene).c_str(), 100 * budget, w, h, unsigned(o.spp));
     for (const FabricRow& row : rows) {
       std::printf("%s: %llu -> %llu bytes (%.1fx smaller), bake %.2f -> %.2f s (%.2fx)\n",
-                  row.fabric.c_str(), static_cast<unsigned long long>(row.full_bytes),
+                  terminal_safe(row.fabric).c_str(),
+                  static_cast<unsigned long long>(row.full_bytes),
                   static_cast<unsigned long long>(row.planned_bytes),
                   double(row.full_bytes) / double(std::max<uint64_t>(row.planned_bytes, 1)),
                   row.full_bake_seconds, row.planned_bake_seconds,
@@ -268,14 +274,14 @@ int run_plan_report(const PlanReportOptions& o) {
           100 * std::sqrt(std::max(row.planned_vs_full, 0.0)), row.same_seed, row.full_vs_reference,
           row.planned_vs_reference);
       for (const auto& what : row.seeds.left_out)
-        std::printf("  left out: %s\n", what.c_str());
+        std::printf("  left out: %s\n", terminal_safe(what).c_str());
     }
     std::printf("out-of-plan estimates %llu (brute-force fallback %llu, zero %llu)\n",
                 static_cast<unsigned long long>(planned_image.stats.out_of_plan),
                 static_cast<unsigned long long>(planned_image.stats.fallback_brute),
                 static_cast<unsigned long long>(planned_image.stats.fallback_zero));
     std::printf("  %s/{plan.json,side-by-side.png,full.exr,planned.exr,reference.exr,assets/}\n",
-                o.output.c_str());
+                terminal_safe(o.output).c_str());
   }
   if (!all_pass)
     throw Error(ExitCode::VerificationFailed,

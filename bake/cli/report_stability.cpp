@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/map_limits.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/stages.hpp"
@@ -563,8 +564,9 @@ std::string case_path(const BakedCase& c, const std::string& scratch) {
 
 // Bakes `c` in a child process (fork) with a time limit, so that a stage that never returns
 // becomes a failed row instead of a hung report (it once did: docs/hardening.md, "The Embree
-// hang"), and so that every case starts from a fresh process. The child writes the asset, its warnings (PATH.warnings, one a line)
-// and any error (PATH.error), and leaves with _exit. Call before this process starts TBB threads.
+// hang"), and so that every case starts from a fresh process. The child writes the asset, its
+// warnings (PATH.warnings, one a line) and any error (PATH.error), and leaves with _exit. Call
+// before this process starts TBB threads.
 BakeOutcome bake_in_child(const BakedCase& c, const std::string& scratch, int timeout_seconds) {
   BakeOutcome out;
   out.path = case_path(c, scratch);
@@ -977,7 +979,7 @@ int run_stability_report(const StabilityOptions& o) {
     std::cout.flush();
   } else {
     std::printf("stability report: %zu rows, %d failed; %s/{stability.csv,stability.json}\n",
-                rows.size(), failed, o.output.c_str());
+                rows.size(), failed, terminal_safe(o.output).c_str());
     for (const StabilityRow& r : rows)
       if (!r.pass)
         std::printf("  FAILED %s %s %s: %llu non-finite, %llu negative, max rel error %.3g\n",

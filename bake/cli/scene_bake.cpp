@@ -10,11 +10,14 @@
 #include <cerrno>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 
 #include "bake/cache/stage_cache.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/pipeline/resource_usage.hpp"
 #include "bake/stages/cache_support.hpp"
+#include "bake/stages/memory_estimate.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "common/version.hpp"
@@ -77,10 +80,20 @@ std::string scene_cache_dir(const std::string& option) {
 void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_option, bool quiet,
                         bool keep_raw_tables) {
   std::string cache;
-  std::unique_ptr<cache::DiskCache> stage_cache;
   const cache::Codecs codecs = stages::artifact_codecs();
+  std::map<std::string, std::string> asset_of;  // fabric path -> asset: each fabric loaded once
+  compress::CompressRequest compression;
+  compression.keep_raw = keep_raw_tables;
   for (std::size_t k = 0; k < loaded.fabrics.size(); ++k) {
     if (loaded.fabrics[k].empty()) continue;
+    if (const auto it = asset_of.find(loaded.fabrics[k]); it != asset_of.end()) {
+      loaded.scene.objects[k].asset = it->second;
+      continue;
+    }
+    // The refusals `clothbake bake` makes before loading anything: a fabric too large for the
+    // machine fails here in milliseconds, naming its [bake] keys.
+    stages::check_fabric_memory(loaded.fabrics[k], compression, {}, 0,
+                                pipeline::machine_memory_bytes());
     if (cache.empty()) {
       cache = scene_cache_dir(cache_option);
       std::error_code ec;
@@ -99,11 +112,11 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
     if (fs::is_regular_file(asset, ec)) {
       ::utimensat(AT_FDCWD, asset.c_str(), nullptr, 0);  // most recently used
     } else {
-      if (!stage_cache) {
-        cache::CacheOptions options;
-        options.dir = cache;
-        stage_cache = std::make_unique<cache::DiskCache>(options, codecs);
-      }
+      // One stage cache per bake: it memoises digests by artifact name, so a cache reused for a
+      // second fabric would hand it the first fabric's records and maps.
+      cache::CacheOptions options;
+      options.dir = cache;
+      const auto stage_cache = std::make_unique<cache::DiskCache>(options, codecs);
       // From the path, as `clothbake bake f.toml` does (the asset's metadata lists load_fabric
       // among the stages), so that the asset has the bytes of that command's.
       pipeline::BakeRequest request;
@@ -111,15 +124,12 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
       request.output_path = asset.string();
       request.run.show_progress = !quiet;
       request.run.cache = stage_cache->enabled() ? stage_cache.get() : nullptr;
-      if (keep_raw_tables) {
-        compress::CompressRequest keep;
-        keep.keep_raw = true;
-        request.seeds.put(stages::kCompressSettingsArtifact, keep);
-      }
+      if (keep_raw_tables) request.seeds.put(stages::kCompressSettingsArtifact, compression);
       pipeline::bake(request, stages::bake_stages());
       stage_cache->enforce_bound();  // the asset counts towards the bound as well
     }
     loaded.scene.objects[k].asset = asset.string();
+    asset_of[loaded.fabrics[k]] = asset.string();
   }
 }
 

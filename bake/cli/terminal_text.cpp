@@ -7,7 +7,9 @@
 
 namespace clothbake::cli {
 
-std::string terminal_safe(std::string_view text) {
+namespace {
+
+std::string escaped(std::string_view text, bool keep_newlines) {
   std::string out;
   out.reserve(text.size());
   auto escape = [&out](unsigned char byte) {
@@ -19,7 +21,7 @@ std::string terminal_safe(std::string_view text) {
   while (i < text.size()) {
     const auto c = static_cast<unsigned char>(text[i]);
     if (c < 0x80) {
-      if (c < 0x20 || c == 0x7f)
+      if ((c < 0x20 || c == 0x7f) && !(keep_newlines && c == '\n'))
         escape(c);
       else
         out += char(c);
@@ -44,6 +46,16 @@ std::string terminal_safe(std::string_view text) {
     i += len;
   }
   return out;
+}
+
+}  // namespace
+
+std::string terminal_safe(std::string_view text) {
+  return escaped(text, false);
+}
+
+std::string terminal_safe_lines(std::string_view text) {
+  return escaped(text, true);
 }
 
 }  // namespace clothbake::cli

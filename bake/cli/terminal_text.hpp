@@ -11,4 +11,7 @@ namespace clothbake::cli {
 // a backslash stays as is. Valid printable UTF-8 passes unchanged.
 std::string terminal_safe(std::string_view text);
 
+// terminal_safe for text of several lines: the same, except that a line feed stays one.
+std::string terminal_safe_lines(std::string_view text);
+
 }  // namespace clothbake::cli

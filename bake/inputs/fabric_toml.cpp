@@ -153,12 +153,50 @@ void check_toml_characters(std::string_view text, const std::string& file) {
       ++k;
     return k - i;
   };
+  // Nesting, counted over the code (an upper bound of the parsed tree's depth): a table header's
+  // dotted key, then per open array or inline table of a value one level plus the dots of the key
+  // before it. toml++ caps nested values but not dotted keys, and every walk of the tree (its own
+  // destructor included) recurses once per level.
+  std::vector<std::size_t> open;                         // depth at each open '[' or '{' of a value
+  std::size_t header_depth = 0, dots = 0, key_dots = 0;  // key_dots: of the key before '='
+  bool line_start = true, in_header = false, header_fresh = false;
+  const auto depth_base = [&] {
+    return !open.empty() ? open.back() : in_header ? std::size_t(0) : header_depth;
+  };
+  const auto check_depth = [&](std::size_t at, std::size_t depth) {
+    if (depth > kMaxTomlDepth)
+      throw Error(ExitCode::Input,
+                  fmt::format("{}: keys, arrays and inline tables nest more than {} levels deep",
+                              text_location(text, at, file), kMaxTomlDepth));
+  };
   for (std::size_t i = 0; i < text.size();) {
     const char c = text[i];
     std::size_t step = 1;
     switch (in) {
       case In::Code:
         if (static_cast<unsigned char>(c) >= 0x80) refuse(i, "outside a string or comment");
+        if (c == '\n') {
+          line_start = true, dots = key_dots = 0;
+        } else if (c == '[' && in_header && header_fresh) {
+          header_fresh = false;  // the second '[' of "[[array.of.tables]]"
+        } else if (c == '[' && open.empty() && line_start) {
+          in_header = header_fresh = true, dots = 0;
+        } else if (c == '[' || c == '{') {
+          open.push_back(depth_base() + key_dots + dots + 1), dots = key_dots = 0;
+          check_depth(i, open.back());
+        } else if (c == ']' && in_header) {
+          header_depth = dots + 1, in_header = false, dots = 0;
+        } else if ((c == ']' || c == '}') && !open.empty()) {
+          open.pop_back(), dots = key_dots = 0;
+        } else if (c == '=') {
+          key_dots = dots, dots = 0;
+        } else if (c == ',') {
+          dots = key_dots = 0;
+        } else if (c == '.') {
+          check_depth(i, depth_base() + key_dots + ++dots + 1);
+        }
+        if (c != '\n' && !ascii_blank(c)) line_start = false;
+        if (c != '[' && !ascii_blank(c)) header_fresh = false;
         if (c == '#')
           in = In::Comment;
         else if (starts(i, "\"\"\""))
@@ -171,7 +209,7 @@ void check_toml_characters(std::string_view text, const std::string& file) {
           in = In::Literal;
         break;
       case In::Comment:
-        if (c == '\n') in = In::Code;
+        if (c == '\n') in = In::Code, line_start = true, dots = key_dots = 0;
         break;
       case In::Basic:
         if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n')

@@ -24,9 +24,16 @@ std::size_t edit_distance(std::string_view a, std::string_view b);
 // (distance <= 2, or <= a third of the word's length for longer words); empty otherwise.
 std::string closest_match(std::string_view word, const std::vector<std::string>& candidates);
 
+// Deepest nesting accepted in a TOML file: dotted keys, table headers, arrays and inline tables
+// together (clothbake's own files nest at most 4 levels). toml++ bounds nested values (256) but not
+// dotted keys, and walking a tree 30 000 levels deep overflows the stack.
+inline constexpr std::size_t kMaxTomlDepth = 128;
+
 // Refuses characters outside ASCII where TOML 1.0 does not allow them (outside strings and
 // comments, and after a line-ending backslash in a multi-line basic string), naming
-// FILE:LINE:COLUMN and the code point. Safe on any bytes; throws Error(Input).
+// FILE:LINE:COLUMN and the code point, and text that nests deeper than kMaxTomlDepth (dotted keys,
+// headers, arrays, inline tables: counted on the text, before any parser recurses), naming where.
+// Safe on any bytes; throws Error(Input).
 void check_toml_characters(std::string_view text, const std::string& file);
 
 // Parses TOML text after check_toml_characters. `file` is used in messages only. Syntax errors

@@ -92,10 +92,18 @@ render::Light load_light(const TomlSection& l, std::size_t index, const fs::path
     light.type = render::LightType::Environment;
     if (!l.has("map")) l.fail("map", "is required for an environment light (a lat-long EXR)");
     const std::string path = resolve(l, "map", base);
-    const Image image = read_image(path);
-    if (image.channels < 3)
-      l.fail("map", fmt::format("{} has {} channel(s); an environment map needs RGB", path,
-                                image.channels));
+    // The first three channels (RGB; others ignored), sides and pixel count checked from the
+    // header before any pixel is allocated.
+    ImageReadLimits limits;
+    limits.max_side = kMaxEnvironmentSide;
+    limits.max_pixels = kMaxEnvironmentPixels;
+    limits.first_channels = 3;
+    Image image;
+    try {
+      image = read_image(path, limits);
+    } catch (const Error& e) {
+      l.fail("map", e.what());
+    }
     render::EnvironmentMap& env = light.environment;
     env.width = image.width;
     env.height = image.height;

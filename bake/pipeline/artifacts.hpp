@@ -38,8 +38,12 @@ class Artifacts {
     auto it = values_.find(name);
     if (it == values_.end()) throw_internal_error("artifact '" + name + "' is missing");
     const Base* base = it->second.get();
-    if (const auto* deferred = dynamic_cast<const Deferred*>(base)) base = deferred->resolve();
+    const auto* deferred = dynamic_cast<const Deferred*>(base);
+    if (deferred) base = deferred->resolve();
     const auto* holder = dynamic_cast<const Holder<T>*>(base);
+    if (holder == nullptr && deferred)  // a cache entry that names another codec: bad input
+      throw Error(ExitCode::Input,
+                  "artifact '" + name + "' from the cache is not a " + typeid(T).name());
     if (holder == nullptr)
       throw_internal_error("artifact '" + name + "' is not a " + typeid(T).name());
     return holder->value;

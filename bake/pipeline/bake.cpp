@@ -24,7 +24,7 @@ BakeResult bake(const BakeRequest& request, const std::vector<Stage>& stages) {
     seeded.put("fabric", *request.fabric);
   else
     seeded.put("fabric_path", request.fabric_path);
-  seeded.put("output", OutputRequest{request.output_path, request.force});
+  seeded.put("output", OutputRequest{request.output_path, request.force, request.defer_commit});
   seeded.merge(request.seeds);
 
   BakeResult result;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -12,13 +13,15 @@
 
 #include "bake/pipeline/driver.hpp"
 #include "fabric/fabric.hpp"
+#include "formats/writer/atomic_file.hpp"
 
 namespace clothbake::pipeline {
 
 // Artifact "output": where the write stage puts the asset.
 struct OutputRequest {
   std::string path;
-  bool force = false;  // replace an existing file that is not an asset
+  bool force = false;         // replace an existing file that is not an asset
+  bool defer_commit = false;  // leave the asset at its temporary name (AssetSummary::pending)
 };
 
 // Artifact "asset": what the write stage wrote.
@@ -39,6 +42,9 @@ struct AssetSummary {
   std::vector<SectionSummary> sections;
   // The file already held these exact bytes: it was left untouched, mtime included (restat).
   bool unchanged = false;
+  // With BakeRequest::defer_commit and a changed asset: the complete asset at its temporary name,
+  // renamed over `path` by pending->commit(); dropping the last reference removes it.
+  std::shared_ptr<formats::TempFile> pending;
 };
 
 struct BakeRequest {
@@ -46,6 +52,10 @@ struct BakeRequest {
   std::optional<Fabric> fabric;  // ...unless the fabric is given (tests, library use)
   std::string output_path;
   bool force = false;
+  // The asset is written but not renamed into place: the caller commits AssetSummary::pending
+  // after its own outputs (report, depfile, stdout) have succeeded, so that a failing command
+  // leaves no asset.
+  bool defer_commit = false;
   std::vector<std::string> stages;  // --stages (empty: all)
   RunOptions run;
   // Optional artifacts available to every stage from the start, beside "fabric"/"fabric_path" and

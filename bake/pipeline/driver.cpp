@@ -33,6 +33,7 @@ RunResult run_once(const std::vector<std::string>& picked, Artifacts seeded,
     order.push_back(s->name);
 
   ProgressBar bar(options.show_progress);
+  bool cache_hits = false;  // values from the cache are checked like values from a file
   const double run_wall = wall_seconds();
   const double run_cpu = process_cpu_seconds();
   for (std::size_t i = 0; i < plan.size(); ++i) {
@@ -50,8 +51,19 @@ RunResult run_once(const std::vector<std::string>& picked, Artifacts seeded,
       stage.run(context);
     } else if (options.cache->load(stage, result.artifacts, produced)) {
       report.cache = "hit";
+      cache_hits = true;
     } else {
-      stage.run(context);
+      try {
+        stage.run(context);
+      } catch (const CacheEntryCorrupt&) {
+        throw;
+      } catch (const CachedValuesInvalid&) {
+        throw;
+      } catch (const Error& e) {
+        // A computing stage refuses only what it was given: after cache hits, the cached values.
+        if (e.code() != ExitCode::Input || !cache_hits || !stage.cacheable) throw;
+        throw CachedValuesInvalid("the " + stage.name + " stage refused them: " + e.what());
+      }
       report.cache = options.cache->store(stage, result.artifacts, produced) ? "miss" : "uncached";
     }
     report.wall_seconds = wall_seconds() - wall0;
@@ -78,12 +90,15 @@ RunResult run_once(const std::vector<std::string>& picked, Artifacts seeded,
 RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
                        const RunOptions& options, const std::vector<Stage>& stages) {
   // A corrupt cache entry found while a stage reads it has been removed: run again (each retry
-  // removes one entry, so this ends; three are plenty in practice).
+  // removes one entry, so this ends; three are plenty in practice). Values from the cache that
+  // fail a later check: their entries are removed, and the run again recomputes them.
   for (int attempt = 0;; ++attempt) {
     try {
       return run_once(picked, seeded, options, stages);
     } catch (const CacheEntryCorrupt&) {
       if (options.cache == nullptr || attempt >= 8) throw;
+    } catch (const CachedValuesInvalid& e) {
+      if (options.cache == nullptr || attempt >= 8 || !options.cache->discard_hits(e.what())) throw;
     }
   }
 }

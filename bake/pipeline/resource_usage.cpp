@@ -82,6 +82,12 @@ uint64_t machine_memory_bytes() {
   if (limit == 0) limit = cgroup_limit("/sys/fs/cgroup/memory/memory.limit_in_bytes");
   // cgroup v1 reports "no limit" as a huge number (2^63 rounded to pages): min() ignores it.
   if (limit > 0) total = std::min(total, limit);
+  // An address-space or data limit (ulimit -v / -d) ends a larger bake with an allocation failure.
+  for (const int resource : {RLIMIT_AS, RLIMIT_DATA}) {
+    struct rlimit rl {};
+    if (::getrlimit(resource, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY)
+      total = std::min(total, uint64_t(rl.rlim_cur));
+  }
   return total;
 }
 

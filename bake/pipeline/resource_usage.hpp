@@ -13,8 +13,9 @@ double wall_seconds();
 // Peak resident set size so far, bytes: VmHWM of /proc/self/status, else getrusage ru_maxrss.
 uint64_t peak_rss_bytes();
 // Memory this process can have: physical RAM (sysconf _SC_PHYS_PAGES x _SC_PAGE_SIZE), or the
-// cgroup's limit when that is smaller (cgroup v2 memory.max of the process's own cgroup, else v1
-// memory.limit_in_bytes). The default of `bake --max-memory` (all of it) and of `batch
+// cgroup's limit (cgroup v2 memory.max of the process's own cgroup, else v1
+// memory.limit_in_bytes) or the process's address-space or data limit (RLIMIT_AS, RLIMIT_DATA:
+// ulimit -v, -d) when smaller. The default of `bake --max-memory` (all of it) and of `batch
 // --max-memory` (80 %). 8 GiB when nothing can be read.
 uint64_t machine_memory_bytes();
 

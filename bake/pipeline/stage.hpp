@@ -58,6 +58,13 @@ struct CacheEntryCorrupt : Error {
   explicit CacheEntryCorrupt(const std::string& message) : Error(ExitCode::Input, message) {}
 };
 
+// Thrown when values a run took from the cache fail a check that values from a file would fail too
+// (a stage refuses an input, the asset assembled from them does not validate): run_pipeline has the
+// cache remove the entries it answered from (StageCache::discard_hits) and runs again.
+struct CachedValuesInvalid : Error {
+  explicit CachedValuesInvalid(const std::string& message) : Error(ExitCode::Input, message) {}
+};
+
 // Where finished stage outputs are kept by key (implemented in bake/cache). The driver calls
 // load() before a stage and, when it returns false, runs the stage and calls store().
 class StageCache {
@@ -70,6 +77,13 @@ class StageCache {
   // Keeps the outputs of a stage that ran. Returns false when they were not kept (the stage has
   // no key or an output has no serialiser, or the cache cannot be written: warned once).
   virtual bool store(const Stage& stage, const Artifacts& available, const Artifacts& produced) = 0;
+  // Removes every entry load() answered from since the last call, warning for each that it is
+  // corrupt (`why`), so that a run after CachedValuesInvalid recomputes them. Returns false when
+  // there was none (the failure was then not the cache's).
+  virtual bool discard_hits(const std::string& why) {
+    (void)why;
+    return false;
+  }
 };
 
 struct RunOptions {

@@ -2,6 +2,11 @@
 // The static_asserts fail the build when an encoded struct gains a field.
 #include "bake/stages/cache_support.hpp"
 
+#include <algorithm>
+#include <cmath>
+
+#include "common/error.hpp"
+
 #include "bake/stages/table_streaming.hpp"
 
 #include "cluster/visibility_clusters.hpp"
@@ -28,6 +33,22 @@ static_assert(sizeof(tables::RadianceOptions) == 4 + 4 + 8 + 8,
               "RadianceOptions changed: update the tables/streamed codec");
 static_assert(sizeof(StreamedTables) == 8 + sizeof(tables::RadianceOptions) + 6 * 24,
               "StreamedTables changed: update its codec");
+
+// Decoded values are checked as values from a file would be (docs/batch.md, "Entries"): a crafted
+// entry with correct checksums must fail here, as a corrupt entry (Error(Input)), not later.
+void require(bool ok, const std::string& what) {
+  if (!ok) throw_input_error(what);
+}
+
+template <class T>
+bool all_finite(const std::vector<T>& v) {
+  return std::all_of(v.begin(), v.end(), [](const T& x) { return std::isfinite(double(x)); });
+}
+
+// N^2 entries for a resolution N in [1, 16384] (the largest fabric, with room).
+bool per_texel(int resolution, std::size_t size) {
+  return resolution >= 1 && resolution <= 16384 && size == std::size_t(resolution) * resolution;
+}
 
 // The streaming fills are a function of their inputs and options: those are stored, the fills
 // rebuilt on decode (cheap: no values are filled until the compress stage asks).
@@ -60,6 +81,23 @@ StreamedTablesArtifact decode_streamed(ByteReader& r) {
   auto yarn_id = r.vec<uint16_t>();
   auto roughness = r.vec<double>();
   auto labels = r.vec<uint8_t>();
+  require(per_texel(resolution, tangent.size()) && gap.size() == tangent.size() &&
+              yarn_id.size() == tangent.size() && labels.size() == tangent.size(),
+          "streamed tables: inputs of other sizes than the resolution's");
+  require(cluster_count >= 1 && cluster_count <= 255 &&
+              std::all_of(labels.begin(), labels.end(),
+                          [&](uint8_t l) { return int(l) < cluster_count; }),
+          "streamed tables: a label outside the clusters");
+  require(options.bins_per_side >= 1 && options.bins_per_side <= 1024 &&
+              options.samples_per_side >= 1 && options.samples_per_side <= 1024 &&
+              std::isfinite(options.max_relative_error),
+          "streamed tables: options out of range");
+  require(std::all_of(tangent.begin(), tangent.end(),
+                      [](const Vec3f& t) {
+                        return std::isfinite(t[0]) && std::isfinite(t[1]) && std::isfinite(t[2]);
+                      }) &&
+              all_finite(gap) && all_finite(roughness),
+          "streamed tables: a value that is not finite");
   return make_streamed_tables(resolution, std::move(tangent), std::move(gap), std::move(yarn_id),
                               std::move(roughness), std::move(labels), cluster_count, options);
 }
@@ -123,6 +161,18 @@ cluster::VisibilityClusters decode_clusters(ByteReader& r) {
   k.iterations = r.pod<int32_t>();
   k.converged = r.pod<uint8_t>() != 0;
   k.empty_repairs = r.pod<int32_t>();
+  require(per_texel(c.resolution, c.labels.size()), "clusters: labels of another size");
+  require(c.clusters >= 1 && c.clusters <= 255 &&
+              std::all_of(c.labels.begin(), c.labels.end(),
+                          [&](uint8_t l) { return int(l) < c.clusters; }),
+          "clusters: a label outside the clusters");
+  require(c.visibility_dirs >= 1 && c.visibility_dirs <= 1024 &&
+              c.mean_visibility.size() ==
+                  std::size_t(c.clusters) * c.visibility_dirs * c.visibility_dirs &&
+              all_finite(c.mean_visibility) &&
+              std::all_of(c.mean_visibility.begin(), c.mean_visibility.end(),
+                          [](float v) { return v >= 0.f; }),
+          "clusters: mean visibility of another size, negative or not finite");
   return c;
 }
 
@@ -134,7 +184,18 @@ cache::Codecs artifact_codecs() {
   codecs.add<std::vector<model::AsgParams<float>>>(
       "asg_params/1",
       [](const std::vector<model::AsgParams<float>>& v, ByteWriter& w) { w.vec(v); },
-      [](ByteReader& r) { return r.vec<model::AsgParams<float>>(); });
+      [](ByteReader& r) {
+        std::vector<model::AsgParams<float>> v = r.vec<model::AsgParams<float>>();
+        require(std::all_of(v.begin(), v.end(),
+                            [](const model::AsgParams<float>& a) {
+                              return std::isfinite(a.axis.x) && std::isfinite(a.axis.y) &&
+                                     std::isfinite(a.axis.z) && std::isfinite(a.rotation) &&
+                                     std::isfinite(a.lambda) && std::isfinite(a.mu) &&
+                                     std::isfinite(a.amplitude);
+                            }),
+                "ASG lobes: a parameter that is not finite");
+        return v;
+      });
   codecs.add<cluster::VisibilityClusters>("visibility_clusters/1", encode_clusters,
                                           decode_clusters);
   codecs.add<StreamedTablesArtifact>("streamed_tables/1", encode_streamed, decode_streamed);

@@ -6,7 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <thread>
 
+#include "bake/inputs/fabric_load.hpp"
+#include "bake/pipeline/plan.hpp"
+#include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "tables/fixed_point_sat.hpp"
 #include "tables/half_vector_bins.hpp"
@@ -277,6 +281,29 @@ void check_memory_estimate(const MemoryEstimate& e, const BakeSettings& bake, do
                     s.stage + " stage (" + s.what + "); --max-memory is " +
                     format_bytes(max_bytes) + ": lower " +
                     (lower.empty() ? "the settings" : lower) + ", or raise --max-memory");
+}
+
+std::optional<MemoryEstimate> check_fabric_memory(const std::string& fabric_path,
+                                                  const compress::CompressRequest& compression,
+                                                  const std::vector<std::string>& stages,
+                                                  int threads, uint64_t max_memory) {
+  const auto peek = peek_fabric_settings(fabric_path);
+  if (!peek) return std::nullopt;
+  MemoryEstimateInput in;
+  in.bake = peek->bake;
+  in.compression = compress::resolve_compress_settings(peek->bake, compression);
+  in.image_maps = peek->image_maps;
+  in.threads = threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  const auto list = bake_stages();
+  try {
+    for (const pipeline::Stage* s : pipeline::plan_stages(list, stages, {"fabric_path", "output"}))
+      in.stages.push_back(s->name);
+  } catch (const Error&) {
+    in.stages.clear();  // an unknown stage name: every stage (the bake reports the name after)
+  }
+  MemoryEstimate estimate = estimate_bake_memory(in);
+  check_memory_estimate(estimate, in.bake, double(max_memory), fabric_path);
+  return estimate;
 }
 
 }  // namespace clothbake::stages

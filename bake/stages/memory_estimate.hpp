@@ -33,6 +33,7 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -86,5 +87,15 @@ std::string format_bytes(double bytes);
 // stage (...); --max-memory is 23.4 GiB". `where` prefixes the message (the fabric file).
 void check_memory_estimate(const MemoryEstimate& estimate, const BakeSettings& bake,
                            double max_bytes, const std::string& where);
+
+// The check every bake makes before loading its maps (`clothbake bake`, the on-the-fly bakes of a
+// scene's fabrics): the fabric's settings peeked from `fabric_path` (no map decoded), the stages
+// `stages` picks (empty or an unknown name: every stage), `threads` workers (0: every core), the
+// estimate checked against `max_memory` by check_memory_estimate (Error(Input), naming the file).
+// Nullopt when the settings cannot be read: the load then reports the error.
+std::optional<MemoryEstimate> check_fabric_memory(const std::string& fabric_path,
+                                                  const compress::CompressRequest& compression,
+                                                  const std::vector<std::string>& stages,
+                                                  int threads, uint64_t max_memory);
 
 }  // namespace clothbake::stages

@@ -15,6 +15,7 @@
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
 #include "formats/writer/same_bytes.hpp"
+#include "formats/writer/valid_asset.hpp"
 
 namespace clothbake::stages {
 namespace {
@@ -36,8 +37,12 @@ nlohmann::json metadata(StageContext& ctx, uint16_t minor) {
   m["fabric"] = fabric_metadata(ctx.input<Fabric>("fabric"));
   m["stages"] = ctx.stage_order();
   nlohmann::json parameters = nlohmann::json::object();
-  for (const auto& name : ctx.collected("metadata/"))
-    parameters[name.substr(std::string("metadata/").size())] = ctx.input<nlohmann::json>(name);
+  for (const auto& name : ctx.collected("metadata/")) {
+    const nlohmann::json& value = ctx.input<nlohmann::json>(name);
+    // Every stage writes an object; another type can only come from a crafted cache entry.
+    if (!value.is_object()) throw_input_error("'" + name + "' is not a JSON object");
+    parameters[name.substr(std::string("metadata/").size())] = value;
+  }
   m["parameters"] = parameters;
   if (ctx.options().record_timings) {
     nlohmann::json timings = nlohmann::json::array();
@@ -67,44 +72,83 @@ std::map<std::string, std::string> superseded_sections(StageContext& ctx) {
   return out;
 }
 
-void run_write(StageContext& ctx) {
-  const auto& request = ctx.input<OutputRequest>("output");
+// References to the sections the stages hold (no copy of the payloads: the raw tables alone can
+// be gigabytes), in `sections`, the superseded ones named in `omitted`; returns the metadata.
+nlohmann::json collect_sections(StageContext& ctx, std::vector<const Section*>* sections,
+                                nlohmann::json* omitted) {
   const auto superseded = superseded_sections(ctx);
-  // References to the sections the stages hold (no copy of the payloads: the raw tables alone can
-  // be gigabytes).
-  std::vector<const Section*> sections;
-  nlohmann::json omitted = nlohmann::json::array();
   for (const auto& name : ctx.collected("section/")) {
     if (auto it = superseded.find(name); it != superseded.end()) {
-      omitted.push_back({{"artifact", name}, {"superseded_by", it->second}});
+      omitted->push_back({{"artifact", name}, {"superseded_by", it->second}});
       continue;
     }
     for (const Section& s : ctx.input<std::vector<Section>>(name))
-      sections.push_back(&s);
+      sections->push_back(&s);
   }
   uint16_t minor = 0;
-  for (const Section* s : sections)
+  for (const Section* s : *sections)
     minor =
         std::max(minor, reader::format_minor_of_section(uint32_t(s->type), s->version, s->instance,
                                                         s->bytes().data(), s->bytes().size()));
   nlohmann::json meta = metadata(ctx, minor);
-  if (!omitted.empty()) meta["omitted_sections"] = omitted;
+  if (!omitted->empty()) meta["omitted_sections"] = *omitted;
+  return meta;
+}
+
+void run_write(StageContext& ctx) {
+  const auto& request = ctx.input<OutputRequest>("output");
+  // Values from the cache are checked as values from a file: what this stage refuses of them, and
+  // an asset assembled from them that does not validate, make the pipeline drop those entries and
+  // recompute (pipeline::CachedValuesInvalid); costs one validation, only after cache hits.
+  const bool from_cache = std::any_of(ctx.completed().begin(), ctx.completed().end(),
+                                      [](const auto& s) { return s.cache == "hit"; });
+  const auto refused = [&](const Error& e) {
+    if (e.code() == ExitCode::Internal || !from_cache) throw;
+    throw pipeline::CachedValuesInvalid("the write stage refused them: " + std::string(e.what()));
+  };
+  std::vector<const Section*> sections;
+  nlohmann::json omitted = nlohmann::json::array();
+  nlohmann::json meta;
+  try {
+    meta = collect_sections(ctx, &sections, &omitted);
+  } catch (const pipeline::CacheEntryCorrupt&) {
+    throw;
+  } catch (const Error& e) {
+    refused(e);
+  }
   const Section metadata_section = formats::make_metadata_section(meta);
   sections.push_back(&metadata_section);
 
   formats::OutputOptions options;
   options.force = request.force;
+  std::shared_ptr<formats::TempFile> pending;
+  options.defer_commit = &pending;
   // Restat: an existing file with exactly these bytes is left alone (mtime kept).
   const bool unchanged = formats::file_holds_asset(request.path, formats::SectionRefs(sections));
   if (!unchanged) formats::write_asset_file(request.path, formats::SectionRefs(sections), options);
+  const std::string written = pending ? pending->path().string() : request.path;
+  if (from_cache) {
+    try {
+      (void)formats::open_valid_asset(written);
+    } catch (const Error& e) {
+      refused(e);
+    }
+  }
+  if (pending && !request.defer_commit) {
+    pending->commit();
+    pending.reset();
+  }
+  const std::string summarised = pending ? pending->path().string() : request.path;
 
   // Summarise from the table order the writer used.
   AssetSummary summary;
   summary.path = request.path;
   summary.unchanged = unchanged;
+  summary.pending = pending;
   summary.size_bytes = formats::asset_size(formats::SectionRefs(sections));
   reader::Asset asset;
-  const reader::Status status = asset.open_file(request.path.c_str(), {reader::Verify::Structure});
+  const reader::Status status = asset.open_file(summarised.c_str(), {reader::Verify::Structure});
+
   if (!status.ok())
     throw_internal_error(std::string("the asset just written does not open: ") + status.message());
   summary.content_hash = hex64(asset.content_hash());

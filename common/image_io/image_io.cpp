@@ -9,7 +9,7 @@
 
 namespace clothbake {
 
-Image read_image(const std::string& path) {
+Image read_image(const std::string& path, const ImageReadLimits& limits) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     throw_input_error(fmt::format("{}: file not found", path));
@@ -25,14 +25,25 @@ Image read_image(const std::string& path) {
   if (spec.width <= 0 || spec.height <= 0)
     throw_input_error(
         fmt::format("{}: image has zero size ({}x{})", path, spec.width, spec.height));
-  if (spec.nchannels < 1 || spec.nchannels > 4)
+  if (limits.first_channels > 0 && spec.nchannels < limits.first_channels)
+    throw_input_error(fmt::format("{}: image has {} channel(s), expected at least {}", path,
+                                  spec.nchannels, limits.first_channels));
+  if (limits.first_channels == 0 && (spec.nchannels < 1 || spec.nchannels > 4))
     throw_input_error(
         fmt::format("{}: image has {} channels, expected 1 to 4", path, spec.nchannels));
-  Image image(spec.width, spec.height, spec.nchannels);
+  const uint64_t pixels = uint64_t(spec.width) * uint64_t(spec.height);
+  if (limits.max_side > 0 && (spec.width > limits.max_side || spec.height > limits.max_side))
+    throw_input_error(fmt::format("{}: image is {}x{}; at most {} pixels a side are accepted", path,
+                                  spec.width, spec.height, limits.max_side));
+  if (limits.max_pixels > 0 && pixels > limits.max_pixels)
+    throw_input_error(fmt::format("{}: image is {}x{} ({} pixels); at most {} are accepted", path,
+                                  spec.width, spec.height, pixels, limits.max_pixels));
+  const int channels = limits.first_channels > 0 ? limits.first_channels : spec.nchannels;
+  Image image(spec.width, spec.height, channels);
   image.source_format = in->format_name();
   image.source_bits = int(spec.format.size() * 8);
   image.source_is_float = spec.format.is_floating_point();
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
     std::string why = in->geterror();
     throw_input_error(
         fmt::format("{}: cannot read pixels, file truncated or corrupt ({})", path, why));

@@ -3,6 +3,8 @@
 // images are normalised to [0, 1] (OIIO's convention), with no colour-space conversion.
 #pragma once
 
+#include <cstdint>
+
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -29,9 +31,18 @@ struct Image {
   }
 };
 
+// What read_image accepts beyond its defaults; every limit is checked from the file's header,
+// before any pixel memory is allocated.
+struct ImageReadLimits {
+  int max_side = 0;         // width and height at most this; 0: no limit
+  uint64_t max_pixels = 0;  // width x height at most this; 0: no limit
+  int first_channels = 0;   // 0: every channel (1 to 4); N: only the first N, a file needs >= N
+};
+
 // Reads an image file. Throws clothbake::Error(Input) naming the path when the file is missing,
-// unreadable, truncated, empty (zero size) or has more than 4 channels.
-Image read_image(const std::string& path);
+// unreadable, truncated, empty (zero size), has more than 4 channels (unless first_channels picks
+// fewer) or fewer than first_channels, or is larger than `limits` allows.
+Image read_image(const std::string& path, const ImageReadLimits& limits = {});
 
 enum class PixelType { Float32, Half, UInt8, UInt16 };
 

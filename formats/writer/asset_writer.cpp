@@ -57,29 +57,8 @@ const char* non_finite_kind(const T& value) {
 }
 
 void check_section(const Section& s) {
-  const std::string label = section_label(s.type, s.instance);
-  if (s.dims.size() > reader::kMaxRank)
-    throw_internal_error("section " + label + ": rank " + std::to_string(s.dims.size()) +
-                         " exceeds 4");
-  if (s.version == 0) throw_internal_error("section " + label + ": payload version 0");
-  if (s.element == ElementType::Opaque) {
-    if (!s.dims.empty())
-      throw_internal_error("section " + label + ": an opaque payload has no dims");
-    return;
-  }
-  if (s.dims.empty()) throw_internal_error("section " + label + ": a typed array needs dims");
-  uint64_t expected = reader::element_size(s.element);
-  if (expected == 0) throw_internal_error("section " + label + ": unknown element type");
-  for (uint32_t d : s.dims) {
-    if (d != 0 && expected > UINT64_MAX / d)
-      throw_internal_error("section " + label + ": shape overflows 64 bits");
-    expected *= d;
-  }
-  if (s.mapped_owner && !s.payload.empty())
-    throw_internal_error("section " + label + ": both an owned and a mapped payload");
-  if (expected != s.bytes().size())
-    throw_internal_error("section " + label + ": payload has " + std::to_string(s.bytes().size()) +
-                         " bytes, its shape needs " + std::to_string(expected));
+  if (const std::string problem = section_problem(s); !problem.empty())
+    throw_internal_error("section " + section_label(s.type, s.instance) + ": " + problem);
 }
 
 reader::SectionEntry entry_of(const Section& s, uint64_t offset) {
@@ -114,6 +93,26 @@ std::string section_label(SectionType type, uint32_t instance) {
   }
   if (instance != 0) label += " instance " + std::to_string(instance);
   return label;
+}
+
+std::string section_problem(const Section& s) {
+  if (s.dims.size() > reader::kMaxRank)
+    return "rank " + std::to_string(s.dims.size()) + " exceeds 4";
+  if (s.version == 0) return "payload version 0";
+  if (s.mapped_owner && !s.payload.empty()) return "both an owned and a mapped payload";
+  if (s.element == ElementType::Opaque)
+    return s.dims.empty() ? "" : "an opaque payload has no dims";
+  if (s.dims.empty()) return "a typed array needs dims";
+  uint64_t expected = reader::element_size(s.element);
+  if (expected == 0) return "unknown element type";
+  for (uint32_t d : s.dims) {
+    if (d != 0 && expected > UINT64_MAX / d) return "shape overflows 64 bits";
+    expected *= d;
+  }
+  if (expected != s.bytes().size())
+    return "payload has " + std::to_string(s.bytes().size()) + " bytes, its shape needs " +
+           std::to_string(expected);
+  return "";
 }
 
 template <class T>

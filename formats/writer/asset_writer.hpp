@@ -45,6 +45,12 @@ struct Section {
 // "height" or "type 0x0777", plus " instance I" when instance != 0: for messages.
 std::string section_label(SectionType type, uint32_t instance);
 
+// Why `s` cannot be written (rank above 4, version 0, an opaque payload with dims, a typed array
+// without dims or of an unknown element type, both payload forms, a shape that overflows 64 bits
+// or that does not match the payload's size), or "" when it can. Safe on any values (the stage
+// cache checks decoded sections with it).
+std::string section_problem(const Section& s);
+
 // A typed-array section holding a copy of `values` with shape `dims` (slowest first). Elements are
 // float, double, reader::Half or an integer type. Throws clothbake::Error:
 //  - ExitCode::Input if a floating-point value is NaN or Inf, naming the section, the element

@@ -249,16 +249,19 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
 void write_file_atomically(const fs::path& path, const std::function<void(Sink&)>& produce,
                            const OutputOptions& options) {
   check_output_path(path, options);
-  TempFile temp(path);
-  FdSink file(temp.fd(),
-              path.string() + " (temporary file " + temp.path().filename().string() + ")");
+  auto temp = std::make_shared<TempFile>(path);
+  FdSink file(temp->fd(),
+              path.string() + " (temporary file " + temp->path().filename().string() + ")");
   if (options.wrap_sink) {
     std::unique_ptr<Sink> wrapped = options.wrap_sink(file);
     produce(*wrapped);
   } else {
     produce(file);
   }
-  temp.commit();
+  if (options.defer_commit)
+    *options.defer_commit = std::move(temp);
+  else
+    temp->commit();
 }
 
 }  // namespace clothbake::formats

@@ -19,6 +19,8 @@
 
 namespace clothbake::formats {
 
+class TempFile;
+
 struct OutputOptions {
   // Replace an existing file that is not a clothbake asset (assets are always replaceable).
   bool force = false;
@@ -27,6 +29,10 @@ struct OutputOptions {
   bool require_asset_to_replace = true;
   // Test hook: wraps the file sink (e.g. in a sink that fails after N bytes).
   std::function<std::unique_ptr<Sink>(Sink& file)> wrap_sink;
+  // When set, write_file_atomically does not rename the complete temporary file but hands it over
+  // here: the caller commits it (TempFile::commit) once its other work has succeeded, or drops it
+  // (the destructor removes it), so that a command that fails after writing leaves nothing.
+  std::shared_ptr<TempFile>* defer_commit = nullptr;
 };
 
 // Checks that `path` can be written before a long computation starts. Throws Error(Input) when:
@@ -81,7 +87,8 @@ int remove_stale_temp_files(const std::filesystem::path& destination,
 // at once, i.e. no live TempFile holds it. Returns whether it was removed; errors are ignored.
 bool remove_if_unlocked(const std::filesystem::path& path);
 
-// check_output_path, then `produce` writes into a temporary file that is committed on success.
+// check_output_path, then `produce` writes into a temporary file that is committed on success (or
+// handed over uncommitted, OutputOptions::defer_commit).
 // Anything `produce` throws propagates after the temporary file is removed.
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(Sink&)>& produce, const OutputOptions& options);

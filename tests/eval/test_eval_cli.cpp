@@ -134,5 +134,39 @@ TEST(EvalCli, BadInputHasItsExitCode) {
   EXPECT_EQ(code(with({"eval", bad.string(), "--rect", "0,0,4,4"})), 3);
 }
 
+// A footprint too small to have an area (below 1e-12 texel^2) is its corner point for every
+// method: 5e-324 gave NaN and 1e-150 gave 0 for the multi-scale methods and the reference, while
+// brute force and an exactly empty rectangle gave the point value.
+TEST(EvalCli, TinyFootprintsGiveThePointValueForEveryMethod) {
+  auto value = [&](const std::string& rect, const std::string& method) {
+    const auto run = run_clothbake({"eval", assets().twill, "--rect", rect, "--wi", "0,0,1", "--wo",
+                                    "0.3,0,1", "--method", method, "--json"});
+    EXPECT_EQ(run.code, 0) << run.err;
+    return run.code == 0 ? nlohmann::json::parse(run.out)["value"] : nlohmann::json();
+  };
+  const nlohmann::json point = value("0,0,0,0", "reference");
+  ASSERT_TRUE(point[0].is_number()) << point;
+  EXPECT_GT(point[0].get<double>(), 0.0);
+  const std::pair<const char*, const char*> cases[] = {{"5e-324", "multiscale"},
+                                                       {"5e-324", "reference"},
+                                                       {"1e-150", "multiscale-paper"},
+                                                       {"1e-150", "reference"}};
+  for (const auto& [size, method] : cases)
+    EXPECT_EQ(value(std::string("0,0,") + size + "," + size, method), point) << size << method;
+  // Brute force on a point draws one of the view's four parallax bins per estimate (docs/
+  // evaluator.md, "Brute force"): its mean is the point value, within its standard error.
+  const auto brute =
+      run_clothbake({"eval", assets().twill, "--rect", "0,0,1e-7,1e-7", "--wi", "0,0,1", "--wo",
+                     "0.3,0,1", "--method", "brute", "--repeat", "400", "--json"});
+  ASSERT_EQ(brute.code, 0) << brute.err;
+  const nlohmann::json b = nlohmann::json::parse(brute.out);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(b["value"][c].get<double>(), point[c].get<double>(),
+                4 * b["std_error"][c].get<double>() + 1e-12 * point[c].get<double>())
+        << c;
+  // A footprint of an area keeps its average (not the corner's value).
+  EXPECT_NE(value("0,0,3,3", "reference"), point);
+}
+
 }  // namespace
 }  // namespace clothbake::eval

@@ -19,15 +19,12 @@
 #include "bake/inputs/map_limits.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
+#include "tests/fuzz/fuzz_files.hpp"
 
 namespace {
 
 const std::string& scratch_file() {
-  static const std::string path = [] {
-    char dir[] = "/tmp/clothbake-fuzz-toml-XXXXXX";
-    if (!::mkdtemp(dir)) __builtin_trap();
-    return std::string(dir) + "/fabric.toml";
-  }();
+  static const std::string path = clothbake::fuzz::scratch_directory("toml") + "/fabric.toml";
   return path;
 }
 
@@ -36,12 +33,7 @@ const std::string& scratch_file() {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   clothbake::set_quiet(true);
   const std::string& path = scratch_file();
-  {
-    std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (!f) __builtin_trap();
-    if (size && std::fwrite(data, 1, size, f) != size) __builtin_trap();
-    std::fclose(f);
-  }
+  clothbake::fuzz::write_file(path, data, size);
   try {
     clothbake::LoadOptions options;
     options.resolution = 16;

@@ -2,11 +2,15 @@
 // written on failure.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "common/image_io/image_io.hpp"
 #include "tests/eval/eval_fixtures.hpp"
 
 namespace clothbake::render {
@@ -141,7 +145,8 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   const auto info =
       test_support::detail::spawn({"/usr/bin/oiiotool", "--info", (out / "grid.png").string()});
   EXPECT_EQ(info.code, 0) << info.err;
-  EXPECT_EQ(j["rows"].size(), 4u * 4u);  // four methods (brute-path too) at four spp
+  EXPECT_EQ(j["rows"].size(), 4u * 4u);                 // four methods (brute-path too) at four spp
+  EXPECT_EQ(j["pixels_compared"].get<int>(), 64 * 64);  // the plane fills the view: no silhouette
   // Multi-scale against both brute-force baselines, in time and in samples per pixel.
   int pairs = 0;
   for (const auto& p : j["summary"]["pairs"])
@@ -303,6 +308,249 @@ TEST(PlanCli, FarSwatchLeavesOutWhatTheSceneCannotSee) {
   const auto missing = run_clothbake({"plan", "/nonexistent/scene.toml"});
   EXPECT_EQ(missing.code, 2);
   EXPECT_NE(missing.err.find("/nonexistent/scene.toml"), std::string::npos) << missing.err;
+}
+
+}  // namespace
+}  // namespace clothbake::render
+
+namespace clothbake::render {
+namespace {
+
+// good_scene() with its point light replaced by an environment light of `map`.
+std::string environment_scene(const fs::path& map) {
+  std::string env = good_scene();
+  const std::string point = "type = \"point\"\nposition = [0.5, 0.5, 1.5]\nintensity = 3";
+  env.replace(env.find(point), point.size(),
+              "type = \"environment\"\nmap = \"" + map.string() + "\"");
+  return env;
+}
+
+// An EXR of 16 x 8 pixels (ZIP, 16 lines a chunk) whose header declares `side` x `side`: windows
+// patched and the line offset table grown to the declared chunks (all pointing at the one chunk
+// of pixels), so that OpenEXR opens it as a small file of a huge image (the issue's 33 KB file).
+fs::path exr_declaring(const std::string& name, int side) {
+  const fs::path map = assets().dir / name;
+  const auto made = test_support::detail::spawn(
+      {"/usr/bin/oiiotool", "--pattern", "constant:color=0.5,0.6,0.7", "16x8", "3", "-d", "half",
+       "--compression", "zip", "-o", map.string()});
+  EXPECT_EQ(made.code, 0) << made.err;
+  std::ifstream in(map, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  std::size_t p = 8;  // magic and version, then attributes: name, type, int32 size, value
+  while (bytes.at(p) != '\0') {
+    const std::string attribute = bytes.c_str() + p;
+    p += attribute.size() + 1;
+    p += std::strlen(bytes.c_str() + p) + 1;
+    int32_t size;
+    std::memcpy(&size, bytes.data() + p, 4);
+    p += 4;
+    if (attribute == "dataWindow" || attribute == "displayWindow") {
+      const int32_t box[4] = {0, 0, side - 1, side - 1};
+      std::memcpy(bytes.data() + p, box, sizeof box);
+    }
+    p += std::size_t(size);
+  }
+  const std::size_t table = p + 1;  // one chunk: one 8-byte offset
+  const uint64_t chunks = (uint64_t(side) + 15) / 16, grown = (chunks - 1) * 8;
+  uint64_t first;
+  std::memcpy(&first, bytes.data() + table, 8);
+  first += grown;
+  std::string offsets;
+  for (uint64_t k = 0; k < chunks; ++k)
+    offsets.append(reinterpret_cast<const char*>(&first), 8);
+  bytes = bytes.substr(0, table) + offsets + bytes.substr(table + 8);
+  std::ofstream(map, std::ios::binary | std::ios::trunc) << bytes;
+  return map;
+}
+
+// Environment maps: sides and pixel count are checked from the header before any pixel is
+// allocated (65536^2 declared in a small file was "out of memory", exit 4; 16000^2 took 3 GB and
+// 10 s), and channels past the first three are ignored as documented (5 channels were refused).
+TEST(RenderHardening, EnvironmentMapsAreBoundedAndExtraChannelsIgnored) {
+  const fs::path five = assets().dir / "five-channels.exr";
+  const auto made = test_support::detail::spawn({"/usr/bin/oiiotool", "--pattern",
+                                                 "constant:color=0.5,0.6,0.7,1,0.25", "16x8", "5",
+                                                 "-d", "half", "-o", five.string()});
+  ASSERT_EQ(made.code, 0) << made.err;
+  auto run = run_clothbake({"render", write_scene("env5.toml", environment_scene(five)).string(),
+                            "-o", (assets().dir / "env5.exr").string(), "--spp", "1"});
+  EXPECT_EQ(run.code, 0) << run.err;
+  const std::pair<int, const char*> declared[] = {{65536, "at most 16384 pixels a side"},
+                                                  {16000, "at most 33554432 are accepted"}};
+  for (const auto& [side, message] : declared) {
+    const fs::path map = exr_declaring("declared-" + std::to_string(side) + ".exr", side);
+    const fs::path out = assets().dir / "declared.exr";
+    const auto start = std::chrono::steady_clock::now();
+    run = run_clothbake({"render", write_scene("declared.toml", environment_scene(map)).string(),
+                         "-o", out.string()});
+    EXPECT_EQ(run.code, 2) << side << ": " << run.err;
+    EXPECT_NE(run.err.find("light[0].map"), std::string::npos) << run.err;
+    EXPECT_NE(run.err.find(message), std::string::npos) << run.err;
+    EXPECT_LT(run.max_rss_kb, 1 << 20) << side;  // 3 GB and more before
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10);
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+// Objects naming one asset share one opened asset and evaluator: 2000 of them cost what one
+// does (5000 took 2.2 GB, about 420 KB each; 15 000 ended in exit 3).
+TEST(RenderHardening, ObjectsNamingOneAssetShareIt) {
+  const std::string object = good_scene().substr(good_scene().find("[[object]]"));
+  std::string many = good_scene();
+  for (int k = 1; k < 2000; ++k)
+    many += object;
+  const auto one = run_clothbake({"render", write_scene("one.toml", good_scene()).string(), "-o",
+                                  (assets().dir / "one.exr").string(), "--spp", "1"});
+  ASSERT_EQ(one.code, 0) << one.err;
+  const auto run = run_clothbake({"render", write_scene("many.toml", many).string(), "-o",
+                                  (assets().dir / "many.exr").string(), "--spp", "1"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_LT(run.max_rss_kb, one.max_rss_kb + 100 * 1024) << one.max_rss_kb;
+}
+
+// Two different fabrics in one scene each get their own asset, the one `clothbake bake` makes: the
+// stage cache memoises digests by artifact name within one bake, and one cache shared by the
+// scene's bakes once gave the second fabric of the same resolution entries of the first.
+TEST(RenderCli, EachSceneFabricIsBakedFromItsOwnToml) {
+  const fs::path matrix = assets().dir / "red-matrix.toml";
+  std::ofstream(matrix)
+      << "name = \"red broken twill\"\n[weave]\nmatrix = [\"1100\", \"0110\", "
+         "\"1001\", \"0011\"]\n[weave.warp]\nspacing_mm = 0.15\n"
+         "[[yarn]]\nname = \"red-warp\"\nroughness = 0.7\ncolor = [0.8, 0.1, 0.1]\n"
+         "[[yarn]]\nname = \"red-weft\"\nroughness = 0.7\ncolor = [0.7, 0.1, 0.1]\n"
+         "[bake]\nresolution = 64\n";
+  std::string scene = good_scene();
+  const std::string asset_line = "asset = \"" + assets().twill + "\"";
+  scene.replace(scene.find(asset_line), asset_line.size(),
+                "fabric = \"" + (assets().dir / "twill.toml").string() + "\"");
+  scene +=
+      "[[object]]\nshape = \"plane\"\ncenter = [0, 0, 0.5]\nnormal = [0, 0, 1]\n"
+      "tangent = [1, 0, 0]\nsize = [0.5, 0.5]\nfabric = \"" +
+      matrix.string() + "\"\ntiles_per_unit = 2\n";
+  const fs::path cache = assets().dir / "cache-two-fabrics";
+  fs::remove_all(cache);
+  const auto run = run_clothbake({"render", write_scene("two-fabrics.toml", scene).string(), "-o",
+                                  (assets().dir / "two-fabrics.exr").string(), "--spp", "1",
+                                  "--cache", cache.string(), "--json"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  auto content_hash = [](const std::string& asset) {
+    const auto info = run_clothbake({"info", asset, "--json"});
+    EXPECT_EQ(info.code, 0) << info.err;
+    return info.code == 0 ? nlohmann::json::parse(info.out)["content_hash"].get<std::string>()
+                          : std::string();
+  };
+  // Each asset has the content of `clothbake bake` of its own TOML (without a cache).
+  std::map<std::string, std::string> hash_by_stem;
+  for (const auto& entry : fs::directory_iterator(cache / "assets")) {
+    const std::string file = entry.path().filename().string();
+    hash_by_stem[file.rfind("red-matrix-", 0) == 0 ? "red-matrix"
+                                                   : file.substr(0, file.find('-'))] =
+        content_hash(entry.path().string());
+  }
+  ASSERT_EQ(hash_by_stem.size(), 2u);
+  for (const char* stem : {"twill", "red-matrix"}) {
+    const fs::path alone = assets().dir / (std::string(stem) + "-alone.cbk");
+    const auto bake =
+        run_clothbake({"bake", (assets().dir / (std::string(stem) + ".toml")).string(), "-o",
+                       alone.string(), "--no-cache"});
+    ASSERT_EQ(bake.code, 0) << bake.err;
+    EXPECT_EQ(hash_by_stem[stem], content_hash(alone.string())) << stem;
+  }
+}
+
+// A scene's fabric goes through the refusals of `clothbake bake` before it is baked on the fly
+// (a fabric that bake refuses in 0.4 s was baked anyway: 2.7 GB and 26 s, or exit 4).
+TEST(RenderHardening, SceneFabricsAreRefusedUpFrontLikeBake) {
+  const fs::path fabric = assets().dir / "too-large.toml";
+  std::ofstream(fabric) << "[weave]\nname = \"plain\"\n[bake]\nresolution = 4096\n"
+                           "radiance_dirs = 64\n";
+  std::string scene = good_scene();
+  const std::string asset_line = "asset = \"" + assets().twill + "\"";
+  scene.replace(scene.find(asset_line), asset_line.size(), "fabric = \"" + fabric.string() + "\"");
+  const fs::path cache = assets().dir / "cache-too-large";
+  const auto start = std::chrono::steady_clock::now();
+  const auto run =
+      run_clothbake({"render", write_scene("too-large-scene.toml", scene).string(), "-o",
+                     (assets().dir / "too-large.exr").string(), "--cache", cache.string()});
+  EXPECT_EQ(run.code, 2) << run.err;
+  EXPECT_NE(run.err.find("[bake] resolution = 4096, radiance_dirs = 64 need ~"), std::string::npos)
+      << run.err;
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5);
+  EXPECT_FALSE(fs::exists(assets().dir / "too-large.exr"));
+  EXPECT_TRUE(!fs::exists(cache / "assets") || fs::is_empty(cache / "assets"));
+}
+
+// Sample counts whose renders would run for days are usage errors (4294967296 was converted into
+// an int by `report error-time`: undefined behaviour, 2^31 samples).
+TEST(RenderHardening, SampleCountsAndTimeBudgetsAreBounded) {
+  const std::string scene = write_scene("bounded.toml", good_scene()).string();
+  const std::string out = (assets().dir / "bounded.exr").string();
+  const std::vector<std::vector<std::string>> refused = {
+      {"render", scene, "-o", out, "--spp", "4294967296"},
+      {"render", scene, "-o", out, "--spp", "1000000000"},
+      {"render", scene, "-o", out, "--time-budget", "1e6"},
+      {"report", "error-time", scene, "-o", out + "-report", "--spp", "4294967296"},
+      {"report", "error-time", scene, "-o", out + "-report", "--spp", "1,1000000000"}};
+  for (const auto& args : refused) {
+    const auto run = run_clothbake(args);
+    EXPECT_EQ(run.code, 1) << args[4] << " " << args.back() << ": " << run.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(out + "-report"));
+  EXPECT_NE(run_clothbake(refused[1]).err.find("2^36"), std::string::npos);
+}
+
+// The cached reference is a cache entry: another channel count (4 was heap corruption, 1 read
+// past its end), NaN pixels (`nan` rows) or a truncated file (which left DIR/images/ behind the
+// failure) are warned about and rendered again. --no-plots lists no picture it did not draw.
+TEST(RenderHardening, CachedReferenceIsCheckedLikeACacheEntry) {
+  const fs::path cache = assets().dir / "cache-reference";
+  fs::remove_all(cache);
+  const fs::path scene = write_scene("reference.toml", good_scene());
+  const fs::path out = assets().dir / "reference-report";
+  auto report = [&](bool json) {
+    std::vector<std::string> args = {
+        "report", "error-time", scene.string(), "-o",      out.string(),   "--spp",
+        "1",      "--methods",  "brute",        "--cache", cache.string(), "--no-plots"};
+    if (json) args.push_back("--json");
+    return run_clothbake(args);
+  };
+  auto run = report(false);
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_EQ(run.out.find(".png"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("{error-time.csv,error-time.json}"), std::string::npos) << run.out;
+  fs::path cached;
+  for (const auto& e : fs::directory_iterator(cache))
+    if (e.path().extension() == ".exr") cached = e.path();
+  ASSERT_FALSE(cached.empty());
+  std::ifstream in(cached, std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), {});
+  const auto image = [&](int w, int h, int channels, float value) {
+    Image img(w, h, channels);
+    for (float& v : img.pixels)
+      v = value;
+    write_image(cached.string(), img, PixelType::Float32);
+  };
+  const std::pair<const char*, std::function<void()>> damaged[] = {
+      {"4 channels", [&] { image(16, 12, 4, 0.5f); }},
+      {"1 channel", [&] { image(16, 12, 1, 0.5f); }},
+      {"NaN", [&] { image(16, 12, 3, std::nanf("")); }},
+      {"truncated", [&] {
+         std::ofstream(cached, std::ios::binary | std::ios::trunc)
+             << good.substr(0, good.size() / 2);
+       }}};
+  for (const auto& [what, damage] : damaged) {
+    damage();
+    run = report(true);
+    ASSERT_EQ(run.code, 0) << what << ": " << run.err;
+    EXPECT_NE(run.err.find("cached reference " + cached.string() + " is unusable"),
+              std::string::npos)
+        << what << ": " << run.err;
+    const nlohmann::json j = nlohmann::json::parse(run.out);
+    EXPECT_FALSE(j["reference"]["cached"].get<bool>()) << what;
+    for (const auto& row : j["rows"])
+      EXPECT_TRUE(std::isfinite(row["relmse"].get<double>())) << what;
+  }
 }
 
 }  // namespace

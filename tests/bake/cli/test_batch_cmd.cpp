@@ -4,7 +4,10 @@
 // naming the fabric while the rest are baked, nothing partial is left, the exit code is 2; the
 // emitted Slurm array script parses and its tasks, run as Slurm would, give the same bytes.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+#include <chrono>
 
 #include <cstdlib>
 #include <filesystem>
@@ -141,7 +144,7 @@ TEST_F(Batch, BadEntriesFailAloneWithAMessage) {
   EXPECT_NE(rows[lib + "/plain.toml"]["note"].get<std::string>().find("two fabrics map to"),
             std::string::npos);
   EXPECT_EQ(rows[other + "/plain.toml"]["status"], "failed");
-  EXPECT_NE(rows[lib + "/missing.toml"]["note"].get<std::string>().find("does not exist"),
+  EXPECT_NE(rows[lib + "/missing.toml"]["note"].get<std::string>().find("file not found"),
             std::string::npos);
   EXPECT_NE(rows[lib + "/broken.toml"]["note"].get<std::string>().find("unknown weave 'nope'"),
             std::string::npos);
@@ -150,6 +153,76 @@ TEST_F(Batch, BadEntriesFailAloneWithAMessage) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "plain.cbk"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "broken.cbk"));
   EXPECT_TRUE(no_temporary_files(dir_ / "out"));
+}
+
+// Lists that are not regular files are refused at once (a FIFO blocked for ever, /dev/zero read
+// 2 GB); a list naming no fabric leaves no OUTDIR; a directory or device in a list is named as what
+// it is; a stamp of the wrong JSON types means "bake again" (it was exit 4); a fabric name that is
+// not UTF-8 is baked once and then up to date (it failed and was rebaked on every run); control
+// bytes in names are escaped in the table.
+TEST_F(Batch, HostileListsStampsAndNames) {
+  const std::string out = (dir_ / "out").string();
+  const fs::path fifo = dir_ / "list.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::string& list : {fifo.string(), std::string("/dev/zero")}) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto r = clothbake::test_support::detail::spawn(
+        {"/usr/bin/timeout", "20", clothbake_executable(), "batch", list, "-o", out});
+    EXPECT_EQ(r.code, 2) << list << ": " << r.err;
+    EXPECT_NE(r.err.find("not a regular file"), std::string::npos) << r.err;
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5);
+    EXPECT_FALSE(fs::exists(out)) << list;
+  }
+  std::ofstream(dir_ / "empty.txt") << "# nothing here\n\n";
+  auto r = run_clothbake({"batch", (dir_ / "empty.txt").string(), "-o", out});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("names no fabric"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+
+  std::ofstream(dir_ / "odd.txt") << "lib\n/dev/null\n";
+  r = run_clothbake({"batch", (dir_ / "odd.txt").string(), "-o", out, "--json"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  ASSERT_EQ(doc["fabrics"].size(), 2u);
+  EXPECT_NE(doc["fabrics"][0]["note"].get<std::string>().find("is a directory"), std::string::npos)
+      << doc["fabrics"][0]["note"];
+  EXPECT_NE(doc["fabrics"][1]["note"].get<std::string>().find("not a regular file"),
+            std::string::npos)
+      << doc["fabrics"][1]["note"];
+
+  // Names: Latin-1 "café" (not UTF-8) and an ESC sequence.
+  fs::create_directories(dir_ / "names");
+  const std::string latin1 = "caf\xe9", escape = "red\x1b[31m";
+  std::ofstream(dir_ / "names" / (latin1 + ".toml")) << fabric("plain");
+  std::ofstream(dir_ / "names" / (escape + ".toml")) << fabric("plain");
+  const std::vector<std::string> args = {"batch", (dir_ / "names").string(), "-o", out};
+  r = run_clothbake(args);
+  EXPECT_EQ(r.code, 0) << r.err << r.out;
+  EXPECT_TRUE(fs::exists(dir_ / "out" / (latin1 + ".cbk")));
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("red\\x1B[31m"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("caf\\xE9"), std::string::npos) << r.out;
+  r = run_clothbake({"batch", (dir_ / "names").string(), "-o", out, "--json"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  const nlohmann::json again = nlohmann::json::parse(r.out);
+  for (const auto& f : again["fabrics"])
+    EXPECT_EQ(f["status"], "up-to-date") << f;
+
+  // Stamps of the wrong types: baked again, not an internal error.
+  const fs::path stamp = dir_ / "out" / ".clothbake-batch" / (latin1 + ".stamp.json");
+  for (const std::string& text :
+       {std::string(R"({"tool": 5, "output": {"size": "x"}, "inputs": {"path": 1}})"),
+        std::string(R"([1, 2, 3])"), std::string("{\"tool\": ")}) {
+    std::ofstream(stamp, std::ios::trunc) << text;
+    r = run_clothbake({"batch", (dir_ / "names").string(), "-o", out, "--json"});
+    EXPECT_EQ(r.code, 0) << text << ": " << r.err;
+    bool rebaked = false;
+    const nlohmann::json rows = nlohmann::json::parse(r.out);
+    for (const auto& f : rows["fabrics"])
+      rebaked |=
+          f["fabric"].get<std::string>().find("caf") != std::string::npos && f["status"] == "baked";
+    EXPECT_TRUE(rebaked) << text << ": " << r.out;
+  }
 }
 
 // A file size limit (RLIMIT_FSIZE, as a full disk: writes fail) that the small assets fit under and

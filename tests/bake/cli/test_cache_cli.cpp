@@ -8,16 +8,28 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <xxhash.h>
 
+#include <array>
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
+#include "bake/cache/codec.hpp"
+#include "bake/pipeline/artifacts.hpp"
+#include "bake/stages/cache_support.hpp"
+#include "cluster/visibility_clusters.hpp"
+#include "formats/writer/asset_writer.hpp"
+#include "model/asg.hpp"
 #include "tests/support/run_cli.hpp"
 
 namespace fs = std::filesystem;
@@ -152,6 +164,217 @@ TEST_F(Cache, CorruptedEntriesAreRecomputedNeverUsed) {
     EXPECT_EQ(again["cache"]["hits"], 7) << kind;
     EXPECT_EQ(again["warnings"].size(), 0u) << again["warnings"];
     fs::remove(dir_ / "c.cbk");
+  }
+}
+
+// An entry rewritten with recomputed checksums, as an adversary would: the outputs by name, each
+// with its codec tag and payload (docs/batch.md, "Entries").
+struct EntryFile {
+  std::string header;                               // 32 bytes: magic, schema, count, key
+  std::vector<std::array<std::string, 3>> outputs;  // name, tag, payload
+
+  explicit EntryFile(const std::string& bytes) : header(bytes.substr(0, 32)) {
+    const auto u64 = [&](std::size_t at) {
+      uint64_t v;
+      std::memcpy(&v, bytes.data() + at, 8);
+      return v;
+    };
+    const uint64_t index = u64(bytes.size() - 24), end = bytes.size() - 24;
+    for (uint64_t p = index; p < end;) {
+      std::array<std::string, 3> o;
+      for (int k = 0; k < 2; ++k) {
+        o[k] = bytes.substr(p + 8, u64(p));
+        p += 8 + o[k].size();
+      }
+      o[2] = bytes.substr(u64(p), u64(p + 8));
+      p += 24;
+      outputs.push_back(o);
+    }
+  }
+  std::string& payload(const std::string& name) {
+    for (auto& o : outputs)
+      if (o[0] == name) return o[2];
+    throw std::runtime_error("no output " + name);
+  }
+  std::string bytes() const {
+    const auto put = [](std::string& s, uint64_t v) { s.append(reinterpret_cast<char*>(&v), 8); };
+    std::string out = header, index;
+    for (const auto& o : outputs) {
+      out.append((64 - out.size() % 64) % 64, '\0');
+      put(index, o[0].size());
+      index += o[0];
+      put(index, o[1].size());
+      index += o[1];
+      put(index, out.size());
+      put(index, o[2].size());
+      put(index, XXH3_64bits(o[2].data(), o[2].size()));
+      out += o[2];
+    }
+    const uint64_t at = out.size();
+    out += index;
+    put(out, at);
+    put(out, index.size());
+    put(out, XXH3_64bits((header + index).data(), header.size() + index.size()));
+    return out;
+  }
+};
+
+// Decodes `payload` with the codec of `tag`, lets `edit` change the value, encodes it again.
+template <class T>
+std::string edited(const std::string& tag, const std::string& payload,
+                   const std::function<void(T&)>& edit) {
+  const clothbake::cache::Codecs codecs = clothbake::stages::artifact_codecs();
+  const clothbake::cache::Codec* codec = codecs.for_tag(tag);
+  clothbake::pipeline::Artifacts a;
+  clothbake::cache::ByteReader r(reinterpret_cast<const std::byte*>(payload.data()),
+                                 payload.size());
+  codec->decode(r, a, "v");
+  T value = a.get<T>("v");
+  edit(value);
+  clothbake::pipeline::Artifacts b;
+  b.put("v", value);
+  clothbake::cache::ByteWriter w;
+  codec->encode(b, "v", w);
+  return std::string(reinterpret_cast<const char*>(w.bytes().data()), w.bytes().size());
+}
+
+// Entries whose checksums were recomputed after an edit are checked like values from a file: a
+// bad one is warned about naming it, removed, and its stage recomputed; the asset is the uncached
+// one (it used to be exit 0 with an asset validate rejects, exit 0 with other metadata, or exit 2
+// naming no entry and keeping it, so that every later bake failed). Deep CBOR (a stack overflow
+// before), a section shape that overflows 64 bits (exit 4), a claim of 2^27 strings and a sparse
+// 2 GiB entry (4.2 GB each) and a FIFO in place of an entry (a hang) are corrupt entries too, in
+// bounded memory.
+TEST_F(Cache, CraftedEntriesWithRecomputedChecksumsAreCheckedLikeFiles) {
+  using clothbake::cluster::VisibilityClusters;
+  bake("plain.cbk", false);
+  bake("a.cbk");
+  const std::string good = slurp(dir_ / "plain.cbk");
+  struct Case {
+    std::string name, stage, output;
+    std::function<std::string(const std::string& tag, const std::string& payload)> payload;
+    std::vector<std::string> rerun;  // stages whose entries are removed, so that they read it
+  };
+  using Sections = std::vector<clothbake::formats::Section>;
+  const auto sections = [](std::function<void(Sections&)> edit) {
+    return [edit](const std::string& tag, const std::string& payload) {
+      return edited<Sections>(tag, payload, edit);
+    };
+  };
+  const auto cbor = [](const std::string& bytes) {
+    return [bytes](const std::string&, const std::string&) {
+      std::string out(8, '\0');
+      const uint64_t n = bytes.size();
+      std::memcpy(out.data(), &n, 8);
+      return out + bytes;
+    };
+  };
+  const std::vector<uint8_t> array = nlohmann::json::to_cbor(nlohmann::json::array({1, 2}));
+  const Case cases[] = {
+      {"wrong resolution",
+       "cluster",
+       "section/clusters",
+       sections([](Sections& v) {
+         for (auto& s : v)
+           if (s.dims.size() == 2) s.dims = {8, 8}, s.payload.resize(64 * s.payload.size() / 256);
+       }),
+       {}},
+      {"label out of range",
+       "cluster",
+       "clusters",
+       [](const std::string& tag, const std::string& payload) {
+         return edited<VisibilityClusters>(tag, payload,
+                                           [](VisibilityClusters& c) { c.labels[5] = 200; });
+       },
+       {"tables", "compress"}},
+      {"NaN lobe",
+       "visibility",
+       "visibility/asg_params",
+       [](const std::string& tag, const std::string& payload) {
+         using Asgs = std::vector<clothbake::model::AsgParams<float>>;
+         return edited<Asgs>(tag, payload, [](Asgs& v) { v[3].lambda = std::nanf(""); });
+       },
+       {"cluster", "tables", "compress"}},
+      {"metadata of another type",
+       "cluster",
+       "metadata/clusters",
+       cbor(std::string(array.begin(), array.end())),
+       {}},
+      {"deep CBOR", "cluster", "metadata/clusters", cbor(std::string(100000, '\x81') + '\0'), {}},
+      {"section shape overflow",
+       "parallax",
+       "section/parallax",
+       sections([](Sections& v) {
+         v[0].dims = {0xffffffffu, 0xffffffffu, 0xffffffffu, 0xffffffffu};
+       }),
+       {}},
+  };
+  const std::map<std::string, std::string> originals = {
+      {"cluster", slurp(entries("cluster")[0])},
+      {"visibility", slurp(entries("visibility")[0])},
+      {"parallax", slurp(entries("parallax")[0])}};
+  for (const Case& c : cases) {
+    const fs::path entry = entries(c.stage)[0];
+    EntryFile file(originals.at(c.stage));
+    for (auto& o : file.outputs)
+      if (o[0] == c.output) o[2] = c.payload(o[1], o[2]);
+    std::ofstream(entry, std::ios::binary | std::ios::trunc) << file.bytes();
+    for (const auto& stage : c.rerun)
+      fs::remove(entries(stage)[0]);
+    CliRun run;
+    const std::string warnings = bake("b.cbk", true, &run)["warnings"].dump();
+    ASSERT_EQ(run.code, 0) << c.name << ": " << run.err;
+    EXPECT_NE(warnings.find("cache entry " + entry.string() + " is corrupt"), std::string::npos)
+        << c.name << ": " << warnings;
+    EXPECT_EQ(slurp(dir_ / "b.cbk"), good) << c.name;
+    EXPECT_LT(run.max_rss_kb, 1 << 20) << c.name;
+    // The bad entry is gone and stored anew: the next bake has no warning.
+    const auto again = bake("c.cbk", true, &run);
+    EXPECT_EQ(again["warnings"].size(), 0u) << c.name << ": " << again["warnings"];
+    EXPECT_EQ(slurp(dir_ / "c.cbk"), good) << c.name;
+  }
+
+  // Declared sizes are checked before anything is allocated: a claim of 2^27 strings (the
+  // compress stage's superseded sections) and a sparse 2 GiB entry whose index claims 2 GiB.
+  const auto expect_recomputed = [&](const std::string& out) {
+    CliRun run;
+    const std::string warnings = bake(out, true, &run)["warnings"].dump();
+    EXPECT_NE(warnings.find("is corrupt"), std::string::npos) << out << ": " << warnings;
+    EXPECT_LT(run.max_rss_kb, 1 << 20) << out;
+    EXPECT_EQ(slurp(dir_ / out), good) << out;
+  };
+  {
+    const fs::path entry = entries("compress")[0];
+    EntryFile file(slurp(entry));
+    std::string claim(8, '\0');
+    const uint64_t n = uint64_t(1) << 27;
+    std::memcpy(claim.data(), &n, 8);
+    file.payload("supersedes/compress") = claim;
+    std::ofstream(entry, std::ios::binary | std::ios::trunc) << file.bytes();
+    expect_recomputed("d.cbk");
+  }
+  {
+    const fs::path entry = entries("parallax")[0];
+    const uint64_t size = uint64_t(2) << 30;
+    fs::resize_file(entry, size);  // sparse: the trailer says the index is everything after 32
+    std::fstream f(entry, std::ios::binary | std::ios::in | std::ios::out);
+    const uint64_t trailer[3] = {32, size - 24 - 32, 0};
+    f.seekp(std::streamoff(size - 24));
+    f.write(reinterpret_cast<const char*>(trailer), sizeof trailer);
+    f.close();
+    expect_recomputed("e.cbk");
+  }
+  {
+    const fs::path entry = entries("visibility")[0];
+    fs::remove(entry);
+    ASSERT_EQ(::mkfifo(entry.c_str(), 0600), 0);
+    const CliRun run = clothbake::test_support::detail::spawn(
+        {"/usr/bin/timeout", "60", clothbake_executable(), "bake", (dir_ / "f.toml").string(), "-o",
+         (dir_ / "f.cbk").string(), "--cache", (dir_ / "cache").string()});
+    EXPECT_EQ(run.code, 0) << run.err;  // timeout's 124 when the FIFO blocks
+    EXPECT_NE(run.err.find("not a regular file"), std::string::npos) << run.err;
+    EXPECT_TRUE(fs::is_regular_file(entries("visibility")[0]));
+    EXPECT_EQ(slurp(dir_ / "f.cbk"), good);
   }
 }
 

@@ -66,6 +66,11 @@ TEST(Depfile, EscapesAsNinjaAndMakeExpect) {
   EXPECT_EQ(cli::escape_depfile_path("x\\ y"), "x\\\\\\ y");
   EXPECT_EQ(cli::escape_depfile_path("win\\path"), "win\\path");
   EXPECT_THROW(cli::escape_depfile_path("bad\nname"), Error);
+  // ':' is "\:" for both; at the end of a path or after a backslash they read it differently.
+  EXPECT_EQ(cli::escape_depfile_path("a:b"), "a\\:b");
+  EXPECT_EQ(cli::escape_depfile_path("c: d"), "c\\:\\ d");
+  EXPECT_THROW(cli::escape_depfile_path("ends:"), Error);
+  EXPECT_THROW(cli::escape_depfile_path("x\\:y"), Error);
 }
 
 TEST(Depfile, TextListsEachDependencyOnceWithPhonyRules) {
@@ -78,7 +83,7 @@ TEST(Depfile, TextListsEachDependencyOnceWithPhonyRules) {
 TEST(Depfile, GnuMakeReadsEscapedNames) {
   if (std::system("command -v make >/dev/null 2>&1") != 0) GTEST_SKIP() << "no make";
   const fs::path dir = fresh_dir("make");
-  const std::vector<std::string> deps = {"a b.txt", "c#d.txt", "e$f.txt"};
+  const std::vector<std::string> deps = {"a b.txt", "c#d.txt", "e$f.txt", "g:h.txt", "i: j.txt"};
   const auto past = fs::file_time_type::clock::now() - std::chrono::seconds(1000);
   for (const auto& d : deps) {
     write(dir / d, "x");
@@ -99,6 +104,67 @@ TEST(Depfile, GnuMakeReadsEscapedNames) {
   }
   fs::remove(dir / deps[0]);
   EXPECT_EQ(std::system((make + " >/dev/null").c_str()), 0) << "a deleted dependency is no error";
+  fs::remove_all(dir);
+}
+
+// Ninja 1.11 reads the same names back (`ninja -t deps` lists what it recorded from the depfile).
+// A ':' in a path used to make GNU Make refuse the whole depfile ("target pattern contains no
+// '%'"), even under -include.
+TEST(Depfile, NinjaReadsEscapedNames) {
+  if (std::system("command -v ninja >/dev/null 2>&1") != 0) GTEST_SKIP() << "no ninja";
+  const fs::path dir = fresh_dir("ninja");
+  const std::vector<std::string> deps = {"a b.txt", "c#d.txt", "e$f.txt", "g:h.txt", "i: j.txt"};
+  for (const auto& d : deps)
+    write(dir / d, "x");
+  write(dir / "out.d.src", cli::depfile_text("out", deps));
+  write(dir / "build.ninja",
+        "rule gen\n  command = cp out.d.src out.d && touch out\n  depfile = out.d\n"
+        "  deps = gcc\nbuild out: gen\n");
+  const std::string ninja = "cd '" + dir.string() + "' && ninja";
+  ASSERT_EQ(std::system((ninja + " >/dev/null").c_str()), 0);
+  const test_support::CliRun listed =
+      test_support::detail::spawn({"/bin/sh", "-c", ninja + " -t deps"});
+  for (const auto& d : deps)
+    EXPECT_NE(listed.out.find("    " + d + "\n"), std::string::npos) << d << " in:\n" << listed.out;
+  EXPECT_EQ(std::system((ninja + " -n | grep -q 'no work to do'").c_str()), 0);
+  fs::last_write_time(dir / deps[3], fs::file_time_type::clock::now() + std::chrono::seconds(5));
+  EXPECT_NE(std::system((ninja + " -n | grep -q 'no work to do'").c_str()), 0)
+      << "g:h.txt is newer: must rebuild";
+  fs::remove_all(dir);
+}
+
+// A bake whose depfile cannot name a path (a line break in the fabric's name) or whose --json
+// report cannot reach stdout fails before the asset is renamed into place: no new asset, and an
+// existing one kept byte for byte (both used to leave the asset of a failed command).
+TEST(BakeDepfile, FailedDepfileOrStdoutLeavesNoAsset) {
+  const fs::path dir = fresh_dir("leftover");
+  write(dir / "a\nb.toml", kTinyFabric);
+  const fs::path out = dir / "o.cbk", dep = dir / "o.d";
+  auto r = run_clothbake({"bake", (dir / "a\nb.toml").string(), "-o", out.string(), "--depfile",
+                          dep.string(), "--quiet"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("line break"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dep));
+  write(dir / "f.toml", kTinyFabric);
+  r = test_support::run_clothbake_line("bake '" + (dir / "f.toml").string() + "' -o '" +
+                                       out.string() + "' --json --quiet > /dev/full");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("cannot write to standard output"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // An existing output is kept as it was.
+  ASSERT_EQ(run_clothbake({"bake", (dir / "f.toml").string(), "-o", out.string(), "--quiet"}).code,
+            0);
+  const std::string before = slurp(out);
+  std::string changed = kTinyFabric;
+  changed.replace(changed.find("tiny"), 4, "tinier");
+  write(dir / "f.toml", changed);
+  r = test_support::run_clothbake_line("bake '" + (dir / "f.toml").string() + "' -o '" +
+                                       out.string() + "' --json --quiet > /dev/full");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(slurp(out), before);
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
   fs::remove_all(dir);
 }
 

@@ -719,3 +719,96 @@ TEST_F(Hardening, MaxMemoryBoundsTheBakeAndTheReportHasTheEstimate) {
   // docs/performance.md has the Release calibration.)
   fs::remove(out);
 }
+
+// An address-space limit (ulimit -v) bounds the default --max-memory like the machine's memory:
+// the compressed 256^2 x 256^2-bin x 64-cluster fabric (18 GiB estimated) under a 6 GiB
+// limit is refused before loading, naming its keys (it ended in exit 4 "out of memory" after
+// allocating). AddressSanitizer cannot start under such a limit: skipped there.
+TEST_F(Hardening, AnAddressSpaceLimitBoundsTheDefaultMaxMemory) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit";
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+  GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit";
+#endif
+#endif
+  const std::string fabric = path("huge-compressed.toml");
+  std::ofstream(fabric) << fabric_text({{"resolution = 16", "resolution = 256"},
+                                        {"radiance_dirs = 6", "radiance_dirs = 256"},
+                                        {"clusters = 2", "clusters = 64"}});
+  const CliRun r = test_support::detail::spawn(
+      {"/bin/sh", "-c",
+       "ulimit -v 6291456; exec '" + test_support::clothbake_executable() + "' bake " + fabric +
+           " -o " + path("huge-compressed.cbk") + " --quiet"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(mentions(r, "compress stage")) << r.err;
+  EXPECT_TRUE(mentions(r, "--max-memory is 6.00 GiB")) << r.err;
+  EXPECT_FALSE(fs::exists(path("huge-compressed.cbk")));
+}
+
+// Keys 40 000 levels deep (a 80 KB file) in a fabric or a scene: exit 2 naming the place for every
+// command that reads one (it was a stack overflow in every one of them).
+TEST_F(Hardening, DeeplyNestedTomlKeysAreRefusedByEveryCommand) {
+  std::string key = "a";
+  for (int i = 0; i < 40000; ++i)
+    key += ".a";
+  const std::string fabric = path("deep-key.toml");
+  std::ofstream(fabric) << fabric_text() << key << " = 1\n";
+  const std::string scene = path("deep-key-scene.toml");
+  std::ofstream(scene) << "[" << key << "]\n";
+  const std::vector<std::vector<std::string>> commands = {
+      {"inspect", fabric},
+      {"bake", fabric, "-o", path("deep-key.cbk")},
+      {"plan", scene},
+      {"render", scene, "-o", path("deep-key.exr")},
+      {"report", "error-time", scene, "-o", path("deep-key-report")}};
+  for (const auto& command : commands) {
+    const CliRun r = run_clothbake(command);
+    EXPECT_EQ(r.code, 2) << command[0] << ": " << r.err;
+    EXPECT_TRUE(mentions(r, "nest more than 128 levels")) << command[0] << ": " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(path("deep-key.cbk")));
+  EXPECT_FALSE(fs::exists(path("deep-key.exr")));
+  EXPECT_FALSE(fs::exists(path("deep-key-report")));
+}
+
+// Control bytes (ESC, BEL, a line feed) in names reach no terminal raw: `inspect` shows a fabric
+// name escaped, error messages escape an unknown key, `plan` its object names and `cache info`
+// the stage names of odd entry files (each was printed raw).
+TEST_F(Hardening, ControlBytesAreEscapedInEveryTextOutput) {
+  const std::string named = path("named.toml");
+  std::ofstream(named) << fabric_text(
+      {{"name = \"small plain\"", "name = \"x\\u001b[31my\\u0007\""}});
+  CliRun r = run_clothbake({"inspect", named});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos);
+  EXPECT_NE(r.out.find("x\\x1B[31my\\x07"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find('\n'), std::string::npos);  // line breaks of the layout stay
+
+  const std::string unknown = path("unknown-key.toml");
+  std::ofstream(unknown) << fabric_text() << "\"k\\u001b]0;title\\u0007\\n\" = 1\n";
+  r = run_clothbake({"inspect", unknown});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err.find('\x1b'), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("k\\x1B]0;title\\x07\\x0A"), std::string::npos) << r.err;
+
+  const std::string fabric = path("plan-fabric.toml");
+  std::ofstream(fabric) << fabric_text();
+  const std::string scene = path("plan-scene.toml");
+  std::ofstream(scene) << "[camera]\nposition = [0, 0, 2]\nresolution = [8, 8]\n"
+                          "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n"
+                          "[[object]]\nshape = \"plane\"\nname = \"cloth\\u001b[2J\"\n"
+                          "fabric = \"plan-fabric.toml\"\n";
+  r = run_clothbake({"plan", scene});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos);
+  EXPECT_NE(r.out.find("cloth\\x1B[2J"), std::string::npos) << r.out;
+
+  const std::string cache = path("odd-cache");
+  fs::create_directories(cache + "/entries");
+  std::ofstream(cache + "/entries/st\x1b[1mage-0123.entry") << "x";
+  r = run_clothbake({"cache", "info", cache});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos);
+  EXPECT_NE(r.out.find("st\\x1B[1mage"), std::string::npos) << r.out;
+}

@@ -162,6 +162,42 @@ TEST(ParseToml, RefusesBytesThatAreNotUtf8AndThePlaceholderRange) {
   EXPECT_EQ(t["a"].value_or(std::string()), "\xF4\x8F\xBE\x80");
 }
 
+// Nesting is bounded on the text, before toml++ or any walk of its tree recurses: 40 000-level
+// dotted keys and headers (a stack overflow in restore_characters before) and inline tables whose
+// keys are dotted are refused naming the place; the deepest accepted is kMaxTomlDepth, counted over
+// headers, keys, arrays and inline tables together, and ordinary files pass.
+TEST(ParseToml, NestingDeeperThanTheLimitIsRefusedBeforeParsing) {
+  auto dotted = [](std::size_t n) {  // a key of n segments: n levels
+    std::string k = "a";
+    for (std::size_t i = 1; i < n; ++i)
+      k += ".a";
+    return k;
+  };
+  const std::string deep_key = dotted(40000) + " = 1\n";
+  EXPECT_THAT(error_message([&] { parse_toml_text(deep_key, "f.toml"); }),
+              HasSubstr("f.toml:1:256: keys, arrays and inline tables nest more than 128 levels"));
+  const std::string deep_header = "x = 1\n[" + dotted(40000) + "]\n";
+  EXPECT_THAT(error_message([&] { parse_toml_text(deep_header, "f.toml"); }),
+              HasSubstr("f.toml:2:257: keys, arrays and inline tables nest more than 128"));
+  std::string inline_tables = "x = ";  // 50 inline tables of 4-level keys: 250 levels
+  for (int i = 0; i < 50; ++i)
+    inline_tables += "{a.b.c.d = ";
+  inline_tables += "1" + std::string(50, '}') + "\n";
+  EXPECT_THAT(error_message([&] { parse_toml_text(inline_tables, "f.toml"); }),
+              HasSubstr("nest more than 128 levels"));
+  // A header's depth carries to its keys: 100 + 29 levels is one too many, 100 + 28 fits.
+  const std::string header = "[" + dotted(100) + "]\n";
+  EXPECT_THAT(error_message([&] { parse_toml_text(header + dotted(29) + " = 1\n", "f.toml"); }),
+              HasSubstr("f.toml:2:"));
+  EXPECT_NO_THROW(parse_toml_text(header + dotted(28) + " = 1\n", "f.toml"));
+  EXPECT_NO_THROW(parse_toml_text(dotted(128) + " = 1\n", "f.toml"));
+  // Dots in strings, numbers and comments are not nesting; arrays of tables and values are fine.
+  std::string ordinary = "s = \"" + std::string(500, '.') + "\" # " + std::string(500, '.') +
+                         "\n[[yarn]]\nv = [1.5, 2.5, [3.5]]\n[a.\"b.c\".d]\ne = {f.g = 1.0}\n";
+  const toml::table t = parse_toml_text(ordinary, "f.toml");
+  EXPECT_EQ(t["a"]["b.c"]["d"]["e"]["f"]["g"].value_or(0.0), 1.0);
+}
+
 struct Doc {
   toml::table table;
   TomlSection root;
