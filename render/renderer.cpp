@@ -1,14 +1,18 @@
 // The direct-lighting renderer (renderer.hpp).
 #include "render/renderer.hpp"
 
+#include <sys/stat.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 
 #include "common/error.hpp"
 #include "formats/writer/open_asset.hpp"
@@ -26,13 +30,27 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr eval::LobeMask kDeltaBit = eval::lobe_bit(model::Lobe::DeltaTransmission);
 constexpr eval::LobeMask kContinuousLobes = eval::kAllLobes & ~kDeltaBit;
 
+// An opened asset and its evaluator, shared by every object that names the same file (5000
+// objects of one asset hold it once: docs/hardening.md, "Limits").
+struct OpenedAsset {
+  reader::Asset asset;
+  eval::Evaluator evaluator;
+};
+
 // An object's shading: an opened asset and its evaluator, or a Lambertian colour.
 struct Material {
-  std::unique_ptr<reader::Asset> asset;
-  eval::Evaluator evaluator;
+  std::shared_ptr<const OpenedAsset> opened;
+  const eval::Evaluator* evaluator = nullptr;  // &opened->evaluator
   bool cloth = false;
   double texels_per_unit = 0;  // tiles_per_unit * N
 };
+
+// The file's identity (device, inode), or its path when it cannot be read (opening then fails).
+std::string file_identity(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return "path " + path;
+  return std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+}
 
 using Frame = ShadingFrame;
 
@@ -63,18 +81,26 @@ struct Renderer::Impl {
 
 Renderer::Renderer(const Scene& scene, const RenderOptions& options)
     : scene_(scene), options_(options), impl_(std::make_unique<Impl>(scene.camera)) {
+  std::map<std::string, std::shared_ptr<const OpenedAsset>> opened;  // by file identity
   for (const Object& o : scene.objects) {
     Material m;
     if (!o.asset.empty()) {
-      m.asset = std::make_unique<reader::Asset>(formats::open_valid_asset(o.asset));
-      eval::EvalOptions eo;
-      eo.tables = options.tables;
-      eo.parallax = options.parallax;
-      eo.sheen_convention = options.sheen_convention;
-      formats::throw_if_failed(m.evaluator.open(*m.asset, eo),
-                               scene.path + ": " + o.name + ".asset: " + o.asset);
+      std::shared_ptr<const OpenedAsset>& shared = opened[file_identity(o.asset)];
+      if (!shared) {
+        auto fresh = std::make_shared<OpenedAsset>();
+        fresh->asset = formats::open_valid_asset(o.asset);
+        eval::EvalOptions eo;
+        eo.tables = options.tables;
+        eo.parallax = options.parallax;
+        eo.sheen_convention = options.sheen_convention;
+        formats::throw_if_failed(fresh->evaluator.open(fresh->asset, eo),
+                                 scene.path + ": " + o.name + ".asset: " + o.asset);
+        shared = std::move(fresh);
+      }
+      m.opened = shared;
+      m.evaluator = &shared->evaluator;
       m.cloth = true;
-      m.texels_per_unit = o.tiles_per_unit * m.evaluator.resolution();
+      m.texels_per_unit = o.tiles_per_unit * m.evaluator->resolution();
     }
     impl_->materials.push_back(std::move(m));
   }
@@ -105,6 +131,30 @@ PixelFootprint Renderer::pixel_footprint(int px, int py) const {
   out.rect =
       footprint_rectangle(hit.u * scale, hit.v * scale, surface_differentials(cr, hit), scale);
   return out;
+}
+
+std::vector<uint8_t> Renderer::interior_pixels() const {
+  const int w = impl_->camera.width(), h = impl_->camera.height();
+  // Objects at the (w + 1) x (h + 1) pixel corners, each traced once.
+  auto object_at = [&](double x, double y) {
+    const SurfaceHit hit =
+        intersect_scene(impl_->camera.generate(x, y).ray, scene_.objects, 0.0, INFINITY);
+    return hit.hit() ? hit.object : -1;
+  };
+  std::vector<int> corner(std::size_t(w + 1) * std::size_t(h + 1));
+  for (int y = 0; y <= h; ++y)
+    for (int x = 0; x <= w; ++x)
+      corner[std::size_t(y) * std::size_t(w + 1) + std::size_t(x)] = object_at(x, y);
+  std::vector<uint8_t> mask(std::size_t(w) * std::size_t(h));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int c = object_at(x + 0.5, y + 0.5);
+      const std::size_t k = std::size_t(y) * std::size_t(w + 1) + std::size_t(x);
+      mask[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
+          corner[k] == c && corner[k + 1] == c && corner[k + std::size_t(w) + 1] == c &&
+          corner[k + std::size_t(w) + 2] == c;
+    }
+  return mask;
 }
 
 RenderResult Renderer::render(const std::function<void(double)>& progress) const {
@@ -165,7 +215,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       const double wi_arr[3] = {wi.x, wi.y, wi.z};
       eval::Estimate e;
       reader::Status s =
-          m.evaluator.estimate(fp, wi_arr, wo_arr, pass_options.method, samples, rng, mask, &e);
+          m.evaluator->estimate(fp, wi_arr, wo_arr, pass_options.method, samples, rng, mask, &e);
       if (s.code() == reader::ErrorCode::OutOfPlan) {
         // A scene-planned asset left out what this query needs (docs/scene-plans.md,
         // "Queries outside the plan"): brute force over the same footprint needs no table; when
@@ -173,7 +223,8 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
         counters.out_of_plan.fetch_add(1, std::memory_order_relaxed);
         if (pass_options.method != eval::Method::Brute &&
             pass_options.method != eval::Method::Reference)
-          s = m.evaluator.estimate(fp, wi_arr, wo_arr, eval::Method::Brute, samples, rng, mask, &e);
+          s = m.evaluator->estimate(fp, wi_arr, wo_arr, eval::Method::Brute, samples, rng, mask,
+                                    &e);
         if (s.ok())
           counters.fallback_brute.fetch_add(1, std::memory_order_relaxed);
         else
@@ -193,7 +244,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       if (!m.cloth) return wi.z * wo.z > 0 ? std::abs(wi.z) / kPi : 0.0;
       const double wi_arr[3] = {wi.x, wi.y, wi.z};
       double pdf = 0;
-      return m.evaluator.direction_pdf(fp, wi_arr, wo_arr, &pdf).ok() ? pdf : 0.0;
+      return m.evaluator->direction_pdf(fp, wi_arr, wo_arr, &pdf).ok() ? pdf : 0.0;
     };
 
     Rgb radiance;
@@ -228,7 +279,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
           const double ul = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
           if (m.cloth) {
             eval::Evaluator::DirectionSample ds;
-            if (m.evaluator.sample_direction(fp, wo_arr, ul, u1, u2, &ds).ok() && ds.valid) {
+            if (m.evaluator->sample_direction(fp, wo_arr, ul, u1, u2, &ds).ok() && ds.valid) {
               valid = true;
               delta = ds.is_delta;
               wb = frame.world(Vec3(ds.wi[0], ds.wi[1], ds.wi[2]));

@@ -10,12 +10,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "bake/cli/command.hpp"
+#include "bake/cli/options.hpp"
 #include "bake/cli/render_error.hpp"
 #include "bake/cli/scene_bake.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_files.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -38,16 +41,19 @@ struct Row {
   render::RenderResult image;
 };
 
-// relMSE (render_error.hpp) over every pixel, and the absolute RMSE.
-void errors(const render::RenderResult& a, const render::RenderResult& ref, double* relmse,
-            double* rmse) {
+// relMSE (render_error.hpp) and the absolute RMSE over the pixels of `mask`.
+void errors(const render::RenderResult& a, const render::RenderResult& ref,
+            const std::vector<uint8_t>& mask, double* relmse, double* rmse) {
   double abs2 = 0;
+  std::size_t count = 0;
   for (std::size_t k = 0; k < ref.rgb.size(); ++k) {
+    if (!mask[k / 3]) continue;
     const double d = double(a.rgb[k]) - ref.rgb[k];
     abs2 += d * d;
+    ++count;
   }
-  *relmse = masked_relmse(a, ref, {});
-  *rmse = ref.rgb.empty() ? 0 : std::sqrt(abs2 / ref.rgb.size());
+  *relmse = masked_relmse(a, ref, mask);
+  *rmse = count == 0 ? 0 : std::sqrt(abs2 / double(count));
 }
 
 // The relative bias of a method from two independent renders a, b at one spp: with weights
@@ -55,8 +61,9 @@ void errors(const render::RenderResult& a, const render::RenderResult& ref, doub
 // bias^2 = relMSE(a) - mean((a - b)^2 / w) / 2 (clamped at 0; the estimate has the noise of the
 // two renders, so it is meaningful where bias^2 is not small against var / spp).
 double bias_estimate(const render::RenderResult& a, const render::RenderResult& b,
-                     const render::RenderResult& ref) {
-  return std::sqrt(std::max(0.0, masked_relmse(a, ref, {}) - 0.5 * relmse_between(a, b, ref, {})));
+                     const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
+  return std::sqrt(
+      std::max(0.0, masked_relmse(a, ref, mask) - 0.5 * relmse_between(a, b, ref, mask)));
 }
 
 // Value of y at x on the log-log polyline through (xs, ys) sorted by x; NaN outside.
@@ -152,11 +159,19 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   ref_options.method = eval::Method::Reference;
   ref_options.spp = environment ? o.reference_spp : 1;
   ref_options.seed = o.seed + 1000003;
+  for (uint32_t spp : o.spp)
+    check_render_samples(scene.camera.width, scene.camera.height, spp, "--spp");
+  check_render_samples(scene.camera.width, scene.camera.height, ref_options.spp, "--reference-spp");
   std::string key = fmt::format("{} {} {}x{} spp {} seed {}", CLOTHBAKE_VERSION_STRING,
                                 inputs::hash_file(o.scene), scene.camera.width, scene.camera.height,
                                 ref_options.spp, ref_options.seed);
+  std::map<std::string, std::string> asset_hashes;  // each file read once, however many objects
   for (const render::Object& obj : scene.objects)
-    if (!obj.asset.empty()) key += " " + inputs::hash_file(obj.asset);
+    if (!obj.asset.empty()) {
+      std::string& hash = asset_hashes[obj.asset];
+      if (hash.empty()) hash = inputs::hash_file(obj.asset);
+      key += " " + hash;
+    }
   for (const render::Light& l : scene.lights)
     if (l.type == render::LightType::Environment) {
       const render::EnvironmentMap& map = l.environment;
@@ -171,6 +186,11 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   // (the parallax planes of the views met, per-bin tables), as a renderer keeps its assets between
   // frames, so that the timed renders measure shading, not the asset's one-time preparation.
   const render::Renderer renderer(scene, ref_options);
+  // Errors are compared on the pixels off silhouettes: there the footprint methods (and the
+  // reference) shade the centre's object while path tracing averages over the pixel's area, so
+  // they converge to different values that no sample count removes.
+  const std::vector<uint8_t> compared = renderer.interior_pixels();
+  const std::size_t pixels_compared = std::size_t(std::count(compared.begin(), compared.end(), 1));
   // --raw-tables: the same scene over assets with both table forms, one renderer per form (an
   // `asset =` without raw tables is refused here, exit 2 naming the object). After the main
   // renderer has opened its assets and the reference key has read them: this bake may prune the
@@ -187,23 +207,46 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     form.tables = eval::TableChoice::Compressed;
     with_compressed = std::make_unique<render::Renderer>(raw_loaded.scene, form);
   }
-  fs::create_directories(out / "images", ec);
-  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
-
   render::RenderResult reference;
   double reference_seconds = 0;
-  if (fs::is_regular_file(cached, ec)) {
-    const Image img = read_image(cached.string());
-    reference.width = img.width;
-    reference.height = img.height;
-    reference.rgb = img.pixels;
-  } else {
+  // The cached reference is a cache entry: one that is not what this report renders (truncated,
+  // another size, not three finite channels >= 0) is removed with a warning and rendered again.
+  if (fs::exists(fs::symlink_status(cached, ec))) {
+    std::string problem;
+    try {
+      ImageReadLimits limits;
+      limits.max_side =
+          scene.camera.width > scene.camera.height ? scene.camera.width : scene.camera.height;
+      inputs::require_regular_file(cached.string());
+      const Image img = read_image(cached.string(), limits);
+      if (img.width != scene.camera.width || img.height != scene.camera.height || img.channels != 3)
+        problem = fmt::format("{}x{} with {} channels, not {}x{} RGB", img.width, img.height,
+                              img.channels, scene.camera.width, scene.camera.height);
+      for (std::size_t i = 0; problem.empty() && i < img.pixels.size(); ++i)
+        if (!(img.pixels[i] >= 0.f) || !std::isfinite(img.pixels[i]))
+          problem = fmt::format("pixel ({}, {}) holds {}", i / 3 % img.width, i / 3 / img.width,
+                                img.pixels[i]);
+      if (problem.empty()) {
+        reference.width = img.width;
+        reference.height = img.height;
+        reference.rgb = img.pixels;
+      }
+    } catch (const Error& e) {
+      problem = e.what();
+    }
+    if (!problem.empty()) {
+      warn("cached reference " + cached.string() + " is unusable (" + problem +
+           "): removed, rendering it again");
+      fs::remove(cached, ec);
+    }
+  }
+  if (reference.rgb.empty()) {
     reference = renderer.render(ref_options);
     reference_seconds = reference.stats.seconds;
     render::write_render_images(cached.string(), reference);
   }
-  if (reference.width != scene.camera.width || reference.height != scene.camera.height)
-    throw_input_error(cached.string() + ": cached reference of another size; delete it");
+  fs::create_directories(out / "images", ec);
+  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
 
   // Each method's first render at 1 spp, untimed in the rows: it builds what the method reads on
   // first use (its time is reported as `warmup`).
@@ -229,7 +272,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       row.spp = spp;
       row.image = renderer.render(ro);
       row.seconds = row.image.stats.seconds;
-      errors(row.image, reference, &row.relmse, &row.rmse);
+      errors(row.image, reference, compared, &row.relmse, &row.rmse);
       rows.push_back(std::move(row));
     }
   // Each method's bias: its largest-spp render against a second one with another seed.
@@ -242,7 +285,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     ro.path_traced = m.path_traced;
     ro.spp = last->spp;
     ro.seed = o.seed + 7777;
-    const double bias = bias_estimate(last->image, renderer.render(ro), reference);
+    const double bias = bias_estimate(last->image, renderer.render(ro), reference, compared);
     for (Row& r : rows)
       if (r.method == m.name) r.bias = bias;
   }
@@ -376,9 +419,9 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       ro.tables = eval::TableChoice::Compressed;
       const render::RenderResult compressed = with_compressed->render(ro);
       tables["methods"][eval::method_name(m)] = {
-          {"relmse_compressed_vs_raw", masked_relmse(compressed, raw, {})},
-          {"relmse_raw", masked_relmse(raw, reference, {})},
-          {"relmse_compressed", masked_relmse(compressed, reference, {})}};
+          {"relmse_compressed_vs_raw", masked_relmse(compressed, raw, compared)},
+          {"relmse_raw", masked_relmse(raw, reference, compared)},
+          {"relmse_compressed", masked_relmse(compressed, reference, compared)}};
     }
   }
 
@@ -420,6 +463,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   }
   nlohmann::json doc = {{"scene", o.scene},
                         {"resolution", {scene.camera.width, scene.camera.height}},
+                        {"pixels_compared", pixels_compared},
                         {"reference",
                          {{"method", "reference"},
                           {"spp", ref_options.spp},
@@ -436,6 +480,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   formats::write_text_atomically(
       out / "error-time.json",
       doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  bool plotted = false;
   if (!o.no_plots) {
     // $CLOTHBAKE_PLOT_SCRIPT_DIR, else the source tree this file was compiled from.
     const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT_DIR");
@@ -444,7 +489,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     const std::string python =
         fs::exists("/usr/bin/python3") ? std::string("/usr/bin/python3") : std::string("python3");
     const std::string command = python + " '" + script.string() + "' '" + out.string() + "'";
-    if (std::system(command.c_str()) != 0)
+    plotted = std::system(command.c_str()) == 0;
+    if (!plotted)
       warn("report: plotting failed (python3-matplotlib missing?); the CSV and JSON are written");
   }
 
@@ -452,10 +498,12 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     print_json(doc);
     return 0;
   }
-  std::printf("error against run time: %s, %dx%d, reference %s\n", o.scene.c_str(),
+  std::printf("error against run time: %s, %dx%d, reference %s\n", terminal_safe(o.scene).c_str(),
               scene.camera.width, scene.camera.height,
               reference_seconds == 0 ? "from the cache"
                                      : fmt::format("{:.3g} s", reference_seconds).c_str());
+  std::printf("  errors over %zu of %d pixels (silhouettes left out)\n", pixels_compared,
+              scene.camera.width * scene.camera.height);
   std::printf("  %-17s %5s %10s %12s %12s\n", "method", "spp", "seconds", "relMSE", "bias est.");
   for (const Row& r : rows)
     std::printf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds, r.relmse,
@@ -479,11 +527,12 @@ int run_error_time_report(const ErrorTimeOptions& o) {
         const std::string b = pair[key].get<std::string>();
         return b == "lower" ? ">" : b == "upper" ? "<" : "";
       };
-      std::printf("  multi-scale at %u spp against %s at equal error: %s%.3gx in time, %s%.3gx in "
-                  "samples per pixel\n",
-                  pair["spp"].get<uint32_t>(), pair["against"].get<std::string>().c_str(),
-                  bound("equal_error_speedup_bound"), pair["equal_error_speedup"].get<double>(),
-                  bound("equal_error_spp_ratio_bound"), pair["equal_error_spp_ratio"].get<double>());
+      std::printf(
+          "  multi-scale at %u spp against %s at equal error: %s%.3gx in time, %s%.3gx in "
+          "samples per pixel\n",
+          pair["spp"].get<uint32_t>(), pair["against"].get<std::string>().c_str(),
+          bound("equal_error_speedup_bound"), pair["equal_error_speedup"].get<double>(),
+          bound("equal_error_spp_ratio_bound"), pair["equal_error_spp_ratio"].get<double>());
     }
   if (!tables.is_null())
     for (const auto& [name, t] : tables["methods"].items())
@@ -499,7 +548,9 @@ int run_error_time_report(const ErrorTimeOptions& o) {
         near_field["object"].get<std::string>().c_str(),
         near_field["relmse_parallax_model"].get<double>(),
         near_field["relmse_without_offsets"].get<double>());
-  std::printf("  %s/{error-time.csv,error-time.json,error-time.png,grid.png}\n", o.output.c_str());
+  // The plots are listed only when they were drawn.
+  std::printf("  %s/{error-time.csv,error-time.json%s}\n", terminal_safe(o.output).c_str(),
+              plotted ? ",error-time.png,grid.png" : "");
   return 0;
 }
 

@@ -121,6 +121,31 @@ TEST(Render, FootprintOfAPlaneSeenHeadOnIsThePixelSize) {
   EXPECT_NEAR(f.wo[2], 1.0, 1e-12);
 }
 
+// A 0.5-wide square seen head-on from 2 units with a 30-degree field: its edges project to
+// x = W/2 (1 +- 0.25 / (2 tan 15deg)), and the pixels off silhouettes are those whose square lies
+// wholly inside or wholly outside that square of the image.
+TEST(Render, InteriorPixelsLeaveOutExactlyTheSilhouettes) {
+  Scene s = plane_scene(32, 32);
+  s.objects[0].size[0] = s.objects[0].size[1] = 0.5;
+  const std::vector<uint8_t> mask = Renderer(s, {}).interior_pixels();
+  ASSERT_EQ(mask.size(), 32u * 32u);
+  const double lo = 16 * (1 - 0.25 / (2 * std::tan(15 * kPi / 180)));
+  const double hi = 32 - lo;
+  auto side = [&](int k) {  // 1 inside, -1 outside, 0 straddling the edge
+    return (k >= lo && k + 1 <= hi) ? 1 : (k + 1 <= lo || k >= hi) ? -1 : 0;
+  };
+  int left_out = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const bool inside = side(x) == 1 && side(y) == 1;
+      const bool outside = side(x) == -1 || side(y) == -1;
+      EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], inside || outside ? 1 : 0)
+          << x << "," << y;
+      left_out += !(inside || outside);
+    }
+  EXPECT_EQ(left_out, 4 * (int(std::ceil(hi)) - int(std::floor(lo))) - 4);  // the ring of edges
+}
+
 // The 24 x 24 plane scene with the twill at `tiles_per_unit` under a point light.
 Scene lit_twill_plane(double tiles_per_unit) {
   Scene s = plane_scene(24, 24);
