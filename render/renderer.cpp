@@ -135,20 +135,46 @@ PixelFootprint Renderer::pixel_footprint(int px, int py) const {
 
 std::vector<uint8_t> Renderer::interior_pixels() const {
   const int w = impl_->camera.width(), h = impl_->camera.height();
-  // Objects at the (w + 1) x (h + 1) pixel corners, each traced once.
-  auto object_at = [&](double x, double y) {
+  // What a point of the image sees: the object hit (-1: none) and, per point or directional light
+  // (the first 64), whether it is shadowed there; at the (w + 1) x (h + 1) pixel corners each
+  // traced once.
+  struct Seen {
+    int object = -1;
+    uint64_t shadowed = 0;
+    bool operator==(const Seen&) const = default;
+  };
+  auto seen_at = [&](double x, double y) {
     const SurfaceHit hit =
         intersect_scene(impl_->camera.generate(x, y).ray, scene_.objects, 0.0, INFINITY);
-    return hit.hit() ? hit.object : -1;
+    Seen seen;
+    if (!hit.hit()) return seen;
+    seen.object = hit.object;
+    for (std::size_t li = 0; li < scene_.lights.size() && li < 64; ++li) {
+      const Light& light = scene_.lights[li];
+      bool blocked = false;
+      if (light.type == LightType::Point) {
+        const Vec3 to = light.position - hit.point;
+        const double dist = length(to);
+        if (!(dist > 0)) continue;
+        const Vec3 wi = to / dist;
+        blocked =
+            occluded({shadow_ray_origin(hit, wi), wi}, scene_.objects, 0.0, dist * (1 - 1e-9));
+      } else if (light.type == LightType::Directional) {
+        const Vec3 wi = -light.direction;
+        blocked = occluded({shadow_ray_origin(hit, wi), wi}, scene_.objects, 0.0, INFINITY);
+      }
+      if (blocked) seen.shadowed |= uint64_t(1) << li;
+    }
+    return seen;
   };
-  std::vector<int> corner(std::size_t(w + 1) * std::size_t(h + 1));
+  std::vector<Seen> corner(std::size_t(w + 1) * std::size_t(h + 1));
   for (int y = 0; y <= h; ++y)
     for (int x = 0; x <= w; ++x)
-      corner[std::size_t(y) * std::size_t(w + 1) + std::size_t(x)] = object_at(x, y);
+      corner[std::size_t(y) * std::size_t(w + 1) + std::size_t(x)] = seen_at(x, y);
   std::vector<uint8_t> mask(std::size_t(w) * std::size_t(h));
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const int c = object_at(x + 0.5, y + 0.5);
+      const Seen c = seen_at(x + 0.5, y + 0.5);
       const std::size_t k = std::size_t(y) * std::size_t(w + 1) + std::size_t(x);
       mask[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
           corner[k] == c && corner[k + 1] == c && corner[k + std::size_t(w) + 1] == c &&

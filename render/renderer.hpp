@@ -94,10 +94,12 @@ class Renderer {
   PixelFootprint pixel_footprint(int x, int y) const;
 
   // One byte per pixel, row 0 at the top: 1 where the camera rays through the pixel's centre and
-  // its four corners all hit the same object (or all miss), 0 on silhouettes. A footprint renders
-  // a pixel from its centre's object while path tracing averages over the pixel's area, so the two
-  // converge to different values on silhouettes only (docs/rendering.md, "Error against run
-  // time"). Traces 5 rays per pixel on the calling thread; allocates the mask.
+  // its four corners all hit the same object (or all miss) and, at the hits, the same point and
+  // directional lights (the first 64) are shadowed; 0 on silhouettes and shadow edges. A footprint
+  // renders a pixel from its centre's hit and shadow rays while path tracing averages over the
+  // pixel's area, so the two converge to different values there only (docs/rendering.md, "Error
+  // against run time"). Traces (1 + lights) rays per pixel and corner on the calling thread;
+  // allocates the mask.
   std::vector<uint8_t> interior_pixels() const;
 
   const Scene& scene() const { return scene_; }

@@ -186,9 +186,10 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   // (the parallax planes of the views met, per-bin tables), as a renderer keeps its assets between
   // frames, so that the timed renders measure shading, not the asset's one-time preparation.
   const render::Renderer renderer(scene, ref_options);
-  // Errors are compared on the pixels off silhouettes: there the footprint methods (and the
-  // reference) shade the centre's object while path tracing averages over the pixel's area, so
-  // they converge to different values that no sample count removes.
+  // Errors are compared on the pixels off silhouettes and shadow edges: there the footprint
+  // methods (and the reference) shade the centre's hit with its shadow rays while path tracing
+  // averages over the pixel's area, so they converge to different values that no sample count
+  // removes.
   const std::vector<uint8_t> compared = renderer.interior_pixels();
   const std::size_t pixels_compared = std::size_t(std::count(compared.begin(), compared.end(), 1));
   // --raw-tables: the same scene over assets with both table forms, one renderer per form (an
@@ -502,8 +503,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
               scene.camera.width, scene.camera.height,
               reference_seconds == 0 ? "from the cache"
                                      : fmt::format("{:.3g} s", reference_seconds).c_str());
-  std::printf("  errors over %zu of %d pixels (silhouettes left out)\n", pixels_compared,
-              scene.camera.width * scene.camera.height);
+  std::printf("  errors over %zu of %d pixels (silhouettes and shadow edges left out)\n",
+              pixels_compared, scene.camera.width * scene.camera.height);
   std::printf("  %-17s %5s %10s %12s %12s\n", "method", "spp", "seconds", "relMSE", "bias est.");
   for (const Row& r : rows)
     std::printf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds, r.relmse,

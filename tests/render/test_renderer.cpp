@@ -146,6 +146,28 @@ TEST(Render, InteriorPixelsLeaveOutExactlyTheSilhouettes) {
   EXPECT_EQ(left_out, 4 * (int(std::ceil(hi)) - int(std::floor(lo))) - 4);  // the ring of edges
 }
 
+// A shadow edge is left out like a silhouette: a sun at 45 degrees over -x and an occluder out of
+// the camera's view (z = 1, x >= 0.6) shadow the plane for x >= -0.4, whose image is the column
+// x = 16 (1 - 0.4 / (2 tan 15deg)) = 4.06: pixel column 4 straddles it.
+TEST(Render, InteriorPixelsLeaveOutShadowEdges) {
+  Scene s = plane_scene(32, 32);
+  Object occluder = s.objects[0];
+  occluder.name = "object[1]";
+  occluder.center = {1.8, 0, 1};
+  occluder.size[0] = 2.4;
+  s.objects.push_back(occluder);
+  Light sun;
+  sun.type = LightType::Directional;
+  sun.direction = normalize(Vec3(-1, 0, -1));
+  s.lights.push_back(sun);
+  const std::vector<uint8_t> mask = Renderer(s, {}).interior_pixels();
+  const double edge = 16 * (1 - 0.4 / (2 * std::tan(15 * kPi / 180)));
+  ASSERT_EQ(int(edge), 4);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x)
+      EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], x == 4 ? 0 : 1) << x << "," << y;
+}
+
 // The 24 x 24 plane scene with the twill at `tiles_per_unit` under a point light.
 Scene lit_twill_plane(double tiles_per_unit) {
   Scene s = plane_scene(24, 24);
