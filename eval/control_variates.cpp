@@ -20,11 +20,9 @@ constexpr double kInvPi = 0.318309886183790671537767526745028724;
 //   diffuse   g(q) = |i_z| / pi T_sheen v_c(q) I(q) R(q)       (R = R_d or T_d times the colour)
 //   sheen     g(q) = colour sheen(i, o) |i_z| v_c(q)
 //   delta     g(q) = T_sheen v_c(q) T_gap(q)                   (T_gap = 1 - I, from its table)
-struct Constants {
-  bool specular = false, diffuse = false, sheen = false, delta = false;
-  Lobe specular_lobe = Lobe::SpecularReflection, diffuse_lobe = Lobe::DiffuseReflection;
+struct Constants : ActiveLobes {
   Rgb diffuse_scale, sheen_scale, delta_scale;
-  reader::BinWeights h_bins, gap_bin;
+  reader::BinWeights gap_bin;
   // kbar_c G-bar |i_z| T_sheen per cluster, RGB (the first 3 C entries are set; a plain array so
   // that the 255-cluster capacity costs no initialisation per estimate).
   double specular_scale[3 * reader::kMaxVisibilityClusters];
@@ -109,19 +107,11 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame, c
                                            int64_t(std::floor(0.5 * (shifted.y0 + shifted.y1))));
   const model::ClothBsdf<double> centre(data.texel_params(centre_texel));
   const Rgb t_sheen = centre.sheen_transmittance(frame.wo);
-  const bool reflect = frame.wi.z * frame.wo.z > 0.0, transmit = frame.wi.z * frame.wo.z < 0.0;
-  const LobeMask mask = frame.mask;
+  const bool reflect = frame.wi.z * frame.wo.z > 0.0;
   const double cos_i = frame.cos_i;
   const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
   Constants k;
-  k.specular_lobe = reflect ? Lobe::SpecularReflection : Lobe::SpecularTransmission;
-  k.diffuse_lobe = reflect ? Lobe::DiffuseReflection : Lobe::DiffuseTransmission;
-  // h = 0 (i = -o) has no half-vector bin; the specular lobes are 0 there (D(0) = 0).
-  k.specular = (reflect || transmit) && (mask & lobe_bit(k.specular_lobe)) &&
-               reader::make_bin_weights(data.specular.tables->bins_per_side(), h, &k.h_bins);
-  k.diffuse = (reflect || transmit) && (mask & lobe_bit(k.diffuse_lobe));
-  k.sheen = (mask & lobe_bit(Lobe::Sheen)) != 0;
-  k.delta = frame.delta && (mask & lobe_bit(Lobe::DeltaTransmission));
+  static_cast<ActiveLobes&>(k) = active_lobes(data, frame);
 
   Rgb base[model::kLobeCount];
   double values[3 * reader::kMaxVisibilityClusters];

@@ -93,6 +93,20 @@ double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, i
   return data.parallax.weighted_depth(frame.parallax_bins.index, frame.parallax_bins.weight, x, y);
 }
 
+ActiveLobes active_lobes(const EvalData& data, const ShadingFrame& frame) noexcept {
+  ActiveLobes a;
+  const bool reflect = frame.wi.z * frame.wo.z > 0.0, transmit = frame.wi.z * frame.wo.z < 0.0;
+  const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
+  a.specular_lobe = reflect ? model::Lobe::SpecularReflection : model::Lobe::SpecularTransmission;
+  a.diffuse_lobe = reflect ? model::Lobe::DiffuseReflection : model::Lobe::DiffuseTransmission;
+  a.specular = (reflect || transmit) && (frame.mask & lobe_bit(a.specular_lobe)) &&
+               reader::make_bin_weights(data.specular.tables->bins_per_side(), h, &a.h_bins);
+  a.diffuse = (reflect || transmit) && (frame.mask & lobe_bit(a.diffuse_lobe));
+  a.sheen = (frame.mask & lobe_bit(model::Lobe::Sheen)) != 0;
+  a.delta = frame.delta && (frame.mask & lobe_bit(model::Lobe::DeltaTransmission));
+  return a;
+}
+
 int draw_view_bin(const ShadingFrame& frame, double u) noexcept {
   double cumulative = 0.0;
   int last = 0;

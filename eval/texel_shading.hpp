@@ -50,6 +50,19 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
 // reader::ParallaxView::depth): what multiscale-paper's footprint mean approximates.
 double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept;
 
+// The lobes of frame.mask that a control variate carries for (i, o) and the specular lobe's
+// half-vector bin weights: the specular and diffuse lobes of the reflection or transmission side
+// (neither when i_z o_z = 0), the sheen, the delta lobe only at i = -o. h = 0 (i = -o) has no
+// half-vector bin; the specular lobes are 0 there (D(0) = 0). Shared by both control-variate
+// estimators; no allocation.
+struct ActiveLobes {
+  bool specular = false, diffuse = false, sheen = false, delta = false;
+  model::Lobe specular_lobe = model::Lobe::SpecularReflection;
+  model::Lobe diffuse_lobe = model::Lobe::DiffuseReflection;
+  reader::BinWeights h_bins;
+};
+ActiveLobes active_lobes(const EvalData& data, const ShadingFrame& frame) noexcept;
+
 // The view bin k in [0, 4) of frame.parallax_bins drawn with its weight by u in [0, 1): the first k
 // whose cumulative weight exceeds u (the last with a positive weight if rounding leaves none).
 int draw_view_bin(const ShadingFrame& frame, double u) noexcept;

@@ -141,7 +141,8 @@ int run_eval(const EvalCliOptions& o) {
                           {"direct", e.counters.direct},
                           {"without_control_variate", e.counters.without_control_variate},
                           {"texel_evals", e.counters.texel_evals},
-                          {"samples", e.counters.samples}};
+                          {"samples", e.counters.samples},
+                          {"remainder_samples", e.counters.remainder_samples}};
     print_json(out);
     return 0;
   }
