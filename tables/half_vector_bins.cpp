@@ -55,7 +55,7 @@ bool bins_resolve_roughness(int bins_per_side, double sigma) {
 
 int default_bins_per_side(double min_roughness) {
   if (!(min_roughness > 0.0)) return 128;
-  const double n = std::ceil(2.0 * std::sqrt(2.0 * model::kPi<double>) / min_roughness - 1e-9);
+  const double n = std::ceil(3.0 * std::sqrt(2.0 * model::kPi<double>) / min_roughness - 1e-9);
   return int(std::clamp(n, 32.0, 128.0));
 }
 

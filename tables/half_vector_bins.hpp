@@ -43,12 +43,13 @@ int bins_per_side_for_roughness(double sigma);
 // True when n x n bins resolve sigma (bin width <= 2 sigma, with a 1e-9 tolerance).
 bool bins_resolve_roughness(int bins_per_side, double sigma);
 
-// The default bins per side for a fabric whose narrowest roughness is sigma: bins at most sigma / 2
-// wide, n = ceil(2 sqrt(2 pi) / sigma), clamped to [32, 128]. The 2-sigma rule above only keeps a
+// The default bins per side for a fabric whose narrowest roughness is sigma: bins at most sigma / 3
+// wide, n = ceil(3 sqrt(2 pi) / sigma), clamped to [32, 128]. The 2-sigma rule above only keeps a
 // lobe from vanishing between bin centres; the multi-scale control variate pairs the binned table
-// value with the exact D at the same texel, and measured on the satin (sigma 0.06) its variance
-// ratio against brute force rises from 9 (32^2 bins) to 33 (64^2) and 77 (128^2) on whole tiles
-// (docs/evaluator.md, "The error budget"). The default twill (sigma 0.4) keeps 32^2.
+// value with the exact D at the same texel, and measured on the satin (sigma 0.06) the shipped
+// estimator's whole-tile variance ratio against brute force (median over 16 light and view pairs)
+// is 46 with 84^2 bins (sigma / 2) and 101 with 126^2 (sigma / 3; docs/evaluator.md, "The error
+// budget"). The default twill (sigma 0.4) keeps 32^2.
 int default_bins_per_side(double min_roughness);
 
 // Quadrature points per bin side for the narrowest roughness sigma: the sub-cell spacing

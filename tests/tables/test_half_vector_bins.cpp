@@ -38,6 +38,26 @@ TEST(HalfVectorBins, TwoSigmaRule) {
   EXPECT_EQ(default_samples_per_side(32, 0.01), 8);
 }
 
+// The default bins: the fewest at most sigma / 3 wide, within [32, 128].
+TEST(HalfVectorBins, DefaultBinsAreAThirdOfTheNarrowestRoughness) {
+  for (double sigma : {0.03, 0.0588, 0.06, 0.07, 0.08, 0.1, 0.2, 0.235, 0.4, 1.0}) {
+    const int n = default_bins_per_side(sigma);
+    EXPECT_GE(n, 32) << sigma;
+    EXPECT_LE(n, 128) << sigma;
+    if (n > 32 && n < 128) {
+      EXPECT_LE(bin_angular_width(n), sigma / 3 * (1 + 1e-12)) << sigma;
+      EXPECT_GT(bin_angular_width(n - 1), sigma / 3) << sigma;
+    } else if (n == 32) {
+      EXPECT_LE(bin_angular_width(32), sigma / 3 * (1 + 1e-12)) << sigma;
+    } else {
+      EXPECT_GT(bin_angular_width(127), sigma / 3) << sigma;
+    }
+  }
+  EXPECT_EQ(default_bins_per_side(0.06), 126);  // the example satin
+  EXPECT_EQ(default_bins_per_side(0.4), 32);    // the example twill
+  EXPECT_EQ(default_bins_per_side(0.0), 128);   // no roughness: the finest
+}
+
 TEST(HalfVectorBins, RejectsBadSizes) {
   EXPECT_THROW(make_half_vector_bins(0, 2), Error);
   EXPECT_THROW(make_half_vector_bins(300, 2), Error);
