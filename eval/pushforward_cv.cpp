@@ -113,7 +113,11 @@ uint32_t remainder_samples(const EvalData& data, const Footprint& p, uint32_t sp
   const double s = double(spp);
   const double m =
       std::ceil(data.options.remainder_sample_scale * remainder * std::sqrt(s * (s + 2.0)));
-  return uint32_t(std::clamp(m, 1.0, double(kMaxRemainderSamples)));
+  // At least one sample in each of B's rectangles that has an area (the column right of the whole
+  // periods, the row above them): a rectangle without a sample would drop its integral of g.
+  const double kx = std::floor(w / n), ky = std::floor(h / n);
+  const double pieces = double(w > kx * n) + double(kx >= 1.0 && h > ky * n);
+  return uint32_t(std::clamp(m, std::max(1.0, pieces), double(kMaxRemainderSamples)));
 }
 
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
