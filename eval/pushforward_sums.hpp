@@ -23,9 +23,10 @@
 //   lobe(c, j)+6    = e_j(t)               [c(t) = c]   (sheen)
 //   lobe(c, j)+7    = e_j(t) (1 - I(t))    [c(t) = c]   (delta transmission)
 //
-// Each bin's sums are built on the first estimate that draws it (thread-safe, std::call_once): one
-// pass over the N^2 source texels to splat m_k, one over the destinations. Memory: count() doubles
-// per bin built (about 10 KB for the default twill), cost about 5 ms per bin at N = 256.
+// Each bin's sums are built on its first bin_sums() call (thread-safe, std::call_once; the
+// estimator asks for a view's four bins on the view's first estimate): one pass over the N^2
+// source texels to splat m_k, one over the destinations. Memory: count() doubles per bin built
+// (about 10 KB for the default twill), cost about 4 ms per bin at N = 256.
 //
 // C++17, standard library only. bin_sums() allocates only on a bin's first use.
 #pragma once
