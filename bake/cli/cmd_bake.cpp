@@ -149,8 +149,7 @@ Action setup_bake(CLI::App& app) {
   app.add_option("--stages", o->stages,
                  "comma-separated stages to run (plus the stages they need); default: all")
       ->delimiter(',');
-  app.add_option("--threads", o->threads, "worker threads (the asset is identical for any N)")
-      ->check(CLI::PositiveNumber);
+  add_threads_option(app, o->threads, "worker threads (the asset is identical for any N)");
   app.add_flag("--quiet", o->quiet, "no progress bar and no informational messages");
   app.add_option("--report", o->report,
                  "write a JSON report: per-stage wall/CPU time and peak memory, asset sections");

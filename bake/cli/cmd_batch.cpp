@@ -297,7 +297,7 @@ Action setup_batch(CLI::App& app) {
       ->required();
   app.add_option("-o,--output", o->output_dir, "output folder: OUTDIR/<fabric stem>.cbk")
       ->required();
-  app.add_option("--jobs", o->jobs, "bakes at once (default 1)")->check(CLI::PositiveNumber);
+  app.add_option("--jobs", o->jobs, "bakes at once (default 1)")->check(CLI::Range(1, 1024));
   app.add_option("--max-memory", o->max_memory,
                  "never start bakes whose measured peaks sum above this (default 80 % of RAM or of "
                  "the cgroup limit)");

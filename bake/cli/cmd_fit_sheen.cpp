@@ -115,9 +115,7 @@ Action setup_fit_sheen(CLI::App& app) {
   app.add_option("--resolution", o->resolution, "table nodes COS,ROUGH (each 2 to 1024)")
       ->capture_default_str();
   app.add_option("--seed", o->seed, "random seed")->capture_default_str();
-  app.add_option("--threads", o->threads, "worker threads (0: all cores)")
-      ->check(CLI::Range(0, 1024))
-      ->capture_default_str();
+  add_threads_option(app, o->threads, "worker threads");
   add_json_flag(app, o->json, "print the fit report as one JSON document on stdout");
   return [o] {
     const auto [cos_count, roughness_count] = parse_resolution(o->resolution);

@@ -69,7 +69,6 @@ int run_render(const RenderCliOptions& o) {
   if (o.spp == 0) throw CLI::ValidationError("--spp", "must be at least 1");
   if (!(o.time_budget >= 0) || !(o.time_budget <= kMaxTimeBudgetSeconds))
     throw CLI::ValidationError("--time-budget", "must be a number of seconds in [0, 86400]");
-  if (o.threads < 0) throw CLI::ValidationError("--threads", "must be >= 0 (0: all cores)");
   render::check_output_path(o.output);
 
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
@@ -141,7 +140,7 @@ const bool registered = register_command(
        app.add_option("--time-budget", o->time_budget,
                       "seconds: repeat passes of --spp until spent (the image then depends on the "
                       "machine's speed)");
-       app.add_option("--threads", o->threads, "threads (default: all cores)");
+       add_threads_option(app, o->threads, "rendering threads (the image is identical for any N)");
        app.add_option("--seed", o->seed, "seed of every sample (default 1)");
        app.add_option("--tables", o->tables, "Integral-Radiance tables: auto, raw, compressed")
            ->check(CLI::IsMember({"auto", "raw", "compressed"}));

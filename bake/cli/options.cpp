@@ -18,6 +18,25 @@ CLI::Option* add_json_flag(CLI::App& app, bool& json, const std::string& help) {
   return app.add_flag("--json", json, help);
 }
 
+CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& help) {
+  const CLI::Validator whole_non_negative(
+      [](std::string& text) -> std::string {
+        std::size_t used = 0;
+        long value = -1;
+        try {
+          value = std::stol(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used != text.size() || value < 0 || value > 4096)
+          return "must be a whole number in [0, 4096] (0: all cores), got '" + text + "'";
+        return {};
+      },
+      "N >= 0");
+  return app.add_option("--threads", threads, help + " (0, the default: all cores)")
+      ->check(whole_non_negative);
+}
+
 CLI::Option* add_asset_argument(CLI::App& app, std::string& path, const std::string& help) {
   return app.add_option("ASSET", path, help)->required();
 }

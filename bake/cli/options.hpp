@@ -21,6 +21,11 @@ CLI::Option* add_json_flag(CLI::App& app, bool& json,
 CLI::Option* add_asset_argument(CLI::App& app, std::string& path,
                                 const std::string& help = "asset file (.cbk)");
 
+// --threads N: worker threads, one meaning in every command: 0 (the default) all cores, N > 0 at
+// most N. Anything else is exit 1, "--threads: must be a whole number >= 0 (0: all cores), got
+// 'TEXT'". `help` says what the threads do.
+CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& help);
+
 // What a number list must look like.
 struct NumberListRule {
   std::string expected;              // for the message "expected EXPECTED, got 'TEXT'"

@@ -75,3 +75,37 @@ TEST(OptionGroups, JsonFlagAndAssetArgument) {
 }
 
 }  // namespace
+
+namespace {
+
+// --threads: 0 (the default) means all cores in every command; anything but a whole number in
+// [0, 4096] is a usage error that names the option and the text.
+TEST(ThreadsOption, ZeroIsAllCoresAndBadValuesNameTheOption) {
+  auto parse = [](std::vector<std::string> args, int* threads) {
+    CLI::App app;
+    clothbake::cli::add_threads_option(app, *threads, "worker threads");
+    args.insert(args.begin(), "prog");
+    std::vector<const char*> argv;
+    for (const auto& a : args)
+      argv.push_back(a.c_str());
+    try {
+      app.parse(int(argv.size()), argv.data());
+    } catch (const CLI::ParseError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  int threads = -7;
+  EXPECT_EQ(parse({"--threads", "0"}, &threads), "");
+  EXPECT_EQ(threads, 0);
+  EXPECT_EQ(parse({"--threads", "3"}, &threads), "");
+  EXPECT_EQ(threads, 3);
+  for (const char* bad : {"-1", "1.5", "x", "4097", "99999999999999999999"}) {
+    const std::string message = parse({"--threads", bad}, &threads);
+    EXPECT_NE(message.find("--threads"), std::string::npos) << bad << ": " << message;
+    EXPECT_NE(message.find(std::string("got '") + bad + "'"), std::string::npos) << message;
+    EXPECT_LT(message.size(), 200u) << message;  // no 300-digit range
+  }
+}
+
+}  // namespace
