@@ -297,7 +297,8 @@ Action setup_batch(CLI::App& app) {
       ->required();
   app.add_option("-o,--output", o->output_dir, "output folder: OUTDIR/<fabric stem>.cbk")
       ->required();
-  app.add_option("--jobs", o->jobs, "bakes at once (default 1)")->check(CLI::Range(1, 1024));
+  app.add_option("--jobs", o->jobs, "bakes at once (default 1; 0: one per core)")
+      ->check(CLI::Range(0, 1024));
   app.add_option("--max-memory", o->max_memory,
                  "never start bakes whose measured peaks sum above this (default 80 % of RAM or of "
                  "the cgroup limit)");
@@ -336,14 +337,15 @@ Action setup_batch(CLI::App& app) {
     if (o->emit == "slurm") return emit_slurm(*o, jobs, unknown_peak);
 
     const int cpus = std::max(1, int(std::thread::hardware_concurrency()));
-    const int threads = std::max(1, cpus / o->jobs);
+    const int at_once = o->jobs == 0 ? cpus : o->jobs;  // --jobs 0: one bake per core
+    const int threads = std::max(1, cpus / at_once);
     auto estimate = [&](const Job& j) { return j.peak ? j.peak + j.peak / 10 : unknown_peak; };
     std::map<pid_t, std::size_t> running;
     uint64_t reserved = 0;
     const auto batch_start = std::chrono::steady_clock::now();
     for (;;) {
       // Start what fits: in list order, first fit by memory; one bake always may run.
-      for (std::size_t i = 0; i < jobs.size() && int(running.size()) < o->jobs; ++i) {
+      for (std::size_t i = 0; i < jobs.size() && int(running.size()) < at_once; ++i) {
         Job& j = jobs[i];
         if (j.status != "pending") continue;
         if (!running.empty() && reserved + estimate(j) > max_memory) continue;
@@ -413,7 +415,7 @@ Action setup_batch(CLI::App& app) {
                   {"baked", baked},
                   {"up_to_date", fresh},
                   {"failed", failed},
-                  {"jobs", o->jobs},
+                  {"jobs", at_once},
                   {"threads_per_bake", threads},
                   {"max_memory_bytes", max_memory},
                   {"wall_seconds", wall}});

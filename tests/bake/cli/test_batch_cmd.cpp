@@ -14,6 +14,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "tests/support/run_cli.hpp"
 
@@ -256,6 +257,18 @@ TEST_F(Batch, MemoryLimitStillBakesEverything) {
   // A limit below any bake's peak: one bake at a time, all baked.
   const auto doc = batch({"--jobs", "2", "--max-memory", "1M"});
   EXPECT_EQ(doc["baked"], 3);
+}
+
+// --jobs 0: one bake per core (as --threads 0 is all cores); outside [0, 1024] a usage error.
+TEST_F(Batch, JobsZeroIsOnePerCore) {
+  const auto doc = batch({"--jobs", "0"});
+  EXPECT_EQ(doc["baked"], 3);
+  EXPECT_EQ(doc["jobs"].get<int>(), std::max(1, int(std::thread::hardware_concurrency())));
+  const auto bad = run_clothbake(
+      {"batch", (dir_ / "lib").string(), "-o", (dir_ / "out2").string(), "--jobs", "-1"});
+  EXPECT_EQ(bad.code, 1) << bad.err;
+  EXPECT_NE(bad.err.find("--jobs"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out2"));
 }
 
 // The emitted script: bash parses it, its directives are those documented, and running each array
