@@ -25,9 +25,14 @@ void check_output_path(const std::string& exr_path) {
                       "beside it)");
   std::error_code ec;
   if (fs::is_directory(p, ec)) throw_input_error(exr_path + ": is a directory");
-  const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+  // A missing folder is created when the images are written (not now: a render that fails
+  // leaves nothing behind), so its nearest existing ancestor must be a folder.
+  fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+  while (!fs::exists(fs::symlink_status(dir, ec)) && dir.has_parent_path() &&
+         dir.parent_path() != dir)
+    dir = dir.parent_path();
   if (!fs::is_directory(dir, ec))
-    throw_input_error(exr_path + ": the folder " + dir.string() + " does not exist");
+    throw_input_error(exr_path + ": " + dir.string() + " is not a folder");
 }
 
 void write_image_atomically(const fs::path& path, const Image& image, PixelType type) {
@@ -41,6 +46,11 @@ OutputFiles write_render_images(const std::string& exr_path, const RenderResult&
   OutputFiles files;
   files.exr = exr_path;
   files.png = fs::path(exr_path).replace_extension(".png").string();
+  if (const fs::path dir = fs::path(exr_path).parent_path(); !dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw_input_error(exr_path + ": cannot create its folder (" + ec.message() + ")");
+  }
   Image linear(r.width, r.height, 3), preview(r.width, r.height, 3);
   for (std::size_t k = 0; k < r.rgb.size(); ++k) {
     linear.pixels[k] = r.rgb[k];

@@ -15,11 +15,12 @@ struct OutputFiles {
 };
 
 // Checks an output path before any work: it must end in .exr, not be a directory, and its folder
-// must exist. Throws clothbake::Error(Input) naming the path.
+// must exist or be creatable (its nearest existing ancestor a folder; write_render_images creates
+// it). Throws clothbake::Error(Input) naming the path.
 void check_output_path(const std::string& exr_path);
 
-// Writes exr_path and the same path with .png. Throws clothbake::Error(Input) on I/O failure,
-// leaving neither file changed.
+// Creates exr_path's folder when missing, then writes exr_path and the same path with .png. Throws
+// clothbake::Error(Input) on I/O failure, leaving neither file changed.
 OutputFiles write_render_images(const std::string& exr_path, const RenderResult& image);
 
 // Writes `image` to `path` through OpenImageIO (the format from the extension) under a temporary

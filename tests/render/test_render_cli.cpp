@@ -54,6 +54,28 @@ TEST(RenderCli, WritesTheExrAndThePreview) {
   EXPECT_EQ(sa, sb);
 }
 
+// -o into a missing folder creates it when the images are written; a path whose nearest existing
+// ancestor is a file is refused before anything is rendered, and a failed render creates nothing.
+TEST(RenderCli, OutputFoldersAreCreatedOnlyWhenWriting) {
+  const fs::path scene = write_scene("folder.toml", good_scene());
+  const fs::path out = assets().dir / "new" / "deeper" / "r.exr";
+  fs::remove_all(assets().dir / "new");
+  const auto run = run_clothbake({"render", scene.string(), "-o", out.string()});
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_TRUE(fs::is_regular_file(out));
+  EXPECT_TRUE(fs::is_regular_file(fs::path(out).replace_extension(".png")));
+  std::ofstream(assets().dir / "a-file") << "x";
+  const auto under_file = run_clothbake(
+      {"render", scene.string(), "-o", (assets().dir / "a-file" / "sub" / "r.exr").string()});
+  EXPECT_EQ(under_file.code, 2) << under_file.err;
+  EXPECT_NE(under_file.err.find("is not a folder"), std::string::npos) << under_file.err;
+  const fs::path failing = assets().dir / "never" / "r.exr";
+  const auto bad = run_clothbake(
+      {"render", write_scene("bad.toml", "[camera]\n").string(), "-o", failing.string()});
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_FALSE(fs::exists(assets().dir / "never"));
+}
+
 // --sheen-convention reaches the evaluator: an explicit published equals the default, converged
 // changes the cloth pixels; a bad value is a usage error.
 TEST(RenderCli, SheenConventionPicksTheTable) {
