@@ -79,8 +79,10 @@ def main():
                 if path and os.path.exists(path):
                     a.imshow(mpimg.imread(path), cmap=None if row == 0 else "inferno",
                              interpolation="nearest")
-                a.set_title(p["label"] if row == 0 else "relative error (0 to %.2g)" %
-                            p.get("error_scale", 0), fontsize=8)
+                if row == 0:
+                    a.set_title(p["label"], fontsize=8)
+                elif path:  # the reference has no error panel: no title either
+                    a.set_title("relative error (0 to %.2g)" % p.get("error_scale", 0), fontsize=8)
         fig.tight_layout()
         fig.savefig(os.path.join(out, "grid.png"), dpi=110)
         plt.close(fig)
