@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 #include <sys/stat.h>
 
+#include <cstdint>
 #include <exception>
+#include <stdexcept>
 
 #include "bake/inputs/fabric_files.hpp"
 #include "common/error.hpp"
@@ -35,11 +37,30 @@ std::string stamp_path(const std::string& text) {
   return out;
 }
 
+}  // namespace
+
+uint64_t json_unsigned(const nlohmann::json& value, const char* what) {
+  if (value.is_number_unsigned()) return value.get<uint64_t>();
+  if (value.is_number_integer() && value.get<int64_t>() >= 0) return uint64_t(value.get<int64_t>());
+  throw std::invalid_argument(std::string(what) + " is not a whole number >= 0 below 2^64");
+}
+
+int64_t json_signed(const nlohmann::json& value, const char* what) {
+  if (value.is_number_integer() && !value.is_number_unsigned()) return value.get<int64_t>();
+  if (value.is_number_unsigned() && value.get<uint64_t>() <= uint64_t(INT64_MAX))
+    return int64_t(value.get<uint64_t>());
+  throw std::invalid_argument(std::string(what) + " is not a whole number below 2^63 in magnitude");
+}
+
+namespace {
+
 // check_stamp on a stamp that parsed; throws (nlohmann::json::exception, std::exception) on
 // values of the wrong types.
 StampCheck check_parsed(const nlohmann::json& stamp, const StampKey& key) {
   StampCheck out;
-  out.peak_rss_bytes = stamp.value("peak_rss_bytes", uint64_t(0));
+  out.peak_rss_bytes = stamp.contains("peak_rss_bytes")
+                           ? json_unsigned(stamp["peak_rss_bytes"], "peak_rss_bytes")
+                           : 0;
   if (stamp.value("tool", "") != key.tool || stamp.value("exe", "") != stamp_text(key.exe)) {
     out.why = "another clothbake";
     return out;
@@ -51,8 +72,8 @@ StampCheck check_parsed(const nlohmann::json& stamp, const StampKey& key) {
   }
   struct stat st {};
   if (::stat(key.output.c_str(), &st) != 0 ||
-      uint64_t(st.st_size) != stamp.at("output").at("size").get<uint64_t>() ||
-      mtime_ns(st) != stamp.at("output").at("mtime_ns").get<int64_t>()) {
+      uint64_t(st.st_size) != json_unsigned(stamp.at("output").at("size"), "output.size") ||
+      mtime_ns(st) != json_signed(stamp.at("output").at("mtime_ns"), "output.mtime_ns")) {
     out.why = "output missing or changed";
     return out;
   }
@@ -63,8 +84,8 @@ StampCheck check_parsed(const nlohmann::json& stamp, const StampKey& key) {
       out.why = path + " is gone";
       return out;
     }
-    const bool same_size = uint64_t(st.st_size) == input.at("size").get<uint64_t>();
-    if (same_size && mtime_ns(st) == input.at("mtime_ns").get<int64_t>()) continue;
+    const bool same_size = uint64_t(st.st_size) == json_unsigned(input.at("size"), "size");
+    if (same_size && mtime_ns(st) == json_signed(input.at("mtime_ns"), "mtime_ns")) continue;
     // Touched: the content decides (another size is another content, no need to read it).
     std::string hash;
     if (same_size) try {

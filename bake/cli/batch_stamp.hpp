@@ -24,6 +24,13 @@ struct StampCheck {
   uint64_t output_size = 0;     // the output's size, when up to date
 };
 
+// A JSON value that must be a whole number in [0, 2^64) (unsigned) or in [-2^63, 2^63) (signed):
+// the number itself; anything else (a string, a fraction, a number beyond the type, which JSON
+// parses as a double whose conversion would be undefined) throws std::invalid_argument naming
+// `what`. For stamps and bake reports read back from files.
+uint64_t json_unsigned(const nlohmann::json& value, const char* what);
+int64_t json_signed(const nlohmann::json& value, const char* what);
+
 // Whether the stamp `text` holds for `key`: same tool, executable, options and fabric; the output
 // with the stamped size and mtime; every input the bake read with its stamped size and mtime, or,
 // when only the mtime changed, its stamped XXH64 (a changed size is a change; only touched files

@@ -379,8 +379,8 @@ Action setup_batch(CLI::App& app) {
         try {
           std::ifstream in(base + ".report.json");
           const nlohmann::json report = nlohmann::json::parse(in);
-          j.peak = report["total"]["peak_rss_bytes"];
-          j.size = report["asset"]["size_bytes"];
+          j.peak = json_unsigned(report["total"]["peak_rss_bytes"], "total.peak_rss_bytes");
+          j.size = json_unsigned(report["asset"]["size_bytes"], "asset.size_bytes");
           j.status = "baked";
           j.note = report["asset"].value("unchanged", false) ? "same bytes (file kept)" : j.note;
           write_stamp(*o, j, report);
