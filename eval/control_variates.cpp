@@ -40,14 +40,9 @@ void control_variate(const EvalData& data, const ShadingFrame& frame, const Cons
   const uint32_t label = data.clusters.label(x, y);
   const double vbar = frame.mean_visibility[label];
   const double gap = data.maps.gap[t];
-  if (k.diffuse) {
-    const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
-    const float* colour = data.maps.albedo.data + 3 * t;
-    const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
-                                                                  : yarn.diffuse_transmittance) *
-                       Rgb(colour[0], colour[1], colour[2]);
-    g[int(k.diffuse_lobe)] = k.diffuse_scale * (albedo * gap) * vbar;
-  }
+  if (k.diffuse)
+    g[int(k.diffuse_lobe)] =
+        k.diffuse_scale * (texel_diffuse_albedo(data, t, k.diffuse_lobe) * gap) * vbar;
   if (k.sheen) g[int(Lobe::Sheen)] = k.sheen_scale * vbar;
   if (k.delta) {
     if (data.gap.present()) {

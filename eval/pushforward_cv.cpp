@@ -67,14 +67,9 @@ void control_variate(const EvalData& data, const Constants& k, int64_t qx, int64
       g[int(k.specular_lobe)] += k.specular_scale[data.image_cluster[first]] * (value * v);
     }
   }
-  if (k.diffuse) {
-    const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
-    const float* colour = data.maps.albedo.data + 3 * t;
-    const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
-                                                                  : yarn.diffuse_transmittance) *
-                       Rgb(colour[0], colour[1], colour[2]);
-    g[int(k.diffuse_lobe)] += k.diffuse_scale * albedo * (gap * v);
-  }
+  if (k.diffuse)
+    g[int(k.diffuse_lobe)] +=
+        k.diffuse_scale * texel_diffuse_albedo(data, t, k.diffuse_lobe) * (gap * v);
   if (k.sheen) g[int(Lobe::Sheen)] += k.sheen_scale * v;
   if (k.delta) g[int(Lobe::DeltaTransmission)] += k.delta_scale * ((1.0 - gap) * v);
 }

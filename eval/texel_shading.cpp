@@ -93,6 +93,14 @@ double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, i
   return data.parallax.weighted_depth(frame.parallax_bins.index, frame.parallax_bins.weight, x, y);
 }
 
+Rgb texel_diffuse_albedo(const EvalData& data, uint64_t t, model::Lobe lobe) noexcept {
+  const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
+  const float* colour = data.maps.albedo.data + 3 * t;
+  return (lobe == model::Lobe::DiffuseReflection ? yarn.diffuse_reflectance
+                                                 : yarn.diffuse_transmittance) *
+         Rgb(colour[0], colour[1], colour[2]);
+}
+
 ActiveLobes active_lobes(const EvalData& data, const ShadingFrame& frame) noexcept {
   ActiveLobes a;
   const bool reflect = frame.wi.z * frame.wo.z > 0.0, transmit = frame.wi.z * frame.wo.z < 0.0;

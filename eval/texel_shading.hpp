@@ -55,6 +55,10 @@ double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, i
 // (neither when i_z o_z = 0), the sheen, the delta lobe only at i = -o. h = 0 (i = -o) has no
 // half-vector bin; the specular lobes are 0 there (D(0) = 0). Shared by both control-variate
 // estimators; no allocation.
+// The diffuse albedo of texel index t for the diffuse lobe `lobe` (reflection: R_d, transmission:
+// T_d): the yarn's times the texel's colour (docs/evaluator.md, "Texel parameters").
+Rgb texel_diffuse_albedo(const EvalData& data, uint64_t t, model::Lobe lobe) noexcept;
+
 struct ActiveLobes {
   bool specular = false, diffuse = false, sheen = false, delta = false;
   model::Lobe specular_lobe = model::Lobe::SpecularReflection;
