@@ -526,6 +526,21 @@ void run(const EvalData& d, const PairTables& tb, const Footprint& p, int sample
   }
 }
 
+// The footprints of one size: a whole-tile multiple at the origin once (its average does not
+// depend on the position), any other size at `positions` random positions (seed 7, the same in
+// every section so that their rows are comparable).
+std::vector<Footprint> study_footprints(double side, uint32_t n, int positions) {
+  const bool periodic = std::fmod(side, double(n)) == 0.0;
+  std::vector<Footprint> where(periodic ? 1 : positions);
+  Rng place(7);
+  for (Footprint& f : where) {
+    const double x0 = periodic ? 0.0 : place.uniform() * n;
+    const double y0 = periodic ? 0.0 : place.uniform() * n;
+    f = Footprint{x0, y0, x0 + side, y0 + side};
+  }
+  return where;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t m = v.size() / 2;
@@ -569,19 +584,12 @@ void study(const EvalData& d, const Config& cfg, LobeMask mask, const char* lobe
       other.join();
     }
     for (double side : sides) {
-      const bool periodic = std::fmod(side, double(d.n)) == 0.0;
-      const int positions = periodic ? 1 : cfg.positions;
+      const std::vector<Footprint> where = study_footprints(side, d.n, cfg.positions);
+      const int positions = int(where.size());
       {
         // ratios[row][pair], bias[row][pair]
         std::vector<std::vector<double>> ratio(kRows), bias(kRows);
         std::vector<Accumulators> per_pair(16 * positions);
-        std::vector<Footprint> where(positions);
-        Rng place(7);
-        for (int k = 0; k < positions; ++k) {
-          const double x0 = periodic ? 0.0 : place.uniform() * d.n;
-          const double y0 = periodic ? 0.0 : place.uniform() * d.n;
-          where[k] = Footprint{x0, y0, x0 + side, y0 + side};
-        }
         auto work = [&](int first, int step) {
           for (int pair = first; pair < 16; pair += step) {
             const PairTables& tb = tables[pair];
@@ -653,17 +661,10 @@ void shipped(const Evaluator& ev, const Config& cfg) {
   std::printf("| footprint | R min | R median | R max | |bias| / SE max | remainder samples |\n");
   std::printf("| --- | --- | --- | --- | --- | --- |\n");
   for (double side : sides) {
-    const bool periodic = std::fmod(side, double(d.n)) == 0.0;
-    const int positions = periodic ? 1 : cfg.positions;
+    const std::vector<Footprint> where = study_footprints(side, d.n, cfg.positions);
+    const int positions = int(where.size());
     std::vector<double> ratio(16), worst_z(16, 0.0);
     double remainder = 0;
-    Rng place(7);
-    std::vector<Footprint> where(positions);
-    for (int k = 0; k < positions; ++k) {
-      const double x0 = periodic ? 0.0 : place.uniform() * d.n;
-      const double y0 = periodic ? 0.0 : place.uniform() * d.n;
-      where[k] = Footprint{x0, y0, x0 + side, y0 + side};
-    }
     auto work = [&](int first, int step) {
       for (int pair = first; pair < 16; pair += step) {
         double var_ms = 0, var_brute = 0;
