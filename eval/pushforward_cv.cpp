@@ -127,7 +127,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const double ax = kx * double(n), ay = ky * double(n);
   // The view's four bins are built together, whichever is drawn: a view's first estimate (a
   // renderer's first frame, a report's warm-up pass) then prepares everything that view will read,
-  // and later estimates never pay a build (about 4 ms per bin at N = 256).
+  // and later estimates never pay a build (6-9 ms per bin at N = 256, docs/evaluator.md).
   for (int other = 0; other < 4; ++other)
     if (other != bin && frame.parallax_bins.weight[other] > 0.0)
       (void)data.pushforward.bin_sums(uint32_t(frame.parallax_bins.index[other]));

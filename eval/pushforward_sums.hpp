@@ -26,7 +26,7 @@
 // Each bin's sums are built on its first bin_sums() call (thread-safe, std::call_once; the
 // estimator asks for a view's four bins on the view's first estimate): one pass over the N^2
 // source texels to splat m_k, one over the destinations. Memory: count() doubles per bin built
-// (about 10 KB for the default twill), cost about 4 ms per bin at N = 256.
+// (about 10 KB for the default twill), cost 6-9 ms per bin at N = 256 (docs/evaluator.md).
 //
 // C++17, standard library only. bin_sums() allocates only on a bin's first use.
 #pragma once
