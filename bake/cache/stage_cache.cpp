@@ -352,6 +352,13 @@ bool DiskCache::load(const pipeline::Stage& stage, const pipeline::Artifacts& av
   return true;
 }
 
+void DiskCache::begin_run() {
+  derived_.clear();
+  content_.clear();
+  keys_.clear();
+  hit_paths_.clear();
+}
+
 bool DiskCache::discard_hits(const std::string& why) {
   const bool any = !hit_paths_.empty();
   for (const std::string& path : hit_paths_) {

@@ -53,8 +53,9 @@ struct CacheCounts {
   int unstored = 0;  // ran, could not be stored (no codec, cache not writable)
 };
 
-// Serves exactly one bake: it memoises the digests of artifacts by name as the bake runs, so a
-// second bake (another fabric) needs a DiskCache of its own; any number may share one folder.
+// Memoises the digests of artifacts by name within a pipeline run and forgets them when the next
+// run begins (begin_run), so one DiskCache may serve several bakes (the fabrics of a scene); any
+// number may share one folder.
 class DiskCache final : public pipeline::StageCache {
  public:
   // Creates the folder if needed. A folder that cannot be created or written is warned about
@@ -70,9 +71,10 @@ class DiskCache final : public pipeline::StageCache {
   bool store(const pipeline::Stage& stage, const pipeline::Artifacts& available,
              const pipeline::Artifacts& produced) override;
   bool discard_hits(const std::string& why) override;
+  void begin_run() override;
   const CacheCounts& counts() const { return *counts_; }
-  // Keys of the stages seen so far (stage name -> 32 hex digits); the last one of a bake (the
-  // compress stage's, or any stage's) identifies the bake's computed content.
+  // Keys of the stages seen in the current run (stage name -> 32 hex digits); the last one of a
+  // bake (the compress stage's, or any stage's) identifies the bake's computed content.
   const std::map<std::string, std::string>& keys() const { return keys_; }
   // Prunes the folder to the bound when it holds more (done after each store; a caller that adds
   // files of its own, such as the assets of scene renders, calls it after adding them).

@@ -80,6 +80,7 @@ std::string scene_cache_dir(const std::string& option) {
 void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_option, bool quiet,
                         bool keep_raw_tables) {
   std::string cache;
+  std::unique_ptr<cache::DiskCache> stage_cache;  // one for every fabric (it forgets between runs)
   const cache::Codecs codecs = stages::artifact_codecs();
   std::map<std::string, std::string> asset_of;  // fabric path -> asset: each fabric loaded once
   compress::CompressRequest compression;
@@ -112,11 +113,11 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
     if (fs::is_regular_file(asset, ec)) {
       ::utimensat(AT_FDCWD, asset.c_str(), nullptr, 0);  // most recently used
     } else {
-      // One stage cache per bake: it memoises digests by artifact name, so a cache reused for a
-      // second fabric would hand it the first fabric's records and maps.
-      cache::CacheOptions options;
-      options.dir = cache;
-      const auto stage_cache = std::make_unique<cache::DiskCache>(options, codecs);
+      if (!stage_cache) {
+        cache::CacheOptions options;
+        options.dir = cache;
+        stage_cache = std::make_unique<cache::DiskCache>(options, codecs);
+      }
       // From the path, as `clothbake bake f.toml` does (the asset's metadata lists load_fabric
       // among the stages), so that the asset has the bytes of that command's.
       pipeline::BakeRequest request;

@@ -93,6 +93,7 @@ RunResult run_pipeline(const std::vector<std::string>& picked, Artifacts seeded,
   // removes one entry, so this ends; three are plenty in practice). Values from the cache that
   // fail a later check: their entries are removed, and the run again recomputes them.
   for (int attempt = 0;; ++attempt) {
+    if (options.cache != nullptr) options.cache->begin_run();
     try {
       return run_once(picked, seeded, options, stages);
     } catch (const CacheEntryCorrupt&) {

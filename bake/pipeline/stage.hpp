@@ -84,6 +84,10 @@ class StageCache {
     (void)why;
     return false;
   }
+  // A pipeline run starts (run_pipeline calls it before each run, a retry included): whatever the
+  // cache memoised about the previous run's artifacts no longer holds, since the same names may now
+  // hold other values (the next fabric of a scene).
+  virtual void begin_run() {}
 };
 
 struct RunOptions {

@@ -431,8 +431,9 @@ TEST(RenderHardening, ObjectsNamingOneAssetShareIt) {
 }
 
 // Two different fabrics in one scene each get their own asset, the one `clothbake bake` makes: the
-// stage cache memoises digests by artifact name within one bake, and one cache shared by the
-// scene's bakes once gave the second fabric of the same resolution entries of the first.
+// scene's one stage cache memoises digests by artifact name within a run, and before it forgot
+// them between runs (StageCache::begin_run) the second fabric of the same resolution got entries
+// of the first.
 TEST(RenderCli, EachSceneFabricIsBakedFromItsOwnToml) {
   const fs::path matrix = assets().dir / "red-matrix.toml";
   std::ofstream(matrix)
