@@ -150,20 +150,10 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
     if (!hit.hit()) return seen;
     seen.object = hit.object;
     for (std::size_t li = 0; li < scene_.lights.size() && li < 64; ++li) {
-      const Light& light = scene_.lights[li];
-      bool blocked = false;
-      if (light.type == LightType::Point) {
-        const Vec3 to = light.position - hit.point;
-        const double dist = length(to);
-        if (!(dist > 0)) continue;
-        const Vec3 wi = to / dist;
-        blocked =
-            occluded({shadow_ray_origin(hit, wi), wi}, scene_.objects, 0.0, dist * (1 - 1e-9));
-      } else if (light.type == LightType::Directional) {
-        const Vec3 wi = -light.direction;
-        blocked = occluded({shadow_ray_origin(hit, wi), wi}, scene_.objects, 0.0, INFINITY);
-      }
-      if (blocked) seen.shadowed |= uint64_t(1) << li;
+      LightArrival arrival;
+      if (scene_.lights[li].type != LightType::Environment &&
+          !unshadowed_light(scene_.lights[li], hit, scene_.objects, &arrival))
+        seen.shadowed |= uint64_t(1) << li;
     }
     return seen;
   };
@@ -276,17 +266,10 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     Rgb radiance;
     for (std::size_t li = 0; li < scene.lights.size(); ++li) {
       const Light& light = scene.lights[li];
-      if (light.type == LightType::Point) {
-        const Vec3 to = light.position - hit.point;
-        const double dist = length(to);
-        if (!(dist > 0)) continue;
-        const Vec3 wi = to / dist;
-        if (occluded({shadow_origin(wi), wi}, scene.objects, 0.0, dist * (1 - 1e-9))) continue;
-        radiance += bsdf(wi, kContinuousLobes, samples) * light.intensity / (dist * dist);
-      } else if (light.type == LightType::Directional) {
-        const Vec3 wi = -light.direction;
-        if (occluded({shadow_origin(wi), wi}, scene.objects, 0.0, INFINITY)) continue;
-        radiance += bsdf(wi, kContinuousLobes, samples) * light.irradiance;
+      if (light.type != LightType::Environment) {
+        LightArrival arrival;
+        if (unshadowed_light(light, hit, scene.objects, &arrival))
+          radiance += bsdf(arrival.wi, kContinuousLobes, samples) * arrival.irradiance;
       } else {
         const Environment& env = *impl.environments[li];
         Rgb sum_env;

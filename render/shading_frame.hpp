@@ -3,6 +3,9 @@
 // both see the same local directions.
 #pragma once
 
+#include <cmath>
+#include <vector>
+
 #include "model/vec.hpp"
 #include "render/shapes.hpp"
 
@@ -29,6 +32,34 @@ inline Vec3 shadow_ray_origin(const SurfaceHit& hit, const Vec3& wi) {
   const double eps =
       1e-7 * (1.0 + std::abs(hit.point.x) + std::abs(hit.point.y) + std::abs(hit.point.z) + hit.t);
   return hit.point + hit.normal * (dot(hit.normal, wi) > 0 ? eps : -eps);
+}
+
+// What a point or directional light delivers at `hit` when nothing shadows it: the direction
+// towards it (world, unit) and the irradiance on a surface facing it (a point light's intensity
+// over the squared distance, a directional light's irradiance). False when the light is shadowed
+// there (the shadow ray from shadow_ray_origin, up to the light), when a point light sits on the
+// hit, and for environment lights (sampled by their own rules). The one shadow test of these lights
+// for the renderer, its interior-pixel mask and the usage analysis.
+struct LightArrival {
+  Vec3 wi;
+  Rgb irradiance;
+};
+inline bool unshadowed_light(const Light& light, const SurfaceHit& hit,
+                             const std::vector<Object>& objects, LightArrival* out) {
+  if (light.type == LightType::Point) {
+    const Vec3 to = light.position - hit.point;
+    const double dist = length(to);
+    if (!(dist > 0)) return false;
+    out->wi = to / dist;
+    out->irradiance = light.intensity / (dist * dist);
+    return !occluded({shadow_ray_origin(hit, out->wi), out->wi}, objects, 0.0, dist * (1 - 1e-9));
+  }
+  if (light.type == LightType::Directional) {
+    out->wi = -light.direction;
+    out->irradiance = light.irradiance;
+    return !occluded({shadow_ray_origin(hit, out->wi), out->wi}, objects, 0.0, INFINITY);
+  }
+  return false;
 }
 
 }  // namespace clothbake::render

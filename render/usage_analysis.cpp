@@ -147,16 +147,9 @@ SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& sha
         };
         for (std::size_t li = 0; li < scene.lights.size(); ++li) {
           const Light& light = scene.lights[li];
-          if (light.type == LightType::Point) {
-            const Vec3 to = light.position - hit.point;
-            const double dist = length(to);
-            if (!(dist > 0)) continue;
-            const Vec3 wi = to / dist;
-            if (!occluded({shadow_ray_origin(hit, wi), wi}, scene.objects, 0.0, dist * (1 - 1e-9)))
-              lit(wi);
-          } else if (light.type == LightType::Directional) {
-            const Vec3 wi = -light.direction;
-            if (!occluded({shadow_ray_origin(hit, wi), wi}, scene.objects, 0.0, INFINITY)) lit(wi);
+          if (light.type != LightType::Environment) {
+            LightArrival arrival;
+            if (unshadowed_light(light, hit, scene.objects, &arrival)) lit(arrival.wi);
           } else {
             for (const Vec3& wi : environments[li].directions)
               if (!occluded({shadow_ray_origin(hit, wi), wi}, scene.objects, 0.0, INFINITY))
