@@ -350,8 +350,8 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   // samples it like any footprint (one view bin drawn per estimate: one BSDF evaluation per
   // sample, what a path tracer pays per ray).
   const bool point = !(w * h >= 1e-12);
-  const bool direct = (point && method != Method::Brute) ||
-                      (multiscale && w < direct_side && h < direct_side);
+  const bool direct =
+      (point && method != Method::Brute) || (multiscale && w < direct_side && h < direct_side);
   // The unbiased form needs the compressed tables' images, and a whole period of the tile in both
   // axes of the footprint: narrower footprints are sampled exactly as brute force (the same
   // random numbers: the view bin, then the points).
@@ -361,8 +361,7 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
                          "ones have no images to integrate under the parallax); use "
                          "multiscale-paper, brute or reference with raw tables");
   const double tile = double(data_->n);
-  const bool without_cv =
-      method == Method::Multiscale && !direct && (w < tile || h < tile);
+  const bool without_cv = method == Method::Multiscale && !direct && (w < tile || h < tile);
   if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
                                                // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
@@ -372,16 +371,16 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
                            "asset left out (bin_map instance 0)",
                            hv[0], hv[1], hv[2]);
   }
+  const Footprint sampled =
+      point ? Footprint{footprint.x0, footprint.y0, footprint.x0, footprint.y0} : footprint;
   if (direct) {
     out->counters.direct = true;
-    const Footprint corner{footprint.x0, footprint.y0, footprint.x0, footprint.y0};
-    s = exact_average(*data_, frame, point ? corner : footprint, 0, out);
+    s = exact_average(*data_, frame, sampled, 0, out);
   } else if (method == Method::Reference) {
     s = exact_average(*data_, frame, footprint, 0, out);
   } else if (method == Method::Brute || without_cv) {
     out->counters.without_control_variate = without_cv;
-    const Footprint corner{footprint.x0, footprint.y0, footprint.x0, footprint.y0};
-    brute_force(*data_, frame, point ? corner : footprint, spp, rng, out);
+    brute_force(*data_, frame, sampled, spp, rng, out);
   } else if (method == Method::MultiscalePaper) {
     s = paper_control_variates(*data_, frame, footprint, spp, rng, out);
   } else {

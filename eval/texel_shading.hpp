@@ -50,15 +50,15 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
 // reader::ParallaxView::depth): what multiscale-paper's footprint mean approximates.
 double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept;
 
+// The diffuse albedo of texel index t for the diffuse lobe `lobe` (reflection: R_d, transmission:
+// T_d): the yarn's times the texel's colour (docs/evaluator.md, "Texel parameters").
+Rgb texel_diffuse_albedo(const EvalData& data, uint64_t t, model::Lobe lobe) noexcept;
+
 // The lobes of frame.mask that a control variate carries for (i, o) and the specular lobe's
 // half-vector bin weights: the specular and diffuse lobes of the reflection or transmission side
 // (neither when i_z o_z = 0), the sheen, the delta lobe only at i = -o. h = 0 (i = -o) has no
 // half-vector bin; the specular lobes are 0 there (D(0) = 0). Shared by both control-variate
 // estimators; no allocation.
-// The diffuse albedo of texel index t for the diffuse lobe `lobe` (reflection: R_d, transmission:
-// T_d): the yarn's times the texel's colour (docs/evaluator.md, "Texel parameters").
-Rgb texel_diffuse_albedo(const EvalData& data, uint64_t t, model::Lobe lobe) noexcept;
-
 struct ActiveLobes {
   bool specular = false, diffuse = false, sheen = false, delta = false;
   model::Lobe specular_lobe = model::Lobe::SpecularReflection;

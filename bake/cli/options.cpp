@@ -19,17 +19,20 @@ CLI::Option* add_json_flag(CLI::App& app, bool& json, const std::string& help) {
 }
 
 CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& help) {
+  // The project's number parser, as a CLI11 validator (its message without the option prefix,
+  // which CLI11 adds).
   const CLI::Validator whole_non_negative(
       [](std::string& text) -> std::string {
-        std::size_t used = 0;
-        long value = -1;
+        const NumberListRule rule{.expected = "a whole number in [0, 4096] (0: all cores)",
+                                  .count = 1,
+                                  .integers = true,
+                                  .min = 0,
+                                  .max = 4096};
         try {
-          value = std::stol(text, &used);
-        } catch (const std::exception&) {
-          used = 0;
+          (void)parse_number_list(text, "", rule);
+        } catch (const CLI::ValidationError&) {
+          return "must be " + rule.expected + ", got '" + text + "'";
         }
-        if (used != text.size() || value < 0 || value > 4096)
-          return "must be a whole number in [0, 4096] (0: all cores), got '" + text + "'";
         return {};
       },
       "N >= 0");
