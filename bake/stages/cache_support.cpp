@@ -88,8 +88,9 @@ StreamedTablesArtifact decode_streamed(ByteReader& r) {
               std::all_of(labels.begin(), labels.end(),
                           [&](uint8_t l) { return int(l) < cluster_count; }),
           "streamed tables: a label outside the clusters");
+  // samples_per_side 0 is the default rule (radiance_fill.hpp), what every bake writes.
   require(options.bins_per_side >= 1 && options.bins_per_side <= 1024 &&
-              options.samples_per_side >= 1 && options.samples_per_side <= 1024 &&
+              options.samples_per_side >= 0 && options.samples_per_side <= 1024 &&
               std::isfinite(options.max_relative_error),
           "streamed tables: options out of range");
   require(std::all_of(tangent.begin(), tangent.end(),

@@ -137,6 +137,31 @@ TEST_F(Cache, AlbedoOnlyChangeReusesTheGeometryStages) {
   EXPECT_EQ(cache_states(bake("c.cbk")).at("tables"), "miss");
 }
 
+// Evicted entries (prune takes the least recently used out one by one) are recomputed from the
+// entries still cached: for every stage, the entries after it are removed, so every cached output
+// a computing stage reads is decoded. An entry every bake writes must pass its own decode checks:
+// nothing is reported corrupt, only the removed stages are stored, and the asset is unchanged.
+TEST_F(Cache, EvictedEntriesAreRebuiltFromTheCachedOnes) {
+  const std::vector<std::string> order = {"fabric_records", "feature_maps", "parallax",
+                                          "visibility",     "cluster",      "tables"};
+  bake("a.cbk");
+  for (std::size_t kept = 1; kept <= order.size(); ++kept) {
+    bake("full.cbk");  // every entry back
+    for (std::size_t k = kept; k < order.size(); ++k)
+      for (const auto& e : entries(order[k]))
+        fs::remove(e);
+    for (const auto& e : entries("compress"))
+      fs::remove(e);
+    const auto report = bake("b.cbk");
+    const auto states = cache_states(report);
+    EXPECT_EQ(states.at(order[kept - 1]), "hit") << order[kept - 1];
+    EXPECT_EQ(report["cache"]["corrupt"], 0) << order[kept - 1] << report["warnings"].dump();
+    EXPECT_EQ(report["cache"]["stored"], int(order.size() - kept + 1))
+        << order[kept - 1] << report["warnings"].dump();
+    EXPECT_EQ(slurp(dir_ / "b.cbk"), slurp(dir_ / "a.cbk")) << order[kept - 1];
+  }
+}
+
 // A flipped byte in a payload, in the index, or a truncated entry: detected, removed, recomputed;
 // the asset equals an uncached bake.
 TEST_F(Cache, CorruptedEntriesAreRecomputedNeverUsed) {
