@@ -92,6 +92,9 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   if (!(options.remainder_sample_scale > 0.0) || !std::isfinite(options.remainder_sample_scale))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "remainder_sample_scale must be finite and > 0");
+  if (!(options.max_remainder_fraction >= 0.0) || !std::isfinite(options.max_remainder_fraction))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "max_remainder_fraction must be finite and >= 0");
   if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "direct_max_side must be finite and >= 0");
@@ -352,16 +355,16 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   const bool point = !(w * h >= 1e-12);
   const bool direct =
       (point && method != Method::Brute) || (multiscale && w < direct_side && h < direct_side);
-  // The unbiased form needs the compressed tables' images, and a whole period of the tile in both
-  // axes of the footprint: narrower footprints are sampled exactly as brute force (the same
-  // random numbers: the view bin, then the points).
+  // The unbiased form needs the compressed tables' images, and a footprint that a block of whole
+  // periods covers up to max_remainder_fraction of its area: others are sampled exactly as brute
+  // force (the same random numbers: the view bin, then the points).
   if (method == Method::Multiscale && !direct && !data_->specular.is_compressed())
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
                          "method multiscale needs compressed Integral-Radiance tables (the raw "
                          "ones have no images to integrate under the parallax); use "
                          "multiscale-paper, brute or reference with raw tables");
-  const double tile = double(data_->n);
-  const bool without_cv = method == Method::Multiscale && !direct && (w < tile || h < tile);
+  const bool without_cv =
+      method == Method::Multiscale && !direct && !point && !uses_control_variate(*data_, footprint);
   if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
                                                // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};

@@ -14,9 +14,10 @@
 //
 // Methods (Method):
 //   Multiscale      clustered control variates with each texel's low-rank visibility, at each
-//                   sample's own destination, whose mean over the footprint's whole periods is
-//                   exact (per-view-bin push-forward sums): unbiased (docs/evaluator.md, "Unbiased
-//                   multi-scale"); footprints without a whole period are sampled as brute force.
+//                   sample's own destination, whose mean over a block of whole periods is exact
+//                   (per-view-bin push-forward sums) and over the rest of the footprint sampled
+//                   cheaply: unbiased (docs/evaluator.md, "Unbiased multi-scale"); footprints far
+//                   from a block of whole periods are sampled as brute force.
 //   MultiscalePaper Eq. 8-10 as printed: one parallax shift per footprint, k-bar and G-bar at the
 //                   footprint, residual D (V - v_c) (biased where those approximations fail).
 //   Brute           the paper's "w/o multi-scale": stratified samples p in P, per-sample parallax,
@@ -85,11 +86,16 @@ struct EvalOptions {
   // false: the model without parallax (x'(p) = p, no footprint shift): for measuring what the
   // parallax offsets are worth (the near-field report, docs/rendering.md).
   bool parallax = true;
-  // The unbiased multi-scale form's cheap samples of g over the part B of a footprint outside its
-  // whole periods (docs/evaluator.md, "Unbiased multi-scale"): ceil(scale (|B| / |P|)
-  // sqrt(spp (spp + 2))) of them, at least 1 when B is not empty, at most 65536. Any value > 0
+  // The unbiased multi-scale form's cheap samples of g over the part B of a footprint that its
+  // block of whole periods leaves (docs/evaluator.md, "Unbiased multi-scale"): ceil(scale (|B| /
+  // |P|) sqrt(spp (spp + 2))) of them, at least 1 when B is not empty, at most 65536. Any value > 0
   // keeps the estimate unbiased; this one balances their cost against their variance.
   double remainder_sample_scale = 32.0;
+  // The unbiased multi-scale form uses its control variate on a footprint P when the part B of P
+  // that its whole-period block A leaves to cheap samples (the symmetric difference, signed) is at
+  // most this fraction of |P| (eval/methods.hpp, period_block); otherwise P is sampled as brute
+  // force. Any value keeps the estimate unbiased; docs/evaluator.md gives the measured choice.
+  double max_remainder_fraction = 1.0;
   // The sheen table of every texel's BSDF (model/sheen.hpp, docs/sheen.md): the published one of
   // Zeltner et al. by default, as renderers ship it; Converged for the layer's exact albedo. The
   // asset stores only the sheen colour and roughness, so this is the evaluator's choice.
@@ -105,10 +111,10 @@ struct Counters {
   uint32_t samples = 0;            // Monte Carlo samples drawn over the footprint
   uint32_t texel_evals = 0;        // per-texel BSDF evaluations (f^ V at one texel)
   uint32_t table_queries = 0;      // footprint queries on SATs (radiance, parallax, footprint sums)
-  uint32_t remainder_samples = 0;  // multiscale: cheap samples of g outside the whole periods
+  uint32_t remainder_samples = 0;  // multiscale: cheap samples of g over B (period_block)
   bool direct = false;             // answered by the exact sum (footprint below direct_max_side)
-  bool without_control_variate = false;  // multiscale: sampled as brute force (the footprint holds
-                                         // no whole period of the tile in one of its axes)
+  bool without_control_variate = false;  // multiscale: sampled as brute force (|B| / |P| above
+                                         // EvalOptions::max_remainder_fraction)
 };
 
 struct Estimate {

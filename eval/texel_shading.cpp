@@ -156,14 +156,14 @@ void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int
   const uint64_t t = data.texel(x, y);
   const model::ClothBsdf<double> bsdf(data.texel_params(t));
   // V exactly as reader::VisibilityAsgView::visibility computes it, for the mirrored direction.
-  const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe(x, y));
+  const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe_at(t));
   const double v = model::asg_eval(lobe, frame.wi_light);
   const double visibility = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
   integrand_lobes(frame, bsdf.eval(frame.wi, frame.wo, visibility), out->lobes);
   out->visibility = visibility;
   out->gap = bsdf.gap();
   out->sggx_d = bsdf.sggx().D(frame.h);
-  out->label = data.clusters.label(x, y);
+  out->label = data.clusters.label_at(t);
 }
 
 }  // namespace clothbake::eval

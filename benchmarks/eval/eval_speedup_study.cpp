@@ -7,9 +7,10 @@
 // eps^2), eps = 1 % of the mean reference over the footprints.
 //
 //   eval_speedup_study ASSET [--footprints N] [--repeats K] [--min-side S] [--max-side S]
-//                      [--remainder-scale K] [--per-footprint] [--seed S]
+//                      [--remainder-scale K] [--max-remainder F] [--per-footprint] [--seed S]
 //                      [--tables raw|compressed]
-// --remainder-scale: EvalOptions::remainder_sample_scale. Besides the time, the equal-error ratio
+// --remainder-scale: EvalOptions::remainder_sample_scale; --max-remainder:
+// EvalOptions::max_remainder_fraction. Besides the time, the equal-error ratio
 // in samples: brute force's spp at the multi-scale error (log-log interpolation) over 2.
 // Exit 2 on a bad argument or asset.
 #include <algorithm>
@@ -43,7 +44,7 @@ struct Point {
   std::fprintf(stderr,
                "eval_speedup_study: %s\nusage: eval_speedup_study ASSET [--footprints N] "
                "[--repeats K] [--min-side S] [--max-side S] [--seed S] [--tables raw|compressed] "
-               "[--remainder-scale K] [--per-footprint]\n",
+               "[--remainder-scale K] [--max-remainder F] [--per-footprint]\n",
                why);
   std::exit(2);
 }
@@ -145,6 +146,8 @@ int main(int argc, char** argv) {
       seed = number(v, "--seed");
     else if (opt == "--remainder-scale")
       options.remainder_sample_scale = number(v, "--remainder-scale");
+    else if (opt == "--max-remainder")
+      options.max_remainder_fraction = number(v, "--max-remainder");
     else if (opt == "--tables") {
       if (std::strcmp(v, "raw") == 0)
         options.tables = TableChoice::Raw;

@@ -388,8 +388,12 @@ int CompressedRadianceTables::cluster_of_texel(uint32_t x, uint32_t y) const noe
 
 CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights(
     uint32_t x, uint32_t y) const noexcept {
+  return texel_weights_at(uint64_t(y) * n_ + x);
+}
+
+CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights_at(
+    uint64_t t) const noexcept {
   TexelWeights tw;
-  const uint64_t t = uint64_t(y) * n_ + x;
   const uint8_t g = cell_map_[t];
   if (g == kNoCell) return tw;
   tw.first_image = cell_images_[2 * g];
@@ -447,7 +451,7 @@ uint32_t CompressedRadianceTables::texel_image_weights_at(uint64_t t, uint32_t* 
                                                           double* weights) const noexcept {
   *first_image = 0;
   if (!is_open() || t >= uint64_t(n_) * n_) return 0;
-  const TexelWeights tw = texel_weights(uint32_t(t % n_), uint32_t(t / n_));
+  const TexelWeights tw = texel_weights_at(t);  // no division: this is the cheap samples' path
   if (tw.rank < 0) return 0;
   *first_image = tw.first_image;
   for (int j = 0; j <= tw.rank; ++j)

@@ -91,6 +91,11 @@ class CompressedRadianceTables final : public RadianceTables {
   float image_basis(uint32_t image, uint32_t bin) const noexcept {
     return basis_[uint64_t(bin) * images_ + image];
   }
+  // Every image's scaled basis value in bin `bin` (< bins): image_count() floats, image order
+  // (image_basis(i, bin) = row[i]); valid while the tables are open.
+  const float* image_basis_row(uint32_t bin) const noexcept {
+    return basis_.get() + uint64_t(bin) * images_;
+  }
   // The visibility cluster whose tables image `image` (< image_count()) belongs to.
   uint32_t image_cluster(uint32_t image) const noexcept;
   // Every bin of one texel at once (out: bins floats, zeros for a texel without a cell); returns
@@ -111,6 +116,7 @@ class CompressedRadianceTables final : public RadianceTables {
     int64_t weight(int j) const noexcept { return j == 0 ? 1 : int64_t(q[j - 1]); }
   };
   TexelWeights texel_weights(uint32_t x, uint32_t y) const noexcept;
+  TexelWeights texel_weights_at(uint64_t t) const noexcept;  // t = y N + x < N^2
 
   CompressedTableInfoRecord info_{};
   RadianceTableKind kind_ = RadianceTableKind::Specular;

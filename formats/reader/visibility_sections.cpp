@@ -88,8 +88,11 @@ Status VisibilityAsgView::open(const Asset& asset) noexcept {
 
 model::AsgRecord VisibilityAsgView::record(int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
-  const uint16_t* f =
-      records_ + (uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n))) * kAsgRecordFields;
+  return record_at(uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n)));
+}
+
+model::AsgRecord VisibilityAsgView::record_at(uint64_t t) const noexcept {
+  const uint16_t* f = records_ + t * kAsgRecordFields;
   model::AsgRecord r;
   r.axis_u = f[0];
   r.axis_v = f[1];
@@ -102,6 +105,10 @@ model::AsgRecord VisibilityAsgView::record(int64_t x, int64_t y) const noexcept 
 
 model::AsgParams<double> VisibilityAsgView::lobe(int64_t x, int64_t y) const noexcept {
   return model::unpack_asg<double>(record(x, y));
+}
+
+model::AsgParams<double> VisibilityAsgView::lobe_at(uint64_t t) const noexcept {
+  return model::unpack_asg<double>(record_at(t));
 }
 
 double VisibilityAsgView::fit_error(int64_t x, int64_t y) const noexcept {

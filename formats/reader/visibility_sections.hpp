@@ -68,6 +68,9 @@ class VisibilityAsgView {
   // The stored record and its decoded lobe at texel (x, y) (any integers: the tile wraps).
   model::AsgRecord record(int64_t x, int64_t y) const noexcept;
   model::AsgParams<double> lobe(int64_t x, int64_t y) const noexcept;
+  // The same at texel index t = y N + x (t < N^2: not checked; no division, for per-sample use).
+  model::AsgRecord record_at(uint64_t t) const noexcept;
+  model::AsgParams<double> lobe_at(uint64_t t) const noexcept;
   // RMS fit error at (x, y); NaN without the fit error section.
   double fit_error(int64_t x, int64_t y) const noexcept;
 

@@ -3,6 +3,7 @@
 // variance of the unbiased control variates against brute force, and bad arguments.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -345,9 +346,13 @@ TEST(Reference, LobesAddUpAndTheMaskRestricts) {
 // transmission; the compressed tables (the estimator's images): the mean of 4000 estimates at 2 spp
 // within 3 standard errors of the reference.
 void expect_multiscale_unbiased(const std::string& asset, uint64_t seed) {
+  // 1, 4^2 and 32^2 texels (sampled as brute force), a tile, 1.5 x 2 and 3 x 2 tiles (A inside
+  // P), 0.8 x 1.7 tiles (A beyond P in both axes: both rectangles subtracted) and 1.3 x 1.8 tiles
+  // (a column added, a row subtracted) on the 64^2 fixtures.
   const Footprint footprints[] = {{10.3, 20.7, 11.3, 21.7},  {5.5, 7.25, 9.5, 11.25},
                                   {3.1, 40.2, 35.1, 72.2},   {0, 0, 64, 64},
-                                  {-10.3, 5.7, 86.2, 133.9}, {3.0, -7.0, 195.0, 121.0}};
+                                  {-10.3, 5.7, 86.2, 133.9}, {3.0, -7.0, 195.0, 121.0},
+                                  {7.4, 3.3, 58.6, 112.1},   {-20.1, 11.9, 63.1, 127.1}};
   auto o = open(asset, TableChoice::Compressed);
   for (const Directions& dirs : kConfigurations)
     for (const Footprint& p : footprints) {
@@ -380,6 +385,45 @@ TEST(Multiscale, IsUnbiasedWithAThinRemainder) {
   EXPECT_EQ(eval::remainder_samples(*o->evaluator.data(), p, 1), 2u);
 }
 
+// The block of whole periods and its two signed rectangles add up to the footprint, point by
+// point (1_P = 1_A + sum_r sign_r 1_rect_r on a grid of test points over a box around both), and
+// the block is the one of least symmetric difference among the floor and ceiling counts.
+TEST(Multiscale, PeriodBlockAndItsSignedRectanglesAreTheFootprint) {
+  const uint32_t n = 64;
+  Rng rng(21);
+  auto inside = [](const Footprint& r, double x, double y) {
+    return x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1;
+  };
+  for (int trial = 0; trial < 200; ++trial) {
+    const double x0 = -100 + 200 * rng.uniform(), y0 = -100 + 200 * rng.uniform();
+    const double w = 1 + 300 * rng.uniform(), h = 1 + 300 * rng.uniform();
+    const Footprint p{x0, y0, x0 + w, y0 + h};
+    const eval::PeriodBlock b = eval::period_block(n, p);
+    ASSERT_GE(b.kx, 1.0);
+    ASSERT_GE(b.ky, 1.0);
+    const Footprint a{x0, y0, x0 + b.kx * n, y0 + b.ky * n};
+    EXPECT_NEAR(b.kx * b.ky * n * n + b.signs[0] * b.areas[0] + b.signs[1] * b.areas[1], w * h,
+                1e-9 * w * h);
+    double least = 1e300;
+    for (double kx : {std::floor(w / n), std::ceil(w / n)})
+      for (double ky : {std::floor(h / n), std::ceil(h / n)}) {
+        kx = std::max(kx, 1.0);
+        ky = std::max(ky, 1.0);
+        least = std::min(least,
+                         kx * ky * n * n + w * h - 2 * std::min(kx * n, w) * std::min(ky * n, h));
+      }
+    EXPECT_NEAR(b.remainder * w * h, least, 1e-9 * w * h);
+    const double size = std::max({w, h, b.kx * n, b.ky * n}) + 2;
+    for (int k = 0; k < 400; ++k) {
+      const double x = x0 - 1 + size * rng.uniform(), y = y0 - 1 + size * rng.uniform();
+      double sum = inside(a, x, y) ? 1.0 : 0.0;
+      for (int r = 0; r < 2; ++r)
+        if (b.areas[r] > 0.0 && inside(b.rects[r], x, y)) sum += b.signs[r];
+      ASSERT_EQ(sum, inside(p, x, y) ? 1.0 : 0.0) << trial << " at " << x << ", " << y;
+    }
+  }
+}
+
 TEST(Multiscale, NeedsTheCompressedTables) {
   auto o = open(assets().twill, TableChoice::Raw);
   Rng rng(1);
@@ -409,15 +453,17 @@ TEST(Multiscale, SmallFootprintsAreSummedExactly) {
   }
 }
 
-// A footprint without a whole period of the tile in one of its axes is sampled exactly as brute
-// force (bit for bit with the same generator); with one in both, the control variate is used and
-// the remainder gets its cheap samples; the paper form always has its control variate.
-TEST(Multiscale, FootprintsWithoutAWholePeriodAreSampledAsBruteForce) {
+// A footprint that no block of whole periods covers up to max_remainder_fraction (1) of its area
+// is sampled exactly as brute force (bit for bit with the same generator); otherwise the control
+// variate is used and the remainder gets its cheap samples, also below a tile; the paper form
+// always has its control variate.
+TEST(Multiscale, FootprintsFarFromWholePeriodsAreSampledAsBruteForce) {
   auto o = open(assets().twill);
   const double wo[3] = {-0.4, 0.1, 0.85};
-  const Footprint narrow{3.5, 9.25, 60.0, 300.0},  // tall but narrower than the tile
+  const Footprint narrow{3.5, 9.25, 30.0, 300.0},  // tall, under half the tile wide: |B|/|P| 1.4
       whole{-10.0, 5.0, 118.0, 69.0},              // two tiles by one: no remainder
-      ragged{-10.0, 5.0, 120.5, 90.0};             // whole periods and a remainder
+      ragged{-10.0, 5.0, 120.5, 90.0},             // whole periods and a remainder
+      near_tile{-3.0, 2.0, 49.0, 54.0};            // 0.81 x 0.81 tiles: |B|/|P| 0.51
   for (int k = 0; k < 20; ++k) {
     Rng a(100 + k), b(100 + k);
     Estimate ms, brute;
@@ -439,6 +485,11 @@ TEST(Multiscale, FootprintsWithoutAWholePeriodAreSampledAsBruteForce) {
     ASSERT_TRUE(
         o->evaluator.estimate(ragged, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
             .ok());
+    EXPECT_GT(ms.counters.remainder_samples, 0u);
+    ASSERT_TRUE(
+        o->evaluator.estimate(near_tile, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
+            .ok());
+    EXPECT_FALSE(ms.counters.without_control_variate);
     EXPECT_GT(ms.counters.remainder_samples, 0u);
   }
   Rng rng(1);
