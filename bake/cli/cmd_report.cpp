@@ -120,8 +120,8 @@ Action setup_report(CLI::App& app) {
                  "docs/hardening.md)")
       ->required()
       ->check(CLI::IsMember({"compression", "error-time", "plan", "stability"}));
-  app.add_option("FABRIC", o->fabric,
-                 "fabric description (compression) or scene (error-time, plan); none for "
+  app.add_option("INPUT", o->fabric,
+                 "the fabric description (compression) or the scene (error-time, plan); none for "
                  "stability");
   auto large = std::make_shared<bool>(false);
   app.add_flag("--large", *large,
@@ -169,7 +169,7 @@ Action setup_report(CLI::App& app) {
   return [o, et, m, s, resolution, large] {
     if (o->what == "stability") {
       if (!o->fabric.empty())
-        throw Error(ExitCode::Usage, "report stability takes no FABRIC or SCENE argument");
+        throw Error(ExitCode::Usage, "report stability takes no INPUT (fabric or scene)");
       StabilityOptions so;
       so.output = o->output;
       so.large = *large;
@@ -177,7 +177,10 @@ Action setup_report(CLI::App& app) {
       return run_stability_report(so);
     }
     if (o->fabric.empty())
-      throw Error(ExitCode::Usage, "report " + o->what + ": FABRIC (or SCENE) is required");
+      throw Error(ExitCode::Usage,
+                  "report " + o->what + ": INPUT (" +
+                      std::string(o->what == "compression" ? "a fabric" : "a scene") +
+                      ") is required");
     if (*large) throw Error(ExitCode::Usage, "--large applies to report stability only");
     if (o->what == "plan") {
       PlanReportOptions po;
@@ -339,7 +342,7 @@ Action setup_report(CLI::App& app) {
 }
 
 const bool registered = register_command(
-    {"report", "Sweep compression settings and write CSV and plots (report compression)",
+    {"report", "Write a report as CSV, JSON and plots: compression, error-time, plan or stability",
      setup_report});
 
 }  // namespace

@@ -2,6 +2,7 @@
 // Exit codes (docs/cli.md): 0 ok, 1 usage, 2 input or I/O error, 3 invalid asset, 4 internal error.
 // SIGINT, SIGTERM and SIGHUP remove the temporary output files, then end the process by the
 // signal (common/temp_registry.hpp).
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -10,6 +11,7 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/terminal_text.hpp"
+#include "bake/inputs/fabric_toml.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/temp_registry.hpp"
@@ -81,6 +83,19 @@ int main(int argc, char** argv) {
   for (const auto& command : cli::registered_commands()) {
     CLI::App* sub = app.add_subcommand(command.name, command.description);
     actions[sub] = command.setup(*sub);
+  }
+  // A mistyped command: name it and the closest one (CLI11 would only say that one is required).
+  if (argc >= 2 && argv[1][0] != '-') {
+    std::vector<std::string> names;
+    for (const auto& command : cli::registered_commands())
+      names.push_back(command.name);
+    if (std::find(names.begin(), names.end(), argv[1]) == names.end()) {
+      const std::string near = inputs::closest_match(argv[1], names);
+      report_error("unknown command '" + std::string(argv[1]) + "'" +
+                   (near.empty() ? std::string() : "; did you mean '" + near + "'?") +
+                   " (clothbake --help lists the commands)");
+      return int(ExitCode::Usage);
+    }
   }
   try {
     app.parse(argc, argv);

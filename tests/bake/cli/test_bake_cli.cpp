@@ -477,3 +477,22 @@ TEST_F(Cli, ConflictingCompressionOptionsAreUsageErrors) {
     EXPECT_FALSE(fs::exists(dir_ / "x.cbk")) << message;
   }
 }
+
+// A mistyped command is a usage error naming it and the closest command; a word near none gets no
+// suggestion; an empty command line still asks for one.
+TEST_F(Cli, UnknownCommandSuggestsTheClosest) {
+  Outcome r = run({"rendr", "scene.toml"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_IN("unknown command 'rendr'; did you mean 'render'?", r.err);
+  r = run({"valdiate"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_IN("did you mean 'validate'?", r.err);
+  r = run({"xyzzyplugh"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_IN("unknown command 'xyzzyplugh'", r.err);
+  EXPECT_EQ(r.err.find("did you mean"), std::string::npos) << r.err;
+  r = run({});
+  EXPECT_EQ(r.code, 1);
+  r = run({"--version"});
+  EXPECT_EQ(r.code, 0);
+}
