@@ -29,13 +29,13 @@ std::vector<Command> registered_commands();
 
 // Prints JSON on stdout (pretty, 2-space indent, trailing newline): the machine output of --json.
 void print_json(const nlohmann::json& value);
-// Flushes stdout; returns `code`, or 2 (ExitCode::Input) with an error on stderr when anything
-// written to stdout was lost (disk full, /dev/full, closed pipe). main() applies it to every
-// action.
 // Flushes stdout and throws Error(Input) "cannot write to standard output: ..." when what was
 // written did not reach it (a full disk, /dev/full, a closed pipe): for a command that must know
 // before it commits an output.
 void require_stdout_written();
+// Flushes stdout; returns `code`, or 2 (ExitCode::Input) with an error on stderr when anything
+// written to stdout was lost (disk full, /dev/full, closed pipe). main() applies it to every
+// action.
 int checked_stdout(int code);
 
 // Option groups (--json, ASSET) and value parsers shared by the commands: options.hpp.

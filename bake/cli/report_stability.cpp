@@ -18,7 +18,6 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <random>
 #include <thread>
 
 #include "bake/cli/command.hpp"
@@ -38,6 +37,7 @@
 #include "model/parameter_ranges.hpp"
 #include "model/sggx.hpp"
 #include "model/sheen.hpp"
+#include "model/splitmix64.hpp"
 #include "model/spongecake.hpp"
 #include "verify/compressed_verify.hpp"
 #include "verify/radiance_verify.hpp"
@@ -699,8 +699,8 @@ void baked_rows(Report& report, const BakedCase& c, const BakeOutcome& baked) {
     // Eq. 2 offset at 2048^2.
     foot_row.tolerance = range > 0 ? 1e-7 : 0.0;
     std::vector<Sample> depth_samples, foot_samples;
-    std::mt19937_64 rng(fabric.bake.seed);
-    std::uniform_real_distribution<double> unit(0, 1);
+    // The project's generator: the same footprints on every platform and standard library.
+    model::SplitMix64 rng(fabric.bake.seed);
     const int rows_checked = std::min(n, 4);  // the profile is constant in v
     for (int j = 0; j < dirs; ++j)
       for (int i = 0; i < dirs; ++i) {
@@ -727,9 +727,9 @@ void baked_rows(Report& report, const BakedCase& c, const BakeOutcome& baked) {
                                                 {0, 0, double(n), double(n)},
                                                 {-0.5 * n, 0.25, 1.0 * n, 1.5 * n}};
         for (int k = 0; k < c.footprints; ++k) {
-          const double side = std::min(double(n), std::pow(2.0, 6 * unit(rng)) * 0.37);
-          const double x0 = (unit(rng) * 3 - 1) * n, y0 = (unit(rng) * 3 - 1) * n;
-          rects.push_back({x0, y0, x0 + side, y0 + side * (0.5 + unit(rng))});
+          const double side = std::min(double(n), std::pow(2.0, 6 * rng.uniform()) * 0.37);
+          const double x0 = (rng.uniform() * 3 - 1) * n, y0 = (rng.uniform() * 3 - 1) * n;
+          rects.push_back({x0, y0, x0 + side, y0 + side * (0.5 + rng.uniform())});
         }
         for (const reader::Footprint& rect : rects) {
           reader::ParallaxSample ps;
@@ -973,10 +973,7 @@ int run_stability_report(const StabilityOptions& o) {
   }
   fs::remove_all(tmp, ec);
   if (o.json) {
-    // print_json's format (main.cpp, which this library does not link): pretty, U+FFFD for bytes
-    // that are not UTF-8.
-    std::cout << doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
-    std::cout.flush();
+    print_json(doc);
   } else {
     std::printf("stability report: %zu rows, %d failed; %s/{stability.csv,stability.json}\n",
                 rows.size(), failed, terminal_safe(o.output).c_str());
