@@ -1,17 +1,11 @@
 #include "sheen/sheen_table_writer.hpp"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 
 #include "common/error.hpp"
-#include "common/temp_registry.hpp"
 
 namespace clothbake::sheen {
 namespace {
@@ -117,50 +111,6 @@ std::string format_sheen_table_header(const SheenTableFit& fit) {
   out +=
       fmt::format("}};\n// clang-format on\n\n}}  // namespace clothbake::model::{}\n", name_space);
   return out;
-}
-
-void write_file_atomically(const std::string& path, const std::string& text) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path directory = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(directory, ec))
-    throw_input_error("cannot write '" + path + "': directory '" + directory.string() +
-                      "' does not exist");
-  if (fs::is_directory(target, ec))
-    throw_input_error("cannot write '" + path + "': it is a directory");
-  // Hidden name in the same directory (same file system, so the rename is atomic). Built with
-  // append: GCC 12 warns falsely (-Wrestrict) about "." + std::string.
-  std::string temporary_name(".");
-  temporary_name.append(target.filename().string()).append(".tmp.");
-  temporary_name.append(std::to_string(::getpid()));
-  const fs::path temporary = directory / temporary_name;
-  // Registered so that SIGINT/SIGTERM/SIGHUP remove it (common/temp_registry.hpp). Absolute: the
-  // handler must find it whatever the working directory is then.
-  struct Registration {
-    int slot;
-    ~Registration() { unregister_temp_path(slot); }
-  } registration{register_temp_path(fs::absolute(temporary, ec).c_str())};
-  {
-    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-    if (!file)
-      throw_input_error("cannot write '" + path + "': cannot create '" + temporary.string() +
-                        "': " + std::strerror(errno));
-    file.write(text.data(), std::streamsize(text.size()));
-    file.flush();
-    if (!file) {
-      const std::string reason = std::strerror(errno);
-      file.close();
-      fs::remove(temporary, ec);
-      throw_input_error("cannot write '" + path + "': " + reason);
-    }
-  }
-  fs::rename(temporary, target, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    throw_input_error("cannot write '" + path + "': " + ec.message());
-  }
 }
 
 }  // namespace clothbake::sheen

@@ -16,9 +16,4 @@ namespace clothbake::sheen {
 // Contains no timestamps or paths: the same fit gives the same bytes.
 std::string format_sheen_table_header(const SheenTableFit& fit);
 
-// Writes text to path through a temporary file in the same directory and a rename, so that path is
-// either untouched or complete. Throws clothbake::Error (ExitCode::Input) naming the path on any
-// I/O failure, after removing the temporary file.
-void write_file_atomically(const std::string& path, const std::string& text);
-
 }  // namespace clothbake::sheen

@@ -18,6 +18,7 @@
 #include "bake/cli/options.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
+#include "formats/writer/atomic_file.hpp"
 #include "sheen/sheen_fit.hpp"
 #include "sheen/sheen_table_writer.hpp"
 
@@ -120,7 +121,7 @@ Action setup_fit_sheen(CLI::App& app) {
   return [o] {
     const auto [cos_count, roughness_count] = parse_resolution(o->resolution);
     if (!o->output.empty()) {
-      // Fail before minutes of simulation rather than after (write_file_atomically checks again).
+      // Fail before minutes of simulation rather than after (write_text_atomically checks again).
       const std::filesystem::path target(o->output);
       const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : ".";
       std::error_code ec;
@@ -158,7 +159,7 @@ Action setup_fit_sheen(CLI::App& app) {
         warn("fit-sheen: " + std::to_string(n.truncated) + " paths truncated at cos " +
              std::to_string(n.cos_theta) + ", roughness " + std::to_string(n.roughness));
     const std::string header = sheen::format_sheen_table_header(fit);
-    if (!o->output.empty()) sheen::write_file_atomically(o->output, header);
+    if (!o->output.empty()) formats::write_text_atomically(o->output, header);
     info("fit-sheen: simulated in " + std::to_string(fit.simulate_seconds) + " s, fitted in " +
          std::to_string(fit.fit_seconds) + " s");
     if (o->json) {

@@ -104,6 +104,22 @@ TEST_F(Output, RefusesAMissingDirectory) {
   EXPECT_NE(message.find("does not exist"), std::string::npos) << message;
 }
 
+// Text outputs (reports, depfiles, fit-sheen's header): replaced whole, no temporary left, and the
+// failing path named.
+TEST_F(Output, TextReplacesAnyRegularFileAndNamesTheFailingPath) {
+  const fs::path target = dir_ / "table.hpp";
+  formats::write_text_atomically(target, "first\n");
+  formats::write_text_atomically(target, "second\n");
+  EXPECT_EQ(read(target), "second\n");
+  EXPECT_TRUE(others("table.hpp").empty());
+  const fs::path missing = dir_ / "no-such-dir" / "table.hpp";
+  const std::string message = error_of([&] { formats::write_text_atomically(missing, "x"); });
+  EXPECT_NE(message.find(missing.string()), std::string::npos) << message;
+  EXPECT_NE(error_of([&] { formats::write_text_atomically(dir_, "x"); }).find("is a directory"),
+            std::string::npos);
+  EXPECT_TRUE(others("table.hpp").empty());
+}
+
 TEST_F(Output, RefusesAnUnwritablePath) {
   // /proc accepts no new files, even for root.
   const std::string message = error_of(

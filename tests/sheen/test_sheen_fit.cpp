@@ -250,29 +250,6 @@ fs::path scratch_dir(const std::string& name) {
   return dir;
 }
 
-TEST(SheenFit, WritesAtomicallyAndReportsTheFailingPath) {
-  const fs::path dir = scratch_dir("atomic");
-  const fs::path target = dir / "table.hpp";
-  write_file_atomically(target.string(), "first\n");
-  write_file_atomically(target.string(), "second\n");
-  std::ifstream in(target);
-  std::stringstream text;
-  text << in.rdbuf();
-  EXPECT_EQ(text.str(), "second\n");
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
-
-  const std::string missing = (dir / "no-such-dir" / "table.hpp").string();
-  try {
-    write_file_atomically(missing, "x");
-    FAIL() << "expected an error";
-  } catch (const clothbake::Error& e) {
-    EXPECT_EQ(e.code(), clothbake::ExitCode::Input);
-    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
-  }
-  EXPECT_THROW(write_file_atomically(dir.string(), "x"), clothbake::Error);  // a directory
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
-}
-
 // --- the CLI ------------------------------------------------------------------------------------
 
 using clothbake::test_support::CliRun;
