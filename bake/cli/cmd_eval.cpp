@@ -28,7 +28,8 @@ namespace clothbake::cli {
 namespace {
 
 struct EvalCliOptions {
-  std::string asset, rect, wi, wo, method = "multiscale", lobes = "all", tables = "auto";
+  std::string asset, rect, wi, wo, method = "multiscale", lobes = "all";
+  eval::TableChoice tables = eval::TableChoice::Auto;
   std::string sheen_convention = "published";
   uint32_t spp = 2, repeat = 1;
   uint64_t seed = 1;
@@ -82,9 +83,7 @@ int run_eval(const EvalCliOptions& o) {
   const std::array<double, 3> wo = parse_direction(o.wo, "--wo");
   const eval::LobeMask mask = parse_lobes(o.lobes);
   eval::EvalOptions options;
-  options.tables = o.tables == "raw"          ? eval::TableChoice::Raw
-                   : o.tables == "compressed" ? eval::TableChoice::Compressed
-                                              : eval::TableChoice::Auto;
+  options.tables = o.tables;
   model::parse_sheen_convention(o.sheen_convention, options.sheen_convention);  // IsMember
 
   const reader::Asset asset = formats::open_valid_asset(o.asset);
@@ -187,10 +186,7 @@ const bool registered = register_command(
                       "independent estimates to average; their spread gives std_error (default 1)");
        app.add_option("--lobes", o->lobes,
                       "all, or a comma list of lobes of Eq. 4 to restrict every method to");
-       app.add_option("--tables", o->tables,
-                      "Integral-Radiance tables of the multi-scale methods: auto (compressed if "
-                      "present, else raw), raw, compressed")
-           ->check(CLI::IsMember({"auto", "raw", "compressed"}));
+       add_tables_option(app, o->tables, "the multi-scale methods' ");
        app.add_option("--sheen-convention", o->sheen_convention,
                       "sheen table: published (Zeltner et al.'s, as Cycles ships it; default) or "
                       "converged (docs/sheen.md)")

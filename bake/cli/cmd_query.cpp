@@ -42,7 +42,7 @@ struct QueryOptions {
   std::string lobe;
   std::optional<uint32_t> cluster;
   std::string h;
-  std::string tables = "auto";
+  eval::TableChoice tables = eval::TableChoice::Auto;
   bool json = false;
 };
 
@@ -190,9 +190,7 @@ int query_radiance(const QueryOptions& o) {
       c /= largest;
   const std::vector<double> rect = parse_number_list(o.rect, "--rect", kRect);
   args.rect = {rect[0], rect[1], rect[2], rect[3]};
-  args.source = o.tables == "raw"          ? TableSource::Raw
-                : o.tables == "compressed" ? TableSource::Compressed
-                                           : TableSource::Auto;
+  args.source = o.tables;
   const reader::Asset asset = formats::open_valid_asset(o.asset);
   nlohmann::json answer = radiance_query(asset, args);
   if (o.json) {
@@ -235,10 +233,7 @@ const bool registered = register_command(
                       "specular_transmission, delta_transmission)");
        app.add_option("--cluster", o->cluster, "radiance: one visibility cluster (default: all)");
        app.add_option("--h", o->h, "radiance: half vector x,y,z in the local frame");
-       app.add_option("--tables", o->tables,
-                      "radiance: which tables answer: auto (raw if kept, else compressed), raw, "
-                      "compressed")
-           ->check(CLI::IsMember({"auto", "raw", "compressed"}));
+       add_tables_option(app, o->tables, "radiance: ");
        add_json_flag(app, o->json, "print the answer as JSON on stdout");
        return [o] { return run_query(*o); };
      }});

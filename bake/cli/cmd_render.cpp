@@ -32,7 +32,8 @@ namespace {
 namespace fs = std::filesystem;
 
 struct RenderCliOptions {
-  std::string scene, output, method = "multiscale", tables = "auto", cache;
+  std::string scene, output, method = "multiscale", cache;
+  eval::TableChoice tables = eval::TableChoice::Auto;
   std::string sheen_convention = "published";
   uint32_t spp = 2;
   double time_budget = 0;
@@ -83,9 +84,7 @@ int run_render(const RenderCliOptions& o) {
   ro.spp = o.spp;
   ro.seed = o.seed;
   ro.time_budget = o.time_budget;
-  ro.tables = o.tables == "raw"          ? eval::TableChoice::Raw
-              : o.tables == "compressed" ? eval::TableChoice::Compressed
-                                         : eval::TableChoice::Auto;
+  ro.tables = o.tables;
   model::parse_sheen_convention(o.sheen_convention, ro.sheen_convention);  // checked by IsMember
   const render::Renderer renderer(loaded.scene, ro);
   ProgressBar bar(!o.json);
@@ -142,8 +141,7 @@ const bool registered = register_command(
                       "machine's speed)");
        add_threads_option(app, o->threads, "rendering threads (the image is identical for any N)");
        app.add_option("--seed", o->seed, "seed of every sample (default 1)");
-       app.add_option("--tables", o->tables, "Integral-Radiance tables: auto, raw, compressed")
-           ->check(CLI::IsMember({"auto", "raw", "compressed"}));
+       add_tables_option(app, o->tables);
        app.add_option("--sheen-convention", o->sheen_convention,
                       "sheen table: published (Zeltner et al.'s, as Cycles ships it; default) or "
                       "converged (docs/sheen.md)")

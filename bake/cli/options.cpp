@@ -10,12 +10,29 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 
 namespace clothbake::cli {
 
 CLI::Option* add_json_flag(CLI::App& app, bool& json, const std::string& help) {
   return app.add_flag("--json", json, help);
+}
+
+CLI::Option* add_tables_option(CLI::App& app, eval::TableChoice& choice, const std::string& scope) {
+  return app
+      .add_option_function<std::string>(
+          "--tables",
+          [&choice](const std::string& word) {
+            choice = word == "raw"          ? eval::TableChoice::Raw
+                     : word == "compressed" ? eval::TableChoice::Compressed
+                                            : eval::TableChoice::Auto;
+          },
+          scope +
+              "Integral-Radiance tables: auto (the compressed ones when the asset has them, else "
+              "the raw ones; the default), raw, compressed")
+      ->check(CLI::IsMember({"auto", "raw", "compressed"}))
+      ->option_text("auto|raw|compressed");
 }
 
 CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& help) {

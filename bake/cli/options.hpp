@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "eval/evaluator.hpp"
+
 namespace clothbake::cli {
 
 // --json: print the command's answer as one JSON document on stdout (print_json). `help` says
@@ -25,6 +27,13 @@ CLI::Option* add_asset_argument(CLI::App& app, std::string& path,
 // most N. Anything else is exit 1, "--threads: must be a whole number >= 0 (0: all cores), got
 // 'TEXT'". `help` says what the threads do.
 CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& help);
+
+// --tables auto|raw|compressed: which Integral-Radiance tables answer, one meaning in every
+// command (eval, render, query radiance): auto, the default, the compressed tables when the asset
+// has them and else the raw ones (what a renderer reads); raw or compressed only those (exit 2
+// when the asset lacks them). Any other word is exit 1. `scope` prefixes the help ("radiance: ").
+CLI::Option* add_tables_option(CLI::App& app, eval::TableChoice& choice,
+                               const std::string& scope = "");
 
 // What a number list must look like.
 struct NumberListRule {

@@ -28,24 +28,26 @@ nlohmann::json radiance_query(const reader::Asset& asset, const RadianceQueryArg
                 "--lobe: " + args.lobe +
                     " has no Integral-Radiance table (diffuse and sheen lobes are not tabulated; "
                     "use specular_reflection, specular_transmission or delta_transmission)");
-  // Raw tables first under Auto (exact); the compressed ones when the asset has no raw ones.
+  // Compressed tables first under Auto (what a renderer reads); the raw ones when the asset has
+  // no compressed ones.
+  using eval::TableChoice;
   reader::RawRadianceTables raw;
   reader::CompressedRadianceTables compressed;
   const reader::RadianceTables* chosen = nullptr;
   reader::Status status;
-  if (args.source != TableSource::Compressed) {
-    status = raw.open(asset, kind);
-    if (status.ok()) chosen = &raw;
-  }
-  if (!chosen && args.source != TableSource::Raw &&
-      (args.source == TableSource::Compressed || status.code() == reader::ErrorCode::NotFound)) {
+  if (args.source != TableChoice::Raw) {
     status = compressed.open(asset, kind);
     if (status.ok()) chosen = &compressed;
   }
+  if (!chosen && args.source != TableChoice::Compressed &&
+      (args.source == TableChoice::Raw || status.code() == reader::ErrorCode::NotFound)) {
+    status = raw.open(asset, kind);
+    if (status.ok()) chosen = &raw;
+  }
   if (!chosen) {
     if (status.code() == reader::ErrorCode::NotFound) {
-      const char* which = args.source == TableSource::Raw          ? " raw"
-                          : args.source == TableSource::Compressed ? " compressed"
+      const char* which = args.source == TableChoice::Raw          ? " raw"
+                          : args.source == TableChoice::Compressed ? " compressed"
                                                                    : "";
       throw_input_error("the asset has no" + std::string(which) + " " +
                         reader::radiance_kind_name(kind) + " table for " + args.lobe +

@@ -16,20 +16,19 @@
 #include <optional>
 #include <string>
 
+#include "eval/evaluator.hpp"
 #include "formats/reader/asset.hpp"
 
 namespace clothbake::cli {
-
-// Which stored representation answers: raw fixed-point SATs or C-PCA compressed tables. Auto takes
-// the raw tables when the asset keeps them (exact) and the compressed ones otherwise.
-enum class TableSource { Auto, Raw, Compressed };
 
 struct RadianceQueryArgs {
   std::string lobe;
   std::optional<uint32_t> cluster;  // none: every cluster
   std::array<double, 3> h{0, 0, 1};
   std::array<double, 4> rect{0, 0, 1, 1};  // x0, y0, x1, y1
-  TableSource source = TableSource::Auto;
+  // Which stored representation answers (options.hpp, --tables): Auto the compressed tables when
+  // the asset has them, else the raw ones.
+  eval::TableChoice source = eval::TableChoice::Auto;
 };
 
 // The answer as JSON ({lobe, table, source ("raw" or "compressed": which representation

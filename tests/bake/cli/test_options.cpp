@@ -109,3 +109,34 @@ TEST(ThreadsOption, ZeroIsAllCoresAndBadValuesNameTheOption) {
 }
 
 }  // namespace
+
+// --tables: one meaning in eval, render and query (auto = compressed first); unset keeps Auto.
+TEST(TablesOption, MapsTheThreeWordsAndRefusesOthers) {
+  auto parse = [](std::vector<std::string> args, clothbake::eval::TableChoice* choice) {
+    CLI::App app;
+    clothbake::cli::add_tables_option(app, *choice);
+    args.insert(args.begin(), "prog");
+    std::vector<const char*> argv;
+    for (const auto& a : args)
+      argv.push_back(a.c_str());
+    try {
+      app.parse(int(argv.size()), argv.data());
+    } catch (const CLI::ParseError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  using clothbake::eval::TableChoice;
+  TableChoice choice = TableChoice::Auto;
+  EXPECT_EQ(parse({}, &choice), "");
+  EXPECT_EQ(choice, TableChoice::Auto);
+  EXPECT_EQ(parse({"--tables", "raw"}, &choice), "");
+  EXPECT_EQ(choice, TableChoice::Raw);
+  EXPECT_EQ(parse({"--tables", "compressed"}, &choice), "");
+  EXPECT_EQ(choice, TableChoice::Compressed);
+  EXPECT_EQ(parse({"--tables", "auto"}, &choice), "");
+  EXPECT_EQ(choice, TableChoice::Auto);
+  const std::string message = parse({"--tables", "lossy"}, &choice);
+  EXPECT_NE(message.find("--tables"), std::string::npos) << message;
+  EXPECT_NE(message.find("lossy"), std::string::npos) << message;
+}
