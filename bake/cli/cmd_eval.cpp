@@ -136,7 +136,7 @@ int run_eval(const EvalCliOptions& o) {
                           {"lobes", parts},
                           {"std_error", rgb(std_error)},
                           {"seconds_per_estimate", seconds},
-                          {"footprint_texels", texels},
+                          {"footprint_side_texels", std::sqrt(texels)},
                           {"direct", e.counters.direct},
                           {"without_control_variate", e.counters.without_control_variate},
                           {"texel_evals", e.counters.texel_evals},
@@ -145,9 +145,9 @@ int run_eval(const EvalCliOptions& o) {
     print_json(out);
     return 0;
   }
-  std::printf("%s over [%g, %g) x [%g, %g) (%g texels), %s tables, %u spp x %u:\n",
-              eval::method_name(method), r[0], r[2], r[1], r[3], texels, evaluator.table_source(),
-              o.spp, o.repeat);
+  std::printf("%s over [%g, %g) x [%g, %g) (%g x %g texels), %s tables, %u spp x %u:\n",
+              eval::method_name(method), r[0], r[2], r[1], r[3], r[2] - r[0], r[3] - r[1],
+              evaluator.table_source(), o.spp, o.repeat);
   std::printf("  value      (%.6g, %.6g, %.6g)", mean.r, mean.g, mean.b);
   if (o.repeat > 1)
     std::printf("  +- (%.3g, %.3g, %.3g) standard error", std_error.r, std_error.g, std_error.b);

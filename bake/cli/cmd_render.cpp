@@ -32,7 +32,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct RenderCliOptions {
-  std::string scene, output, method = "multiscale", cache;
+  std::string scene, output, method = "multiscale", cache, image_size;
   eval::TableChoice tables = eval::TableChoice::Auto;
   std::string sheen_convention = "published";
   uint32_t spp = 2;
@@ -73,6 +73,11 @@ int run_render(const RenderCliOptions& o) {
   render::check_output_path(o.output);
 
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
+  if (!o.image_size.empty()) {
+    const std::array<int, 2> wh = parse_image_size(o.image_size);
+    loaded.scene.camera.width = wh[0];
+    loaded.scene.camera.height = wh[1];
+  }
   check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp, "--spp");
   bake_scene_fabrics(loaded, o.cache, /*quiet=*/true);
   std::unique_ptr<tbb::global_control> limit;
@@ -110,15 +115,17 @@ int run_render(const RenderCliOptions& o) {
                 {"out_of_plan_brute_fallback", s.fallback_brute},
                 {"out_of_plan_zero", s.fallback_zero},
                 {"cloth_pixels", s.cloth_pixels},
-                {"footprint_texels", {s.footprint_texels_min, s.footprint_texels_max}}});
+                {"footprint_side_texels",
+                 {std::sqrt(s.footprint_texels_min), std::sqrt(s.footprint_texels_max)}}});
     return 0;
   }
   std::printf("rendered %s: %dx%d, %s, %u spp x %u pass(es), %.3g s\n",
               terminal_safe(o.scene).c_str(), result.width, result.height,
               eval::method_name(method), o.spp, s.passes, s.seconds);
-  std::printf("  cloth pixels %llu, footprints %.3g to %.3g texels, %llu estimates\n",
-              static_cast<unsigned long long>(s.cloth_pixels), s.footprint_texels_min,
-              s.footprint_texels_max, static_cast<unsigned long long>(s.estimates));
+  // Footprints as sides (the square root of their areas), the unit of plan and eval.
+  std::printf("  cloth pixels %llu, footprints %.3g to %.3g texels a side, %llu estimates\n",
+              static_cast<unsigned long long>(s.cloth_pixels), std::sqrt(s.footprint_texels_min),
+              std::sqrt(s.footprint_texels_max), static_cast<unsigned long long>(s.estimates));
   std::printf("  %s\n  %s\n", terminal_safe(files.exr).c_str(), terminal_safe(files.png).c_str());
   return 0;
 }
@@ -136,6 +143,9 @@ const bool registered = register_command(
               "multiscale (default), multiscale-paper, brute or reference (docs/evaluator.md)")
            ->check(CLI::IsMember({"multiscale", "multiscale-paper", "brute", "reference"}));
        app.add_option("--spp", o->spp, "samples per pixel footprint and light (default 2)");
+       app.add_option("--image-size", o->image_size,
+                      "W,H: render at W x H pixels instead of the scene camera's resolution (the "
+                      "vertical field of view is kept)");
        app.add_option("--time-budget", o->time_budget,
                       "seconds: repeat passes of --spp until spent (the image then depends on the "
                       "machine's speed)");

@@ -193,29 +193,17 @@ Action setup_report(CLI::App& app) {
       po.spp = *s == "1,2,4,8,16,32,64" ? 2u : uint32_t(positive_list<int>(*s, "--spp").front());
       po.reference_spp = et->reference_spp == 256 ? 64 : et->reference_spp;
       if (!resolution->empty()) {
-        NumberListRule rule;
-        rule.expected = "W,H (integers in [1, 16384])";
-        rule.count = 2;
-        rule.integers = true;
-        rule.min = 1;
-        rule.max = 16384;
-        const std::vector<double> wh = parse_number_list(*resolution, "--image-size", rule);
-        po.width = int(wh[0]);
-        po.height = int(wh[1]);
+        const std::array<int, 2> wh = parse_image_size(*resolution);
+        po.width = wh[0];
+        po.height = wh[1];
       }
       return run_plan_report(po);
     }
     if (o->what == "error-time") {
       if (!resolution->empty()) {
-        NumberListRule rule;
-        rule.expected = "W,H (integers in [1, 16384])";
-        rule.count = 2;
-        rule.integers = true;
-        rule.min = 1;
-        rule.max = 16384;
-        const std::vector<double> wh = parse_number_list(*resolution, "--image-size", rule);
-        et->width = int(wh[0]);
-        et->height = int(wh[1]);
+        const std::array<int, 2> wh = parse_image_size(*resolution);
+        et->width = wh[0];
+        et->height = wh[1];
       }
       et->scene = o->fabric;
       et->output = o->output;

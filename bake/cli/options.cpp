@@ -35,6 +35,17 @@ CLI::Option* add_tables_option(CLI::App& app, eval::TableChoice& choice, const s
       ->option_text("auto|raw|compressed");
 }
 
+std::array<int, 2> parse_image_size(const std::string& text) {
+  NumberListRule rule;
+  rule.expected = "W,H (integers in [1, 16384])";
+  rule.count = 2;
+  rule.integers = true;
+  rule.min = 1;
+  rule.max = 16384;
+  const std::vector<double> wh = parse_number_list(text, "--image-size", rule);
+  return {int(wh[0]), int(wh[1])};
+}
+
 CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& help) {
   // The project's number parser, as a CLI11 validator (its message without the option prefix,
   // which CLI11 adds).

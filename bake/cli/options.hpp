@@ -35,6 +35,10 @@ CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& 
 CLI::Option* add_tables_option(CLI::App& app, eval::TableChoice& choice,
                                const std::string& scope = "");
 
+// --image-size W,H: the camera's pixels, integers in [1, 16384] (the vertical field of view is
+// kept, so the aspect follows W/H). Throws CLI::ValidationError("--image-size", ...) otherwise.
+std::array<int, 2> parse_image_size(const std::string& text);
+
 // What a number list must look like.
 struct NumberListRule {
   std::string expected;              // for the message "expected EXPECTED, got 'TEXT'"

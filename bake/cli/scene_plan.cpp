@@ -271,7 +271,7 @@ nlohmann::json plan_json(const ScenePlan& plan) {
                        {"resolution", p.resolution},
                        {"usage",
                         {{"pixels", u.pixels},
-                         {"footprint_texels",
+                         {"footprint_side_texels",
                           {{"min", u.footprint_min},
                            {"p05", u.footprint_p05},
                            {"median", u.footprint_median},

@@ -26,10 +26,10 @@ TEST(EvalCli, ReferenceJsonIsTheLibrarysAnswer) {
   ASSERT_EQ(run.code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(run.out);
   for (const char* key : {"method", "spp", "value", "lobes", "std_error", "seconds_per_estimate",
-                          "footprint_texels", "tables"})
+                          "footprint_side_texels", "tables"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["method"], "reference");
-  EXPECT_DOUBLE_EQ(j["footprint_texels"].get<double>(), 32.0 * 32.0);
+  EXPECT_DOUBLE_EQ(j["footprint_side_texels"].get<double>(), 32.0);
   reader::Asset asset;
   ASSERT_TRUE(asset.open_file(assets().twill.c_str()).ok());
   Evaluator ev;

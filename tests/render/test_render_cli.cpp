@@ -54,6 +54,35 @@ TEST(RenderCli, WritesTheExrAndThePreview) {
   EXPECT_EQ(sa, sb);
 }
 
+// --image-size overrides the camera's pixels (the EXR has them) and the footprints are reported
+// as sides in texels, the unit of plan and eval: halving the width at the same rows and vertical
+// field of view keeps the pixel footprints; a bad size is exit 1 naming the option, before any work.
+TEST(RenderCli, ImageSizeOverridesTheCameraAndFootprintsAreSides) {
+  const fs::path scene = write_scene("sized.toml", good_scene());
+  const fs::path out = assets().dir / "sized.exr";
+  auto run = run_clothbake(
+      {"render", scene.string(), "-o", out.string(), "--image-size", "8,12", "--json"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  EXPECT_EQ(j["resolution"][0], 8);
+  EXPECT_EQ(j["resolution"][1], 12);
+  const auto full =
+      nlohmann::json::parse(run_clothbake({"render", scene.string(), "-o",
+                                           (assets().dir / "full.exr").string(), "--json"})
+                                .out);
+  const double side = j["footprint_side_texels"][1].get<double>(),
+               full_side = full["footprint_side_texels"][1].get<double>();
+  EXPECT_GT(side, 0.0);
+  EXPECT_NEAR(side, full_side, 0.1 * full_side);  // the same rows: the same scale per pixel
+  for (const char* bad : {"0,16", "8", "8,16,2", "8.5,16", "99999,2"}) {
+    run = run_clothbake(
+        {"render", scene.string(), "-o", (assets().dir / "bad.exr").string(), "--image-size", bad});
+    EXPECT_EQ(run.code, 1) << bad;
+    EXPECT_NE(run.err.find("--image-size"), std::string::npos) << run.err;
+  }
+  EXPECT_FALSE(fs::exists(assets().dir / "bad.exr"));
+}
+
 // -o into a missing folder creates it when the images are written; a path whose nearest existing
 // ancestor is a file is refused before anything is rendered, and a failed render creates nothing.
 TEST(RenderCli, OutputFoldersAreCreatedOnlyWhenWriting) {
@@ -318,7 +347,7 @@ TEST(PlanCli, FarSwatchLeavesOutWhatTheSceneCannotSee) {
   const nlohmann::json j = nlohmann::json::parse(run.out);
   ASSERT_EQ(j["fabrics"].size(), 1u);
   const auto& f = j["fabrics"][0];
-  EXPECT_GT(f["usage"]["footprint_texels"]["min"].get<double>(), 100.0);
+  EXPECT_GT(f["usage"]["footprint_side_texels"]["min"].get<double>(), 100.0);
   EXPECT_EQ(f["usage"]["lit_opposite_side"], 0);
   std::map<std::string, std::string> decision;
   for (const auto& d : f["decisions"])

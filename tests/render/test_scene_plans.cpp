@@ -70,7 +70,7 @@ nlohmann::json info_of(const std::string& asset) {
 TEST(ScenePlanRules, AFarCameraNeedsNoPerTexelParallaxANearOneDoes) {
   const auto far =
       plan_of(write_scene("far.toml", plane_scene("[0, 0, 50]", kFrontLight, 100, 1.2)));
-  EXPECT_GT(far["usage"]["footprint_texels"]["min"].get<double>(), 200.0);
+  EXPECT_GT(far["usage"]["footprint_side_texels"]["min"].get<double>(), 200.0);
   EXPECT_EQ(decisions(far)["per-texel parallax"], "left out");
   const auto near =
       plan_of(write_scene("near.toml", plane_scene("[0.6, 0, 1.2]", kFrontLight, 1, 40)));
@@ -84,7 +84,7 @@ TEST(ScenePlanRules, WideFootprintsSampleFewerVisibilityDirections) {
   const fs::path far_scene =
       write_scene("far-vis.toml", plane_scene("[0, 0, 50]", kFrontLight, 100, 1.2));
   const auto far = plan_of(far_scene);
-  ASSERT_GE(far["usage"]["footprint_texels"]["min"].get<double>(), 128.0);
+  ASSERT_GE(far["usage"]["footprint_side_texels"]["min"].get<double>(), 128.0);
   EXPECT_EQ(decisions(far)["visibility directions"], "reduced");
   for (const auto& x : far["decisions"]) {
     if (x["item"] == "visibility directions") {
@@ -94,7 +94,7 @@ TEST(ScenePlanRules, WideFootprintsSampleFewerVisibilityDirections) {
   }
   const auto near =
       plan_of(write_scene("near-vis.toml", plane_scene("[0.6, 0, 1.2]", kFrontLight, 1, 40)));
-  ASSERT_LT(near["usage"]["footprint_texels"]["min"].get<double>(), 128.0);
+  ASSERT_LT(near["usage"]["footprint_side_texels"]["min"].get<double>(), 128.0);
   EXPECT_EQ(decisions(near)["visibility directions"], "kept");
 
   const std::string out = (assets().dir / "far-vis.cbk").string();
