@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -372,6 +373,13 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   st.cloth_pixels = counters.cloth_pixels;
   st.footprint_texels_min = std::isfinite(counters.min_texels) ? counters.min_texels : 0;
   st.footprint_texels_max = counters.max_texels;
+  for (std::size_t p = 0; p + 2 < result.rgb.size(); p += 3) {
+    const float least = std::min({result.rgb[p], result.rgb[p + 1], result.rgb[p + 2]});
+    if (least < 0.0f) {
+      ++st.negative_pixels;
+      st.min_value = std::min(st.min_value, double(least));
+    }
+  }
   return result;
 }
 

@@ -53,6 +53,11 @@ struct RenderStats {
   // fallback) and counted as 0 (refused again: a view bin or transmission left out).
   uint64_t out_of_plan = 0, fallback_brute = 0, fallback_zero = 0;
   double footprint_texels_min = 0, footprint_texels_max = 0;  // over the cloth pixels
+  // Pixels with a channel below 0 and the least channel value (0 when none): the unbiased
+  // multi-scale and brute-force estimates are noisy around the exact value, and a residual
+  // f - g can push a dark pixel below 0 (docs/rendering.md, "Negative pixels").
+  uint64_t negative_pixels = 0;
+  double min_value = 0;
 };
 
 struct RenderResult {

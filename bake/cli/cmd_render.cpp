@@ -115,6 +115,8 @@ int run_render(const RenderCliOptions& o) {
                 {"out_of_plan_brute_fallback", s.fallback_brute},
                 {"out_of_plan_zero", s.fallback_zero},
                 {"cloth_pixels", s.cloth_pixels},
+                {"negative_pixels", s.negative_pixels},
+                {"min_value", s.min_value},
                 {"footprint_side_texels",
                  {std::sqrt(s.footprint_texels_min), std::sqrt(s.footprint_texels_max)}}});
     return 0;
@@ -126,6 +128,11 @@ int run_render(const RenderCliOptions& o) {
   std::printf("  cloth pixels %llu, footprints %.3g to %.3g texels a side, %llu estimates\n",
               static_cast<unsigned long long>(s.cloth_pixels), std::sqrt(s.footprint_texels_min),
               std::sqrt(s.footprint_texels_max), static_cast<unsigned long long>(s.estimates));
+  if (s.negative_pixels > 0)
+    std::printf(
+        "  %llu pixels with a negative channel in the EXR (least %.3g; black in the PNG): "
+        "estimator noise around the exact value, fewer with more --spp\n",
+        static_cast<unsigned long long>(s.negative_pixels), s.min_value);
   std::printf("  %s\n  %s\n", terminal_safe(files.exr).c_str(), terminal_safe(files.png).c_str());
   return 0;
 }

@@ -301,4 +301,30 @@ TEST(Render, MultiscaleAndBruteForceConvergeAtTheMonteCarloRate) {
 }
 
 }  // namespace
+// The negative-pixel count and least value are the image's own (recounted here), and the exact
+// reference, a sum of non-negative terms, has none.
+TEST(Render, CountsNegativePixelsAndTheirLeastValue) {
+  const Scene s = lit_twill_plane(24.0);
+  for (eval::Method m : {eval::Method::Multiscale, eval::Method::Reference}) {
+    RenderOptions o;
+    o.method = m;
+    o.spp = 1;
+    const RenderResult r = Renderer(s, o).render();
+    uint64_t count = 0;
+    double least = 0;
+    for (std::size_t p = 0; p < r.rgb.size(); p += 3) {
+      const double v = std::min({r.rgb[p], r.rgb[p + 1], r.rgb[p + 2]});
+      if (v < 0) {
+        ++count;
+        least = std::min(least, v);
+      }
+    }
+    EXPECT_EQ(r.stats.negative_pixels, count) << eval::method_name(m);
+    EXPECT_EQ(r.stats.min_value, least) << eval::method_name(m);
+    if (m == eval::Method::Reference) {
+      EXPECT_EQ(r.stats.negative_pixels, 0u);
+    }
+  }
+}
+
 }  // namespace clothbake::render
