@@ -9,6 +9,8 @@
 #include <memory>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/cli/terminal_text.hpp"
@@ -180,7 +182,10 @@ void print_text(const nlohmann::json& doc, const Asset& asset) {
   if (doc.contains("fabric_info")) {
     const auto& f = doc["fabric_info"];
     out << "fabric:   " << f["resolution"] << " x " << f["resolution"] << " texels, "
-        << f["yarn_count"] << " yarns, tile " << f["tile_size_mm"] << " mm\n";
+        << f["yarn_count"] << " yarns, tile "
+        << (f["tile_size_mm"].is_number() ? fmt::format("{:.6g}", f["tile_size_mm"].get<double>())
+                                          : std::string("?"))
+        << " mm\n";
   }
   if (doc.contains("yarns"))
     for (const auto& y : doc["yarns"])

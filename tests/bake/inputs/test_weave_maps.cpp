@@ -73,6 +73,25 @@ float rolled_height(const FabricMaps& maps, int x, int y) {
 
 }  // namespace
 
+// The tile is the sum of the spacings rounded once: eight ends of 0.4 mm and eight picks of 0.1 mm
+// are 3.2 and 0.8 mm exactly as doubles (a running double sum gave 3.1999999999999997, which a
+// written fabric.toml showed), and per-thread spacings are summed the same way.
+TEST(WeaveMaps, TileSizeIsTheCorrectlyRoundedSumOfTheSpacings) {
+  WeaveSpec eight = make_spec(twill(4, 4, false));
+  eight.warp.spacing_mm = 0.4;
+  eight.weft.spacing_mm = 0.1;
+  ASSERT_EQ(eight.matrix.ends, 8);
+  const TileSize t = weave_tile_size(eight);
+  EXPECT_EQ(t.width_mm, 3.2);
+  EXPECT_EQ(t.height_mm, 0.8);
+  double running = 0;
+  for (int e = 0; e < 8; ++e)
+    running += 0.4;
+  EXPECT_NE(running, 3.2);  // what the test guards against
+  eight.end_geometry.assign(8, eight.warp);
+  EXPECT_EQ(weave_tile_size(eight).width_mm, 3.2);
+}
+
 TEST(WeaveMaps, EveryMapIsWellFormed) {
   for (const WeaveSpec& spec : {make_spec(plain_weave()), make_spec(satin(5, 2), 0.7, 1.0),
                                 make_spec(basket(2), 1.0, 0.6), rich_spec()}) {
