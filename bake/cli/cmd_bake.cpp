@@ -57,8 +57,9 @@ struct BakeOptions {
   CLI::Option* max_error_option = nullptr;
   bool keep_raw = false;
   bool no_compress = false;
-  std::string scene;       // --scene: bake the scene's plan
-  std::string max_memory;  // --max-memory S (default: the machine's memory)
+  std::string scene;              // --scene: bake the scene's plan
+  std::optional<int> resolution;  // --resolution: a weave's maps at N texels a side
+  std::string max_memory;         // --max-memory S (default: the machine's memory)
 };
 
 std::string default_max_error_text() {
@@ -182,6 +183,10 @@ Action setup_bake(CLI::App& app) {
       "also keep the raw Integral-Radiance tables in the asset (default: compressed only)");
   app.add_flag("--no-compress", o->no_compress,
                "write the raw Integral-Radiance tables only (no C-PCA compression)");
+  app.add_option("--resolution", o->resolution,
+                 "texels per tile side of a weave's maps (default: the fabric's [bake] "
+                 "resolution, 256 for a WIF draft); image maps must already have it")
+      ->check(CLI::Range(kMinResolution, kMaxResolution));
   app.add_option("--scene", o->scene,
                  "bake only what this scene can query (its plan: `clothbake plan`; "
                  "docs/scene-plans.md)");
@@ -206,8 +211,8 @@ Action setup_bake(CLI::App& app) {
     if (!o->depfile.empty()) formats::check_output_path(o->depfile, report_output);
     // Before any map is decoded or generated: a bake that cannot fit is refused in milliseconds
     // instead of failing (or being killed) after minutes.
-    const std::optional<stages::MemoryEstimate> estimate =
-        stages::check_fabric_memory(o->fabric, compression, o->stages, o->threads, max_memory);
+    const std::optional<stages::MemoryEstimate> estimate = stages::check_fabric_memory(
+        o->fabric, compression, o->stages, o->threads, max_memory, o->resolution);
 
     pipeline::BakeRequest request;
     request.fabric_path = o->fabric;
@@ -219,12 +224,17 @@ Action setup_bake(CLI::App& app) {
     request.run.record_timings = o->record_timings;
     if (!compression.given().empty())
       request.seeds.put(stages::kCompressSettingsArtifact, compression);
+    if (o->resolution) request.seeds.put(stages::kFabricResolutionArtifact, *o->resolution);
     std::optional<ScenePlanSeeds> planned;
     if (!o->scene.empty()) {
       if (o->no_compress || o->keep_raw || !o->stages.empty())
         throw Error(ExitCode::Usage,
                     "--scene bakes the compressed form of every stage: it cannot be combined "
                     "with --no-compress, --keep-raw or --stages");
+      if (o->resolution)
+        throw Error(ExitCode::Usage,
+                    "--scene plans the fabric at its own resolution: it cannot be combined with "
+                    "--resolution (set [bake] resolution in the fabric instead)");
       planned = seed_scene_plan(o->scene, o->fabric, &request);
       for (const auto& what : planned->left_out)
         info("scene plan: left out " + what);

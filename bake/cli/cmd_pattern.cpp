@@ -23,7 +23,7 @@ namespace {
 
 // Resolution of generated weaves when neither the command line nor a fabric file gives one (the
 // paper's feature maps are 256 x 256).
-constexpr int kDefaultPatternResolution = 256;
+constexpr int kDefaultPatternResolution = kDefaultWeaveResolution;
 
 struct PatternOptions {
   std::string weave_name, wif, fabric, output;

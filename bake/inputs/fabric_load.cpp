@@ -5,11 +5,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
 #include "bake/inputs/fabric_files.hpp"
 #include "bake/inputs/fabric_toml.hpp"
+#include "bake/inputs/input_kind.hpp"
 #include "bake/inputs/map_image.hpp"
 #include "bake/inputs/map_normals.hpp"
 #include "bake/inputs/weave.hpp"
@@ -180,6 +182,14 @@ void resolve_radiance_dirs(Fabric& f) {
   for (const YarnMaterial& y : f.yarns)
     roughness.push_back(y.roughness);
   resolve_radiance_dirs(f.bake, roughness);
+}
+
+// A WIF draft given where a fabric is expected: by its name or by its [WIF] section.
+bool is_wif_input(const std::string& path, std::string_view bytes) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".wif" || inputs::sniff_input_kind(bytes) == inputs::InputKind::Wif;
 }
 
 std::vector<YarnMaterial> default_weave_yarns() {
@@ -450,9 +460,20 @@ void load_weave(LoadedFabric& out, const TomlSection& w, const std::string& base
 }  // namespace
 
 LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOptions& options) {
+  const std::string text = inputs::read_file_bytes(toml_path);
+  if (is_wif_input(toml_path, text)) {
+    LoadedFabric out =
+        fabric_from_wif(toml_path, options.resolution.value_or(kDefaultWeaveResolution));
+    out.fabric.bake.radiance_dirs = 0;  // automatic, as for a [weave] without [bake]
+    resolve_radiance_dirs(out.fabric);
+    return out;
+  }
+  inputs::require_input_kind(text, toml_path, inputs::InputKind::Fabric,
+                             "this command needs a fabric (a .toml description, "
+                             "docs/fabric-format.md, or a .wif draft); render, plan and report "
+                             "error-time take scenes");
   LoadedFabric out;
   Fabric& f = out.fabric;
-  const std::string text = inputs::read_file_bytes(toml_path);
   f.inputs.push_back({"fabric", toml_path, inputs::xxh64_hex(text)});
   const toml::table root_table = inputs::parse_toml_text(text, toml_path);
   const TomlSection root(root_table, toml_path, "");
@@ -524,6 +545,12 @@ std::optional<FabricSettingsPeek> peek_fabric_settings(const std::string& toml_p
   try {
     FabricSettingsPeek out;
     const std::string text = inputs::read_file_bytes(toml_path);
+    if (is_wif_input(toml_path, text)) {
+      out.bake.resolution = options.resolution.value_or(kDefaultWeaveResolution);
+      out.bake.radiance_dirs = 0;
+      resolve_radiance_dirs(out.bake, {YarnMaterial{}.roughness});
+      return out;
+    }
     const toml::table root_table = inputs::parse_toml_text(text, toml_path);
     const TomlSection root(root_table, toml_path, "");
     out.bake.radiance_dirs = 0;

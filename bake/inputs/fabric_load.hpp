@@ -32,6 +32,10 @@ struct LoadedFabric {
   std::string weave_label;  // "twill2/1", "matrix", or the WIF title (else its file name)
 };
 
+// The resolution of a weave's maps when nothing else gives one (pattern --weave/--wif, a WIF draft
+// given as a fabric).
+inline constexpr int kDefaultWeaveResolution = 256;
+
 struct LoadOptions {
   // Overrides [bake] resolution (pattern --resolution). Weaves are generated at this resolution;
   // image fabrics must already have it (maps are never resampled), else Error(Input).
@@ -40,7 +44,11 @@ struct LoadOptions {
 
 // Loads and validates the fabric description at `toml_path`. Relative paths in it resolve against
 // the TOML file's directory. Fabric::inputs lists the TOML file first ("fabric"), then every image
-// or WIF file read, each with its XXH64 content hash.
+// or WIF file read, each with its XXH64 content hash. A WIF draft (a ".wif" name, or a "[WIF]"
+// section) is read as fabric_from_wif does, at options.resolution or kDefaultWeaveResolution, with
+// the [bake] defaults and automatic half-vector bins (docs/weaves.md, "WIF drafts as fabrics"). A
+// scene or an asset is refused as such (Error(Input) "PATH is a scene, not a fabric
+// description: ..."), before any TOML error.
 LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOptions& options = {});
 
 // What the up-front memory estimate needs to know of a fabric before anything is decoded.
@@ -49,7 +57,8 @@ struct FabricSettingsPeek {
   bool image_maps = false;  // [maps] (image files) rather than [weave]
 };
 
-// The bake settings of the description at `toml_path` without generating or decoding any map:
+// The bake settings of the description at `toml_path` without generating or decoding any map (a
+// WIF draft: the defaults at options.resolution or kDefaultWeaveResolution):
 // the TOML is read and parsed (at most 64 MiB, regular files only), [bake] is range-checked as
 // load_fabric_description does, and the resolution is [bake] resolution (or options.resolution)
 // for a weave, the height image's side from its header for an image fabric (no pixel read).

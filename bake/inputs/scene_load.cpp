@@ -8,6 +8,7 @@
 
 #include "bake/inputs/fabric_files.hpp"
 #include "bake/inputs/fabric_toml.hpp"
+#include "bake/inputs/input_kind.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
 #include "render/shapes.hpp"
@@ -172,6 +173,9 @@ render::Object load_object(const TomlSection& o, std::size_t index, const fs::pa
 
 LoadedScene load_scene(const std::string& path) {
   const std::string text = read_file_bytes(path);
+  require_input_kind(text, path, InputKind::Scene,
+                     "this command needs a scene (docs/scene-format.md); bake, inspect and "
+                     "pattern take fabrics");
   const toml::table root_table = parse_toml_text(text, path);
   const TomlSection root(root_table, path, "");
   root.check_keys({"camera", "light", "object", "render"});

@@ -12,7 +12,11 @@ namespace clothbake::stages {
 namespace {
 
 void run_load_fabric(pipeline::StageContext& ctx) {
-  ctx.output("fabric", load_fabric(ctx.input<std::string>("fabric_path")));
+  LoadOptions options;
+  if (ctx.has_input(kFabricResolutionArtifact))
+    options.resolution = ctx.input<int>(kFabricResolutionArtifact);
+  ctx.output("fabric",
+             load_fabric_description(ctx.input<std::string>("fabric_path"), options).fabric);
 }
 
 void run_fabric_records(pipeline::StageContext& ctx) {
@@ -42,6 +46,7 @@ pipeline::Stage load_fabric_stage() {
   s.name = "load_fabric";
   s.description = "read and validate the fabric description";
   s.inputs = {"fabric_path"};
+  s.collects = {kFabricResolutionArtifact};
   s.outputs = {"fabric"};
   s.run = run_load_fabric;
   s.cacheable = false;  // reads files: its output is keyed by content instead

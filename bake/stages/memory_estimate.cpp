@@ -286,8 +286,11 @@ void check_memory_estimate(const MemoryEstimate& e, const BakeSettings& bake, do
 std::optional<MemoryEstimate> check_fabric_memory(const std::string& fabric_path,
                                                   const compress::CompressRequest& compression,
                                                   const std::vector<std::string>& stages,
-                                                  int threads, uint64_t max_memory) {
-  const auto peek = peek_fabric_settings(fabric_path);
+                                                  int threads, uint64_t max_memory,
+                                                  std::optional<int> resolution) {
+  LoadOptions options;
+  options.resolution = resolution;
+  const auto peek = peek_fabric_settings(fabric_path, options);
   if (!peek) return std::nullopt;
   MemoryEstimateInput in;
   in.bake = peek->bake;

@@ -92,10 +92,12 @@ void check_memory_estimate(const MemoryEstimate& estimate, const BakeSettings& b
 // scene's fabrics): the fabric's settings peeked from `fabric_path` (no map decoded), the stages
 // `stages` picks (empty or an unknown name: every stage), `threads` workers (0: every core), the
 // estimate checked against `max_memory` by check_memory_estimate (Error(Input), naming the file).
-// Nullopt when the settings cannot be read: the load then reports the error.
+// Nullopt when the settings cannot be read: the load then reports the error. `resolution`:
+// bake --resolution (kFabricResolutionArtifact), none for the fabric's own.
 std::optional<MemoryEstimate> check_fabric_memory(const std::string& fabric_path,
                                                   const compress::CompressRequest& compression,
                                                   const std::vector<std::string>& stages,
-                                                  int threads, uint64_t max_memory);
+                                                  int threads, uint64_t max_memory,
+                                                  std::optional<int> resolution = std::nullopt);
 
 }  // namespace clothbake::stages

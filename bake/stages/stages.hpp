@@ -40,6 +40,9 @@ pipeline::Stage write_stage();
 // --compress/--max-error/--keep-raw/--no-compress` asks; without it the stage follows the fabric's
 // [bake] settings (compress::settings_from_bake).
 inline constexpr const char* kCompressSettingsArtifact = "compress_options";
+// Optional seed of the load_fabric stage (an int): `clothbake bake --resolution N`, the texels per
+// tile side of a weave's generated maps instead of [bake] resolution (inputs::LoadOptions).
+inline constexpr const char* kFabricResolutionArtifact = "fabric_resolution";
 // What the compress stage supersedes (a std::vector<std::string> of section artifacts, read by
 // the write stage): {"section/tables"} unless the raw tables are kept.
 inline constexpr const char* kCompressSupersedesArtifact = "supersedes/compress";

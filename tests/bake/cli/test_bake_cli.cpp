@@ -496,3 +496,30 @@ TEST_F(Cli, UnknownCommandSuggestsTheClosest) {
   r = run({"--version"});
   EXPECT_EQ(r.code, 0);
 }
+
+// bake takes a WIF draft directly (the README's input) and --resolution N for a weave's maps (what
+// pattern and report take); with --scene it is a usage error (the plan is made at the fabric's own
+// resolution); a scene given to bake is named as one.
+TEST_F(Cli, BakesAWifDraftAndTakesAResolution) {
+  const std::string wif = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/wif/twill-2-2.wif";
+  std::ofstream(dir_ / "c.toml") << kSmallCompressFabric;
+  Outcome r = run({"bake", wif, "-o", "@w.cbk", "--resolution", "16", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = run({"info", "@w.cbk", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["fabric_info"]["resolution"], 16) << r.out;
+  r = run({"bake", "@c.toml", "-o", "@c16.cbk", "--resolution", "16", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = run({"info", "@c16.cbk", "--json"});
+  EXPECT_EQ(nlohmann::json::parse(r.out)["fabric_info"]["resolution"], 16) << r.out;
+  r = run({"bake", "@c.toml", "-o", "@x.cbk", "--resolution", "16", "--scene",
+           std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/scenes/far-swatch.toml"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_IN("cannot be combined with --resolution", r.err);
+  r = run(
+      {"bake", std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/scenes/room.toml", "-o", "@y.cbk"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_IN("is a scene, not a fabric description", r.err);
+  EXPECT_FALSE(fs::exists(dir_ / "x.cbk"));
+  EXPECT_FALSE(fs::exists(dir_ / "y.cbk"));
+}
