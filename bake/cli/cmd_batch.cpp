@@ -32,6 +32,7 @@
 #include "bake/cli/options.hpp"
 #include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_files.hpp"
+#include "bake/pipeline/progress.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/version.hpp"
@@ -343,6 +344,15 @@ Action setup_batch(CLI::App& app) {
     std::map<pid_t, std::size_t> running;
     uint64_t reserved = 0;
     const auto batch_start = std::chrono::steady_clock::now();
+    // On a terminal (not with --json): a line on stderr as each bake ends, so that a long batch is
+    // not silent until its table; on a pipe only the table (stdout) and errors.
+    const bool live = !o->json && pipeline::ProgressBar::stderr_is_terminal();
+    std::size_t to_bake = 0, ended = 0;
+    for (const Job& j : jobs)
+      to_bake += j.status == "pending";
+    if (live && to_bake > 0)
+      std::fprintf(stderr, "batch: baking %zu of %zu fabrics, %d at once\n", to_bake, jobs.size(),
+                   at_once);
     for (;;) {
       // Start what fits: in list order, first fit by memory; one bake always may run.
       for (std::size_t i = 0; i < jobs.size() && int(running.size()) < at_once; ++i) {
@@ -393,6 +403,10 @@ Action setup_batch(CLI::App& app) {
         j.note = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
                                      : last_line(base + ".log");
       }
+      if (live)
+        std::fprintf(stderr, "[%zu/%zu] %s: %s in %.1f s%s%s\n", ++ended, to_bake,
+                     terminal_safe(j.name).c_str(), j.status.c_str(), j.seconds,
+                     j.note.empty() ? "" : ": ", terminal_safe(j.note).c_str());
     }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_start).count();

@@ -7,6 +7,7 @@
 // Writes OUT.exr (linear float RGB) and OUT.png (sRGB preview) atomically (temporary names renamed
 // on success). Objects with `fabric =` are baked into the cache first (scene_bake.hpp).
 // Exit codes: 1 bad options, 2 a bad scene, missing file or unwritable output, 3 an invalid asset.
+#include <fmt/format.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -22,6 +23,7 @@
 #include "bake/cli/scene_bake.hpp"
 #include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/scene_load.hpp"
+#include "bake/pipeline/progress.hpp"
 #include "common/error.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
@@ -42,27 +44,6 @@ struct RenderCliOptions {
   bool json = false;
 };
 
-// A one-line progress bar on stderr, drawn only on a terminal.
-class ProgressBar {
- public:
-  explicit ProgressBar(bool enabled) : enabled_(enabled && ::isatty(2)) {}
-  void update(double fraction) {
-    if (!enabled_) return;
-    const int percent = int(std::floor(100 * std::min(1.0, std::max(0.0, fraction))));
-    std::lock_guard lock(mutex_);
-    if (percent == last_) return;
-    last_ = percent;
-    const int filled = percent / 4;
-    std::fprintf(stderr, "\rrender [%-25.*s] %3d%%", filled, "#########################", percent);
-    if (percent == 100) std::fprintf(stderr, "\n");
-  }
-
- private:
-  bool enabled_;
-  std::mutex mutex_;
-  int last_ = -1;
-};
-
 int run_render(const RenderCliOptions& o) {
   eval::Method method;
   if (!eval::parse_method(o.method.c_str(), &method))
@@ -79,7 +60,7 @@ int run_render(const RenderCliOptions& o) {
     loaded.scene.camera.height = wh[1];
   }
   check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp, "--spp");
-  bake_scene_fabrics(loaded, o.cache, /*quiet=*/true);
+  bake_scene_fabrics(loaded, o.cache, /*quiet=*/o.json);
   std::unique_ptr<tbb::global_control> limit;
   if (o.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
@@ -92,8 +73,11 @@ int run_render(const RenderCliOptions& o) {
   ro.tables = o.tables;
   model::parse_sheen_convention(o.sheen_convention, ro.sheen_convention);  // checked by IsMember
   const render::Renderer renderer(loaded.scene, ro);
-  ProgressBar bar(!o.json);
+  pipeline::ProgressBar bar(!o.json && pipeline::ProgressBar::stderr_is_terminal());
+  bar.begin(fmt::format("render {}x{} {} {} spp", loaded.scene.camera.width,
+                        loaded.scene.camera.height, eval::method_name(method), o.spp));
   const render::RenderResult result = renderer.render([&](double f) { bar.update(f); });
+  bar.finish();
   const render::OutputFiles files = render::write_render_images(o.output, result);
   const render::RenderStats& s = result.stats;
   if (o.json) {

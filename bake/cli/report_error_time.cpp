@@ -3,6 +3,7 @@
 #include "bake/cli/report_error_time.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +21,7 @@
 #include "bake/cli/scene_bake.hpp"
 #include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_files.hpp"
+#include "bake/pipeline/progress.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
@@ -129,10 +131,20 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw_input_error(o.output + ": exists and is not a directory");
+  {
+    // Refused now if it could not be created later: the folder itself is made only when the
+    // renders are done, so that an interrupted report leaves nothing (not even an empty folder).
+    fs::path existing = fs::absolute(out, ec);
+    while (!existing.empty() && !fs::exists(existing, ec) && existing != existing.parent_path())
+      existing = existing.parent_path();
+    if (!fs::is_directory(existing, ec) || ::access(existing.c_str(), W_OK | X_OK) != 0)
+      throw_input_error(o.output + ": cannot be created (" + existing.string() +
+                        " is not a writable folder)");
+  }
 
   // Everything that can refuse the scene comes before anything is written.
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
-  bake_scene_fabrics(loaded, o.cache, true);
+  bake_scene_fabrics(loaded, o.cache, /*quiet=*/o.json);
   if (o.width > 0 && o.height > 0) {
     loaded.scene.camera.width = o.width;
     loaded.scene.camera.height = o.height;
@@ -241,14 +253,23 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       fs::remove(cached, ec);
     }
   }
+  // On a terminal (not with --json) every render shows a bar, and the reference says what it
+  // costs: it is the report's longest render by far.
+  pipeline::ProgressBar bar(!o.json && pipeline::ProgressBar::stderr_is_terminal());
+  auto progress = [&bar](double f) { bar.update(f); };
   if (reference.rgb.empty()) {
-    reference = renderer.render(ref_options);
+    if (!o.json && pipeline::ProgressBar::stderr_is_terminal())
+      std::fprintf(stderr,
+                   "rendering the reference once (then cached): %dx%d pixels, every footprint "
+                   "summed exactly; its time grows with the pixels and their footprints "
+                   "(--image-size W,H renders fewer)\n",
+                   scene.camera.width, scene.camera.height);
+    bar.begin(fmt::format("reference {}x{}", scene.camera.width, scene.camera.height));
+    reference = renderer.render(ref_options, progress);
+    bar.finish();
     reference_seconds = reference.stats.seconds;
     render::write_render_images(cached.string(), reference);
   }
-  fs::create_directories(out / "images", ec);
-  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
-
   // Each method's first render at 1 spp, untimed in the rows: it builds what the method reads on
   // first use (its time is reported as `warmup`).
   nlohmann::json warmup = nlohmann::json::object();
@@ -258,8 +279,10 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     ro.path_traced = m.path_traced;
     ro.spp = 1;
     ro.seed = o.seed + 31337;
-    warmup[m.name] = renderer.render(ro).stats.seconds;
+    bar.begin(fmt::format("warm-up {}", m.name));
+    warmup[m.name] = renderer.render(ro, progress).stats.seconds;
   }
+  const std::size_t row_count = methods.size() * o.spp.size();
   std::vector<Row> rows;
   for (const Method& m : methods)
     for (uint32_t spp : o.spp) {
@@ -271,7 +294,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       Row row;
       row.method = m.name;
       row.spp = spp;
-      row.image = renderer.render(ro);
+      bar.begin(fmt::format("[{}/{}] {} {} spp", rows.size() + 1, row_count, m.name, spp));
+      row.image = renderer.render(ro, progress);
       row.seconds = row.image.stats.seconds;
       errors(row.image, reference, compared, &row.relmse, &row.rmse);
       rows.push_back(std::move(row));
@@ -286,10 +310,15 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     ro.path_traced = m.path_traced;
     ro.spp = last->spp;
     ro.seed = o.seed + 7777;
-    const double bias = bias_estimate(last->image, renderer.render(ro), reference, compared);
+    bar.begin(fmt::format("bias {} {} spp", m.name, last->spp));
+    const double bias =
+        bias_estimate(last->image, renderer.render(ro, progress), reference, compared);
     for (Row& r : rows)
       if (r.method == m.name) r.bias = bias;
   }
+  bar.finish();
+  fs::create_directories(out / "images", ec);
+  if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
   auto curve = [&](const std::string& method) {
     std::vector<std::pair<double, double>> pts;  // (seconds, relmse) by seconds
     for (const Row& r : rows)

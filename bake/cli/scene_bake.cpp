@@ -8,13 +8,16 @@
 #include <xxhash.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 
 #include "bake/cache/stage_cache.hpp"
+#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/pipeline/progress.hpp"
 #include "bake/pipeline/resource_usage.hpp"
 #include "bake/stages/cache_support.hpp"
 #include "bake/stages/memory_estimate.hpp"
@@ -120,10 +123,16 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
       }
       // From the path, as `clothbake bake f.toml` does (the asset's metadata lists load_fabric
       // among the stages), so that the asset has the bytes of that command's.
+      // On a terminal the bake says what it is doing (a scene's first render can bake for
+      // minutes); on a pipe it stays silent unless something goes wrong.
+      const bool show = !quiet && pipeline::ProgressBar::stderr_is_terminal();
+      if (show)
+        std::fprintf(stderr, "baking %s for the scene (not in the asset cache %s yet)\n",
+                     terminal_safe(loaded.fabrics[k]).c_str(), terminal_safe(cache).c_str());
       pipeline::BakeRequest request;
       request.fabric_path = loaded.fabrics[k];
       request.output_path = asset.string();
-      request.run.show_progress = !quiet;
+      request.run.show_progress = show;
       request.run.cache = stage_cache->enabled() ? stage_cache.get() : nullptr;
       if (keep_raw_tables) request.seeds.put(stages::kCompressSettingsArtifact, compression);
       pipeline::bake(request, stages::bake_stages());

@@ -12,13 +12,19 @@ bool ProgressBar::stderr_is_terminal() {
 }
 
 void ProgressBar::begin_stage(int index, int count, const std::string& name) {
+  // Appended piecewise: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string.
+  std::string label(1, '[');
+  label.append(std::to_string(index + 1)).append("/").append(std::to_string(count));
+  label.append("] ").append(name);
+  begin(label);
+}
+
+void ProgressBar::begin(const std::string& label) {
   if (!enabled_) return;
   std::lock_guard lock(mutex_);
-  // Appended piecewise: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string.
-  label_.assign(1, '[');
-  label_.append(std::to_string(index + 1)).append("/").append(std::to_string(count));
-  label_.append("] ").append(name);
+  label_ = label;
   last_draw_ = {};
+  best_ = 0.0;
   draw(0.0);
 }
 
@@ -26,9 +32,10 @@ void ProgressBar::update(double fraction) {
   if (!enabled_) return;
   std::unique_lock lock(mutex_, std::try_to_lock);  // never make a worker thread wait
   if (!lock.owns_lock()) return;
+  best_ = std::max(best_, fraction);
   const auto now = std::chrono::steady_clock::now();
   if (now - last_draw_ < std::chrono::milliseconds(100)) return;
-  draw(fraction);
+  draw(best_);
 }
 
 void ProgressBar::draw(double fraction) {

@@ -1,5 +1,7 @@
 // A one-line progress bar on stderr: "[2/4] feature_maps [#######.....]  58%". Redrawn at most
 // ten times a second with a carriage return; cleared when done. Disabled objects print nothing.
+// The bar never steps back within one label: updates that arrive out of order (worker threads
+// report their own fractions) keep the largest fraction seen since begin().
 #pragma once
 
 #include <atomic>
@@ -18,6 +20,8 @@ class ProgressBar {
   static bool stderr_is_terminal();
 
   void begin_stage(int index, int count, const std::string& name);
+  // Any label ("[3/28] multiscale 8 spp"); the fraction restarts at 0.
+  void begin(const std::string& label);
   // Thread-safe; cheap when called often.
   void update(double fraction);
   void finish();
@@ -29,6 +33,7 @@ class ProgressBar {
   std::mutex mutex_;
   std::string label_;
   std::chrono::steady_clock::time_point last_draw_{};
+  double best_ = 0.0;  // the largest fraction since begin()
   bool drawn_ = false;
 };
 

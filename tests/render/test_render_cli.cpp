@@ -56,7 +56,8 @@ TEST(RenderCli, WritesTheExrAndThePreview) {
 
 // --image-size overrides the camera's pixels (the EXR has them) and the footprints are reported
 // as sides in texels, the unit of plan and eval: halving the width at the same rows and vertical
-// field of view keeps the pixel footprints; a bad size is exit 1 naming the option, before any work.
+// field of view keeps the pixel footprints; a bad size is exit 1 naming the option, before any
+// work.
 TEST(RenderCli, ImageSizeOverridesTheCameraAndFootprintsAreSides) {
   const fs::path scene = write_scene("sized.toml", good_scene());
   const fs::path out = assets().dir / "sized.exr";
@@ -81,6 +82,50 @@ TEST(RenderCli, ImageSizeOverridesTheCameraAndFootprintsAreSides) {
     EXPECT_NE(run.err.find("--image-size"), std::string::npos) << run.err;
   }
   EXPECT_FALSE(fs::exists(assets().dir / "bad.exr"));
+}
+
+// On a terminal a render says what it bakes and shows a bar that never steps back; on a pipe, or
+// with --json, stderr stays empty and stdout holds only the summary (or the JSON).
+TEST(RenderCli, ProgressOnlyOnATerminal) {
+  std::string scene = good_scene();
+  const std::string asset_line = "asset = \"" + assets().twill + "\"";
+  scene.replace(scene.find(asset_line), asset_line.size(),
+                "fabric = \"" + (assets().dir / "twill.toml").string() + "\"");
+  const fs::path path = write_scene("progress.toml", scene);
+  const fs::path cache = assets().dir / "cache-progress";
+  fs::remove_all(cache);
+  const std::vector<std::string> args = {
+      "render", path.string(), "-o",      (assets().dir / "progress.exr").string(),
+      "--spp",  "1",           "--cache", cache.string()};
+  const auto tty = test_support::run_clothbake_on_terminal(args);
+  ASSERT_EQ(tty.code, 0) << tty.err;
+  EXPECT_NE(tty.err.find("baking "), std::string::npos) << tty.err;
+  EXPECT_NE(tty.err.find("render 16x12 multiscale 1 spp"), std::string::npos) << tty.err;
+  // The percentages drawn for the render never decrease.
+  int last = -1;
+  bool monotone = true;
+  for (std::size_t at = tty.err.find("render 16x12"); at != std::string::npos;
+       at = tty.err.find("render 16x12", at + 1)) {
+    const std::size_t pct = tty.err.find('%', at);
+    if (pct == std::string::npos || pct < 3) break;
+    const int value = std::atoi(tty.err.substr(pct - 3, 3).c_str());
+    monotone = monotone && value >= last;
+    last = value;
+  }
+  EXPECT_TRUE(monotone) << tty.err;
+  EXPECT_NE(tty.out.find("rendered "), std::string::npos) << tty.out;
+  fs::remove_all(cache);
+  const auto pipe = run_clothbake(args);
+  ASSERT_EQ(pipe.code, 0) << pipe.err;
+  EXPECT_EQ(pipe.err, "");
+  fs::remove_all(cache);
+  auto json_args = args;
+  json_args.push_back("--json");
+  const auto quiet = test_support::run_clothbake_on_terminal(json_args);
+  ASSERT_EQ(quiet.code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err.find("render 16x12"), std::string::npos) << quiet.err;
+  EXPECT_EQ(quiet.err.find("baking "), std::string::npos) << quiet.err;
+  EXPECT_TRUE(nlohmann::json::accept(quiet.out)) << quiet.out;
 }
 
 // -o into a missing folder creates it when the images are written; a path whose nearest existing
@@ -178,6 +223,25 @@ TEST(RenderCli, BadScenesNameTheKeyAndWriteNothing) {
 
 namespace clothbake::render {
 namespace {
+
+// On a terminal the report says what the reference costs and shows a bar per render, numbered;
+// the output folder is made only once the renders are done.
+TEST(ReportErrorTime, ProgressOnATerminal) {
+  const fs::path path = write_scene("tiny-tty.toml", good_scene());
+  const fs::path out = assets().dir / "error-time-tty";
+  fs::remove_all(out);
+  const fs::path cache = assets().dir / "cache-tty";
+  fs::remove_all(cache);
+  const auto tty = test_support::run_clothbake_on_terminal(
+      {"report", "error-time", path.string(), "-o", out.string(), "--spp", "1,2", "--methods",
+       "multiscale,brute", "--cache", cache.string(), "--no-plots"});
+  ASSERT_EQ(tty.code, 0) << tty.err;
+  EXPECT_NE(tty.err.find("rendering the reference once"), std::string::npos) << tty.err;
+  EXPECT_NE(tty.err.find("--image-size W,H renders fewer"), std::string::npos) << tty.err;
+  for (const char* label : {"reference 16x12", "[1/4] multiscale 1 spp", "[4/4] brute 2 spp"})
+    EXPECT_NE(tty.err.find(label), std::string::npos) << label << "\n" << tty.err;
+  EXPECT_TRUE(fs::is_regular_file(out / "error-time.csv"));
+}
 
 TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   std::string scene = good_scene();

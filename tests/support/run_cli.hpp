@@ -96,6 +96,59 @@ inline CliRun run_clothbake(const std::vector<std::string>& args) {
   return detail::spawn(argv);
 }
 
+// `clothbake ARGS...` with its stderr on a pseudo-terminal (what a user at a terminal sees:
+// progress bars, status lines) and its stdout captured apart; `err` holds what reached the
+// terminal, carriage returns and escape sequences included. For tests of terminal-only output.
+inline CliRun run_clothbake_on_terminal(const std::vector<std::string>& args) {
+  CliRun r;
+  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) return r;
+  const char* slave_name = ::ptsname(master);
+  if (slave_name == nullptr) return r;
+  const std::string slave_path = slave_name;
+  static std::atomic<int> counter{0};
+  const auto out_path = std::filesystem::temp_directory_path() /
+                        ("clothbake_tty_" + std::to_string(::getpid()) + "_" +
+                         std::to_string(counter.fetch_add(1)) + ".out");
+  std::vector<std::string> argv{clothbake_executable()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  std::vector<char*> cargs;
+  for (const auto& a : argv)
+    cargs.push_back(const_cast<char*>(a.c_str()));
+  cargs.push_back(nullptr);
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) return r;
+  if (pid == 0) {
+    ::setsid();
+    const int slave = ::open(slave_path.c_str(), O_RDWR);
+    const int out = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    if (slave < 0 || out < 0 || ::dup2(out, 1) < 0 || ::dup2(slave, 2) < 0) ::_exit(127);
+    ::close(master);
+    ::execv(cargs[0], cargs.data());
+    ::_exit(127);
+  }
+  char buffer[4096];
+  for (;;) {  // until the child closes the terminal (EIO once no slave is open)
+    const ssize_t n = ::read(master, buffer, sizeof buffer);
+    if (n > 0) {
+      r.err.append(buffer, std::size_t(n));
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    break;
+  }
+  int status = 0;
+  pid_t waited;
+  do {
+    waited = ::waitpid(pid, &status, 0);
+  } while (waited < 0 && errno == EINTR);
+  ::close(master);
+  r.code = waited == pid && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = detail::slurp_and_remove(out_path);
+  return r;
+}
+
 // `clothbake COMMAND_LINE` through /bin/sh -c: the words are split and quoted by the shell, as if
 // typed. For tests whose argument lists read best as one string.
 inline CliRun run_clothbake_line(const std::string& command_line) {

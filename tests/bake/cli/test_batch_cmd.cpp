@@ -271,6 +271,24 @@ TEST_F(Batch, JobsZeroIsOnePerCore) {
   EXPECT_FALSE(fs::exists(dir_ / "out2"));
 }
 
+// On a terminal a batch says how many it bakes and prints a line as each bake ends (stderr); the
+// table on stdout is the same as on a pipe, where stderr stays empty.
+TEST_F(Batch, ALineAsEachBakeEndsOnATerminal) {
+  const auto tty = clothbake::test_support::run_clothbake_on_terminal(
+      {"batch", (dir_ / "lib").string(), "-o", (dir_ / "out").string()});
+  ASSERT_EQ(tty.code, 0) << tty.err;
+  EXPECT_NE(tty.err.find("batch: baking 3 of 3 fabrics"), std::string::npos) << tty.err;
+  for (const char* row : {"[1/3] ", "[2/3] ", "[3/3] "})
+    EXPECT_NE(tty.err.find(row), std::string::npos) << tty.err;
+  EXPECT_NE(tty.err.find(": baked in "), std::string::npos) << tty.err;
+  EXPECT_NE(tty.out.find("3 baked, 0 up to date, 0 failed"), std::string::npos) << tty.out;
+  const auto pipe =
+      run_clothbake({"batch", (dir_ / "lib").string(), "-o", (dir_ / "out2").string()});
+  ASSERT_EQ(pipe.code, 0) << pipe.err;
+  EXPECT_EQ(pipe.err, "");
+  EXPECT_NE(pipe.out.find("3 baked, 0 up to date, 0 failed"), std::string::npos) << pipe.out;
+}
+
 // The emitted script: bash parses it, its directives are those documented, and running each array
 // task as Slurm would (SLURM_ARRAY_TASK_ID set) gives assets byte-identical to local bakes.
 TEST_F(Batch, EmittedSlurmArrayRunsTheSameBakes) {
