@@ -23,6 +23,7 @@
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
 #include "tests/formats/test_fabric.hpp"
+#include "tests/support/input_error.hpp"
 
 namespace {
 
@@ -63,14 +64,7 @@ class Output : public ::testing::Test {
     return names;
   }
   static std::string error_of(const std::function<void()>& f) {
-    try {
-      f();
-    } catch (const Error& e) {
-      EXPECT_EQ(e.code(), ExitCode::Input) << e.what();
-      return e.what();
-    }
-    ADD_FAILURE() << "no error";
-    return "";
+    return test_support::input_error_of(f);
   }
   fs::path dir_;
 };

@@ -180,7 +180,9 @@ TEST(Visibility, VerticalWallsGiveFiniteLobes) {
   EXPECT_EQ(v.visible_fraction(std::size_t(5 * n + 7)), 1.0);
 }
 
-TEST(Visibility, WarnsAboutPoorFitsNamingTheWorstTexel) {
+// Poor fits are counted and the worst texel found (the asset's metadata reports them), without a
+// warning: no setting fixes a single lobe's error against a binary horizon (docs/raycast.md).
+TEST(Visibility, CountsPoorFitsAndFindsTheWorstTexelWithoutAWarning) {
   FabricMaps maps = rctest::plain_weave_maps(16);
   VisibilitySettings settings;
   settings.dirs = 16;
@@ -192,12 +194,8 @@ TEST(Visibility, WarnsAboutPoorFitsNamingTheWorstTexel) {
   EXPECT_EQ(quiet.texels_above_warning, 0u);
   settings.fit_warn_rms = 0.02;  // almost everything is
   VisibilityAsgs loud = fit_visibility(v, settings);
-  auto warnings = take_warnings();
-  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(take_warnings().empty());
   const std::size_t worst = loud.worst_texel;
-  std::string where =
-      "texel (" + std::to_string(worst % 16) + ", " + std::to_string(worst / 16) + ")";
-  EXPECT_NE(warnings[0].find(where), std::string::npos) << warnings[0];
   EXPECT_GT(loud.texels_above_warning, 0u);
   EXPECT_EQ(loud.max_fit_error, double(loud.fit_error[worst]));
   for (float e : loud.fit_error)

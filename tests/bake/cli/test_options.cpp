@@ -22,6 +22,20 @@ std::string error_of(F&& parse) {
   return "";
 }
 
+// Parses `args` (after a program name) with `app`; the ParseError's message, or "".
+std::string parse_error_of(CLI::App& app, std::vector<std::string> args) {
+  args.insert(args.begin(), "prog");
+  std::vector<const char*> argv;
+  for (const auto& a : args)
+    argv.push_back(a.c_str());
+  try {
+    app.parse(int(argv.size()), argv.data());
+  } catch (const CLI::ParseError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(NumberList, SplitsAtCommasAndWhitespace) {
   const NumberListRule any{.expected = "numbers"};
   EXPECT_EQ(parse_number_list("1,2.5,-3e2", "--x", any), (std::vector<double>{1, 2.5, -300}));
@@ -81,19 +95,10 @@ namespace {
 // --threads: 0 (the default) means all cores in every command; anything but a whole number in
 // [0, 4096] is a usage error that names the option and the text.
 TEST(ThreadsOption, ZeroIsAllCoresAndBadValuesNameTheOption) {
-  auto parse = [](std::vector<std::string> args, int* threads) {
+  auto parse = [](const std::vector<std::string>& args, int* threads) {
     CLI::App app;
     clothbake::cli::add_threads_option(app, *threads, "worker threads");
-    args.insert(args.begin(), "prog");
-    std::vector<const char*> argv;
-    for (const auto& a : args)
-      argv.push_back(a.c_str());
-    try {
-      app.parse(int(argv.size()), argv.data());
-    } catch (const CLI::ParseError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
+    return parse_error_of(app, args);
   };
   int threads = -7;
   EXPECT_EQ(parse({"--threads", "0"}, &threads), "");
@@ -112,19 +117,10 @@ TEST(ThreadsOption, ZeroIsAllCoresAndBadValuesNameTheOption) {
 
 // --tables: one meaning in eval, render and query (auto = compressed first); unset keeps Auto.
 TEST(TablesOption, MapsTheThreeWordsAndRefusesOthers) {
-  auto parse = [](std::vector<std::string> args, clothbake::eval::TableChoice* choice) {
+  auto parse = [](const std::vector<std::string>& args, clothbake::eval::TableChoice* choice) {
     CLI::App app;
     clothbake::cli::add_tables_option(app, *choice);
-    args.insert(args.begin(), "prog");
-    std::vector<const char*> argv;
-    for (const auto& a : args)
-      argv.push_back(a.c_str());
-    try {
-      app.parse(int(argv.size()), argv.data());
-    } catch (const CLI::ParseError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
+    return parse_error_of(app, args);
   };
   using clothbake::eval::TableChoice;
   TableChoice choice = TableChoice::Auto;

@@ -2,13 +2,13 @@
 // one; a scene, an asset or a fabric given where the other is needed is named as what it is.
 #include <gtest/gtest.h>
 
-#include <functional>
 #include <string>
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/input_kind.hpp"
 #include "bake/inputs/scene_load.hpp"
 #include "tests/bake/inputs/test_support.hpp"
+#include "tests/support/input_error.hpp"
 
 namespace {
 
@@ -59,32 +59,22 @@ TEST(InputKind, AWifDraftLoadsAsAFabric) {
   EXPECT_EQ(peek->bake.resolution, 32);
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ExitCode::Input) << e.what();
-    return e.what();
-  }
-  ADD_FAILURE() << "no error";
-  return "";
-}
-
 TEST(InputKind, TheWrongKindIsNamedBeforeAnyTomlError) {
   const std::string scene = kExamples + "scenes/room.toml",
                     fabric = kExamples + "fabrics/twill.toml";
-  std::string m = error_of([&] { (void)load_fabric_description(scene); });
+  std::string m = test_support::input_error_of([&] { (void)load_fabric_description(scene); });
   EXPECT_NE(m.find(scene + " is a scene, not a fabric description"), std::string::npos) << m;
-  m = error_of([&] { (void)inputs::load_scene(fabric); });
+  m = test_support::input_error_of([&] { (void)inputs::load_scene(fabric); });
   EXPECT_NE(m.find(fabric + " is a fabric description, not a scene"), std::string::npos) << m;
   clothbake::testing::ScratchDir dir;
   clothbake::testing::write_text(dir / "a.cbk", std::string("\x89"
-                                                 "CBK\r\n\x1a\n",
-                                                 8) +
-                                         "rest");
-  m = error_of([&] { (void)load_fabric_description(dir / "a.cbk"); });
+                                                            "CBK\r\n\x1a\n",
+                                                            8) +
+                                                    "rest");
+  m = test_support::input_error_of([&] { (void)load_fabric_description(dir / "a.cbk"); });
   EXPECT_NE(m.find("is a clothbake asset, not a fabric description"), std::string::npos) << m;
-  m = error_of([&] { (void)inputs::load_scene(kExamples + "wif/twill-2-2.wif"); });
+  m = test_support::input_error_of(
+      [&] { (void)inputs::load_scene(kExamples + "wif/twill-2-2.wif"); });
   EXPECT_NE(m.find("is a WIF draft, not a scene"), std::string::npos) << m;
 }
 
