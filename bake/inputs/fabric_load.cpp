@@ -357,6 +357,16 @@ void load_image_maps(LoadedFabric& out, const TomlSection& maps,
   const inputs::MapImage* albedo_image = nullptr;
   for (const auto& image : images) {
     if (image.role == "height") {
+      // An integer image's values are fractions of its full range: in tile units, unscaled, that
+      // is a relief up to a whole tile side tall (a woven relief is a few percent of it). Legal,
+      // and sometimes meant, so a warning, not an error.
+      if (image.integer_encoded && height_units == "tile" && !maps.has("height_scale"))
+        warn(
+            fmt::format("{}: a {}-bit height image in tile units without height_scale: its "
+                        "values 0..1 are a relief up to a whole tile side tall; give [maps] "
+                        "height_scale (the relief's height in tile sides) or the tile's size "
+                        "and height_units = \"mm\"",
+                        image.context, image.bits));
       m.height = inputs::decode_height(image, height_scale * to_tile_units);
       inputs::check_heights(m.height, n, image.context,
                             "[maps] height_scale, height_units and the image's values");

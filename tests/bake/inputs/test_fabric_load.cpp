@@ -37,6 +37,30 @@ class QuietTest : public ::testing::Test {
 
 using FabricLoad = QuietTest;
 
+// An 8-bit height image in tile units without height_scale is a relief up to a tile side tall: a
+// warning naming the file; with height_scale, or a float image, none.
+TEST_F(FabricLoad, IntegerHeightInTileUnitsWithoutAScaleWarns) {
+  ScratchDir dir;
+  auto f = write_image_fabric(dir, 8);
+  write_image(dir / "height8.png", make_image(8, 8, 1, [](int x, int, int) { return x / 7.0; }),
+              PixelType::UInt8);
+  write_text(f.toml, "name = \"h\"\n[maps]\nheight = \"height8.png\"\ntangent = \"tangent.exr\"\n");
+  take_warnings();
+  (void)load_fabric_description(f.toml);
+  auto warnings = take_warnings();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_THAT(warnings[0], HasSubstr("height8.png"));
+  EXPECT_THAT(warnings[0], HasSubstr("8-bit height image in tile units without height_scale"));
+  write_text(f.toml,
+             "name = \"h\"\n[maps]\nheight = \"height8.png\"\ntangent = "
+             "\"tangent.exr\"\nheight_scale = 0.05\n");
+  (void)load_fabric_description(f.toml);
+  EXPECT_TRUE(take_warnings().empty());
+  auto g = write_image_fabric(dir, 8);  // float heights
+  (void)load_fabric_description(g.toml);
+  EXPECT_TRUE(take_warnings().empty());
+}
+
 TEST_F(FabricLoad, ImageFabricWithDefaults) {
   ScratchDir dir;
   auto f = write_image_fabric(dir, 8);
