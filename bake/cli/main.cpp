@@ -71,8 +71,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    int code = app.exit(e);  // prints help/version on stdout, errors on stderr
-    return code == 0 ? 0 : int(ExitCode::Usage);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version: printed on stdout
+    // One error style for every message (docs/cli.md): "clothbake: error: ..." and where the
+    // options are listed, instead of CLI11's bare text and "Run with --help".
+    std::string where = "clothbake --help";
+    if (argc >= 2 && argv[1][0] != '-') where = "clothbake " + std::string(argv[1]) + " --help";
+    report_error(std::string(e.what()) + " (" + where + " lists the options)");
+    return int(ExitCode::Usage);
   }
   try {
     for (auto& [sub, action] : actions)

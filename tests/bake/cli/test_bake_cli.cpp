@@ -479,7 +479,7 @@ TEST_F(Cli, ConflictingCompressionOptionsAreUsageErrors) {
 }
 
 // A mistyped command is a usage error naming it and the closest command; a word near none gets no
-// suggestion; an empty command line still asks for one.
+// suggestion; an empty command line still asks for one; CLI11's errors have clothbake's style.
 TEST_F(Cli, UnknownCommandSuggestsTheClosest) {
   Outcome r = run({"rendr", "scene.toml"});
   EXPECT_EQ(r.code, 1);
@@ -495,6 +495,12 @@ TEST_F(Cli, UnknownCommandSuggestsTheClosest) {
   EXPECT_EQ(r.code, 1);
   r = run({"--version"});
   EXPECT_EQ(r.code, 0);
+  // CLI11's own refusals speak the same way as clothbake's: prefix, message, where to look.
+  r = run({"bake", "--threads", "x"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.rfind("clothbake: error: --threads", 0), 0u) << r.err;
+  EXPECT_IN("(clothbake bake --help lists the options)", r.err);
+  EXPECT_EQ(r.err.find("Run with --help"), std::string::npos) << r.err;
 }
 
 // bake takes a WIF draft directly (the README's input) and --resolution N for a weave's maps (what
