@@ -33,6 +33,7 @@
 #include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_files.hpp"
 #include "bake/pipeline/progress.hpp"
+#include "bake/stages/memory_estimate.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/version.hpp"
@@ -208,20 +209,6 @@ pid_t spawn_bake(const std::vector<std::string>& args, const std::string& log) {
   const int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   return rc == 0 ? pid : -1;
-}
-
-std::string human_size(uint64_t bytes) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(1);
-  if (bytes >= (uint64_t(1) << 30))
-    s << double(bytes) / double(uint64_t(1) << 30) << " GiB";
-  else if (bytes >= (uint64_t(1) << 20))
-    s << double(bytes) / double(1 << 20) << " MiB";
-  else if (bytes >= 1024)
-    s << double(bytes) / 1024.0 << " KiB";
-  else
-    s << bytes << " B";
-  return s.str();
 }
 
 std::string sh_quote(const std::string& s) {
@@ -446,7 +433,8 @@ Action setup_batch(CLI::App& app) {
         secs << std::fixed << std::setprecision(2) << j.seconds;
         std::cout << std::left << std::setw(int(width) + 2) << terminal_safe(j.name)
                   << std::setw(12) << j.status << std::setw(10) << secs.str() << std::setw(12)
-                  << (j.size ? human_size(j.size) : "-") << terminal_safe(j.note) << "\n";
+                  << (j.size ? stages::format_bytes(double(j.size)) : "-") << terminal_safe(j.note)
+                  << "\n";
       }
       std::cout << baked << " baked, " << fresh << " up to date, " << failed << " failed in "
                 << std::fixed << std::setprecision(2) << wall << " s\n";

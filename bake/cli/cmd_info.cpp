@@ -15,6 +15,7 @@
 #include "bake/cli/options.hpp"
 #include "bake/cli/terminal_text.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/stages/memory_estimate.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "formats/writer/metadata_json.hpp"
@@ -153,7 +154,8 @@ void print_text(const nlohmann::json& doc, const Asset& asset) {
   auto text = [](const nlohmann::json& value) { return terminal_safe(value.get<std::string>()); };
   out << "asset:    " << text(doc["path"]) << '\n';
   out << "format:   " << doc["format"]["major"] << '.' << doc["format"]["minor"] << '\n';
-  out << "size:     " << doc["size_bytes"] << " bytes\n";
+  out << "size:     " << stages::format_bytes(doc["size_bytes"].get<double>()) << " ("
+      << doc["size_bytes"] << " bytes)\n";
   out << "content:  xxh64 " << doc["content_hash"].get<std::string>() << '\n';
   if (doc.contains("metadata") && doc["metadata"].is_object()) {
     const auto& m = doc["metadata"];
@@ -173,11 +175,29 @@ void print_text(const nlohmann::json& doc, const Asset& asset) {
             << terminal_safe(in.value("xxh64", "")) << "  " << terminal_safe(in.value("path", ""))
             << '\n';
     }
-    if (m.contains("fabric") && m["fabric"].contains("bake"))
-      out << "bake:     "
-          << terminal_safe(
-                 m["fabric"]["bake"].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace))
-          << '\n';
+    if (m.contains("fabric") && m["fabric"].is_object() && m["fabric"].contains("name") &&
+        m["fabric"]["name"].is_string())
+      out << "name:     " << text(m["fabric"]["name"]) << '\n';
+    if (m.contains("fabric") && m["fabric"].contains("bake") && m["fabric"]["bake"].is_object()) {
+      // One "key value" per setting, a line of them at a time (the JSON has them typed).
+      out << "bake:     ";
+      int on_line = 0;
+      for (const auto& [key, value] : m["fabric"]["bake"].items()) {
+        if (on_line == 4) {
+          out << "\n          ";
+          on_line = 0;
+        } else if (on_line > 0) {
+          out << ", ";
+        }
+        out << terminal_safe(key) << ' '
+            << terminal_safe(
+                   value.is_string()
+                       ? value.get<std::string>()
+                       : value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+        ++on_line;
+      }
+      out << '\n';
+    }
   }
   if (doc.contains("fabric_info")) {
     const auto& f = doc["fabric_info"];
@@ -187,10 +207,21 @@ void print_text(const nlohmann::json& doc, const Asset& asset) {
                                           : std::string("?"))
         << " mm\n";
   }
+  auto rgb = [](const nlohmann::json& c) {
+    if (!c.is_array() || c.size() != 3 || !c[0].is_number() || !c[1].is_number() ||
+        !c[2].is_number())
+      return std::string("?");
+    return fmt::format("({:.3g}, {:.3g}, {:.3g})", c[0].get<double>(), c[1].get<double>(),
+                       c[2].get<double>());
+  };
+  if (doc.contains("fabric_info") && doc["fabric_info"].contains("sheen_color"))
+    out << "  sheen colour " << rgb(doc["fabric_info"]["sheen_color"]) << ", roughness "
+        << doc["fabric_info"]["sheen_roughness"] << '\n';
   if (doc.contains("yarns"))
     for (const auto& y : doc["yarns"])
-      out << "  yarn " << std::left << std::setw(12) << text(y["name"]) << " roughness "
-          << y["roughness"] << ", optical thickness " << y["optical_thickness"] << '\n';
+      out << "  yarn " << std::left << std::setw(12) << text(y["name"]) << " colour "
+          << rgb(y.value("color", nlohmann::json())) << ", roughness " << y["roughness"]
+          << ", optical thickness " << y["optical_thickness"] << '\n';
   if (doc.contains("scene_plan")) {
     const auto& p = doc["scene_plan"];
     out << "plan:     scene " << terminal_safe(p.value("scene", std::string("?"))) << " (xxh64 "

@@ -143,6 +143,14 @@ TEST_F(Cli, BakeInfoValidateExport) {
   r = run({"info", "@a.cbk"});
   EXPECT_EQ(r.code, 0);
   EXPECT_IN("yarn_id", r.out);
+  // The text names the fabric, its yarns' colours and its sheen, lists the bake settings as
+  // "key value" pairs (not a JSON object) and gives the size in binary units with the bytes.
+  EXPECT_IN("name:     cli test", r.out);
+  EXPECT_IN(" colour (", r.out);
+  EXPECT_IN("sheen colour (", r.out);
+  EXPECT_IN("resolution 64", r.out);
+  EXPECT_EQ(r.out.find("bake:     {"), std::string::npos) << r.out;
+  EXPECT_IN(" KiB (", r.out);
 
   r = run({"validate", "@a.cbk", "--json"});
   ASSERT_EQ(r.code, 0) << r.out << r.err;
