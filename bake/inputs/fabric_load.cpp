@@ -231,7 +231,30 @@ void build_weave_maps(LoadedFabric& out, weave::WeaveSpec spec, const std::strin
       "height_mm)";
   inputs::check_maps_finite(f.maps, where, keys);
   inputs::check_heights(f.maps.height, f.maps.resolution, where, keys);
-  f.tile_size_mm = weave::weave_tile_size(spec).width_mm;
+  const weave::TileSize tile = weave::weave_tile_size(spec);
+  f.tile_size_mm = tile.width_mm;
+  // The maps are a square tile: a repeat of W x H mm with H / W far from 1 is stretched back by the
+  // renderer, and its slopes along v are off by that factor (docs/weaves.md, "Non-square
+  // repeats"). Say so, with the whole number of repeats along each side that comes nearest square.
+  const double aspect = tile.height_mm / tile.width_mm;
+  if (std::isfinite(aspect) && (aspect > 1.25 || aspect < 0.8)) {
+    int best_ends = 1, best_picks = 1;
+    double best = std::abs(std::log(aspect));
+    for (int e = 1; e <= 8; ++e)
+      for (int p = 1; p <= 8; ++p)
+        if (const double r = std::abs(std::log(aspect * p / e)); r < best - 1e-12) {
+          best = r;
+          best_ends = e;
+          best_picks = p;
+        }
+    warn(
+        fmt::format("{}: the repeat is {:.4g} x {:.4g} mm (H/W {:.3g}) but the maps are a square "
+                    "tile: slopes along the weft direction are off by a factor {:.3g}; in a fabric "
+                    "description, [weave] "
+                    "repeat = [{}, {}] makes the tile {} x {} repeats (H/W {:.3g})",
+                    where, tile.width_mm, tile.height_mm, aspect, aspect, best_ends, best_picks,
+                    best_ends, best_picks, aspect * best_picks / best_ends));
+  }
   for (std::size_t i = 2; i < f.yarns.size(); ++i)
     warn(
         fmt::format("{}: yarn[{}] '{}' is declared but a weave only uses yarns 0 (warp) and 1 "
@@ -405,7 +428,7 @@ void load_image_maps(LoadedFabric& out, const TomlSection& maps,
 void load_weave(LoadedFabric& out, const TomlSection& w, const std::string& base_dir,
                 const std::string& toml_path) {
   Fabric& f = out.fabric;
-  w.check_keys({"name", "matrix", "wif", "warp", "weft", "end_colors", "pick_colors"});
+  w.check_keys({"name", "matrix", "wif", "warp", "weft", "end_colors", "pick_colors", "repeat"});
   int sources = int(w.has("name")) + int(w.has("matrix")) + int(w.has("wif"));
   if (sources != 1)
     throw_input_error(fmt::format(
@@ -414,7 +437,10 @@ void load_weave(LoadedFabric& out, const TomlSection& w, const std::string& base
         w.where(""), sources == 0 ? "none is given" : "several are given"));
 
   weave::WeaveSpec spec;
-  weave::YarnGeometry warp_mask, weft_mask;
+  // Nothing overridden unless [weave.warp] / [weave.weft] state it (NaN: not set). Default-made
+  // masks used to replace a draft's spacings with the defaults when a section was absent.
+  const double unset = std::nan("");
+  weave::YarnGeometry warp_mask{unset, unset, unset, unset}, weft_mask = warp_mask;
   auto warp_section = w.table("warp");
   auto weft_section = w.table("weft");
   if (warp_section) spec.warp = parse_geometry(*warp_section, spec.warp, &warp_mask);
@@ -463,6 +489,12 @@ void load_weave(LoadedFabric& out, const TomlSection& w, const std::string& base
       w.fail("pick_colors", fmt::format("has {} colours but the weave has {} picks (weft threads)",
                                         colors->size(), spec.matrix.picks));
     spec.pick_colors = *colors;
+  }
+  // A tile of several repeats (docs/weaves.md, "Non-square repeats"): [ends_times, picks_times].
+  if (const auto times = w.numbers("repeat", 2, Range{1, 16})) {
+    if ((*times)[0] != std::floor((*times)[0]) || (*times)[1] != std::floor((*times)[1]))
+      w.fail("repeat", "must be [ends_times, picks_times]: two whole numbers in [1, 16]");
+    spec = weave::repeat_weave_spec(spec, int((*times)[0]), int((*times)[1]));
   }
   build_weave_maps(out, std::move(spec), fmt::format("{}: [weave]", toml_path));
 }

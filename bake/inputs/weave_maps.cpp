@@ -141,6 +141,28 @@ void validate_weave_spec(const WeaveSpec& spec, const std::string& where) {
   check_per_thread(spec.pick_geometry, picks, "pick_geometry", "pick");
 }
 
+WeaveSpec repeat_weave_spec(const WeaveSpec& spec, int ends_times, int picks_times) {
+  WeaveSpec out = spec;
+  const WeaveMatrix& m = spec.matrix;
+  out.matrix.ends = m.ends * ends_times;
+  out.matrix.picks = m.picks * picks_times;
+  out.matrix.cells.assign(std::size_t(out.matrix.ends) * std::size_t(out.matrix.picks), 0);
+  for (int p = 0; p < out.matrix.picks; ++p)
+    for (int e = 0; e < out.matrix.ends; ++e)
+      out.matrix.set(p, e, m.warp_up(p % m.picks, e % m.ends));
+  auto repeat = [](auto list, int times) {
+    auto once = list;
+    for (int k = 1; k < times; ++k)
+      list.insert(list.end(), once.begin(), once.end());
+    return list;
+  };
+  out.end_colors = repeat(spec.end_colors, ends_times);
+  out.pick_colors = repeat(spec.pick_colors, picks_times);
+  out.end_geometry = repeat(spec.end_geometry, ends_times);
+  out.pick_geometry = repeat(spec.pick_geometry, picks_times);
+  return out;
+}
+
 TileSize weave_tile_size(const WeaveSpec& spec) {
   // Summed in long double and rounded once: eight ends of 0.4 mm are 3.2 mm, not the
   // 3.1999999999999997 of a running double sum (which a written fabric.toml would then show).

@@ -475,6 +475,30 @@ TEST_F(FabricLoad, MatrixWeaveWithThreadColours) {
   EXPECT_EQ(loaded.weave->pick_colors, std::vector<Rgb>(4, Rgb{1, 1, 1}));
 }
 
+// A repeat far from square warns with the repeat counts that come nearest square; [weave] repeat
+// applies them (no warning then), and a bad value names the key.
+TEST_F(FabricLoad, NonSquareRepeatWarnsAndRepeatTilesIt) {
+  ScratchDir dir;
+  const std::string wif = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/wif/twill-2-2.wif";
+  write_text(dir / "w.toml", "[weave]\nwif = \"" + wif + "\"\n[bake]\nresolution = 16\n");
+  take_warnings();
+  const LoadedFabric one = load_fabric_description(dir / "w.toml");
+  auto warnings = take_warnings();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_THAT(warnings[0], HasSubstr("H/W 0.5"));
+  EXPECT_THAT(warnings[0], HasSubstr("repeat = [1, 2]"));
+  write_text(dir / "w.toml",
+             "[weave]\nwif = \"" + wif + "\"\nrepeat = [1, 2]\n[bake]\nresolution = 16\n");
+  const LoadedFabric two = load_fabric_description(dir / "w.toml");
+  EXPECT_TRUE(take_warnings().empty());
+  EXPECT_EQ(two.weave->matrix.picks, 2 * one.weave->matrix.picks);
+  EXPECT_EQ(two.fabric.tile_size_mm, one.fabric.tile_size_mm);
+  for (const char* bad : {"repeat = [1.5, 2]", "repeat = [0, 1]", "repeat = [1]", "repeat = 2"}) {
+    write_text(dir / "w.toml", "[weave]\nwif = \"" + wif + "\"\n" + bad + "\n");
+    EXPECT_THAT(load_error(dir / "w.toml"), HasSubstr("weave.repeat")) << bad;
+  }
+}
+
 TEST_F(FabricLoad, WifWeaveWithGeometryOverrides) {
   ScratchDir dir;
   std::string wif = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/wif/twill-2-2.wif";
@@ -489,6 +513,11 @@ TEST_F(FabricLoad, WifWeaveWithGeometryOverrides) {
   WifDraft draft = read_wif(wif);
   EXPECT_EQ(loaded.weave->matrix, draft.spec.matrix);
   EXPECT_EQ(loaded.weave->weft.twist_deg, draft.spec.weft.twist_deg) << "only stated keys override";
+  // The draft's spacings stay where the file states none ([weave.weft] absent: they were replaced
+  // by the defaults, a 4 x 2 mm tile instead of the draft's 10.16 x 5.08 mm).
+  EXPECT_EQ(loaded.weave->weft.spacing_mm, draft.spec.weft.spacing_mm);
+  EXPECT_EQ(loaded.weave->warp.spacing_mm, draft.spec.warp.spacing_mm);
+  EXPECT_EQ(loaded.fabric.tile_size_mm, weave::weave_tile_size(draft.spec).width_mm);
   ASSERT_EQ(loaded.fabric.inputs.size(), 2u);
   EXPECT_EQ(loaded.fabric.inputs[1].role, "wif");
   EXPECT_EQ(loaded.fabric.inputs[1].xxh64, inputs::hash_file(wif));

@@ -92,6 +92,31 @@ TEST(WeaveMaps, TileSizeIsTheCorrectlyRoundedSumOfTheSpacings) {
   EXPECT_EQ(weave_tile_size(eight).width_mm, 3.2);
 }
 
+// A tile of several repeats: the matrix tiled, per-thread lists repeated, the tile's sides the
+// repeat's times the counts; the maps of [1, 1] are the spec's own.
+TEST(WeaveMaps, RepeatedSpecTilesTheMatrixAndItsThreads) {
+  WeaveSpec spec = rich_spec();
+  const WeaveSpec r = repeat_weave_spec(spec, 2, 3);
+  ASSERT_EQ(r.matrix.ends, 2 * spec.matrix.ends);
+  ASSERT_EQ(r.matrix.picks, 3 * spec.matrix.picks);
+  for (int p = 0; p < r.matrix.picks; ++p)
+    for (int e = 0; e < r.matrix.ends; ++e)
+      EXPECT_EQ(r.matrix.warp_up(p, e),
+                spec.matrix.warp_up(p % spec.matrix.picks, e % spec.matrix.ends));
+  ASSERT_EQ(r.end_colors.size(), 2 * spec.end_colors.size());
+  EXPECT_EQ(r.end_colors[spec.end_colors.size() + 1], spec.end_colors[1]);
+  ASSERT_EQ(r.pick_colors.size(), 3 * spec.pick_colors.size());
+  ASSERT_EQ(r.end_geometry.size(), 2 * spec.end_geometry.size());
+  EXPECT_EQ(r.end_geometry[spec.end_geometry.size() + 1].spacing_mm,
+            spec.end_geometry[1].spacing_mm);
+  const TileSize one = weave_tile_size(spec), tiled = weave_tile_size(r);
+  EXPECT_NEAR(tiled.width_mm, 2 * one.width_mm, 1e-12);
+  EXPECT_NEAR(tiled.height_mm, 3 * one.height_mm, 1e-12);
+  const WeaveSpec same = repeat_weave_spec(spec, 1, 1);
+  EXPECT_EQ(same.matrix, spec.matrix);
+  EXPECT_EQ(same.end_colors, spec.end_colors);
+}
+
 TEST(WeaveMaps, EveryMapIsWellFormed) {
   for (const WeaveSpec& spec : {make_spec(plain_weave()), make_spec(satin(5, 2), 0.7, 1.0),
                                 make_spec(basket(2), 1.0, 0.6), rich_spec()}) {
