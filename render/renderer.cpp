@@ -373,14 +373,22 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   st.cloth_pixels = counters.cloth_pixels;
   st.footprint_texels_min = std::isfinite(counters.min_texels) ? counters.min_texels : 0;
   st.footprint_texels_max = counters.max_texels;
-  for (std::size_t p = 0; p + 2 < result.rgb.size(); p += 3) {
-    const float least = std::min({result.rgb[p], result.rgb[p + 1], result.rgb[p + 2]});
+  const NegativePixels negative = count_negative_pixels(result.rgb);
+  st.negative_pixels = negative.count;
+  st.min_value = negative.least;
+  return result;
+}
+
+NegativePixels count_negative_pixels(const std::vector<float>& rgb) noexcept {
+  NegativePixels out;
+  for (std::size_t p = 0; p + 2 < rgb.size(); p += 3) {
+    const float least = std::min({rgb[p], rgb[p + 1], rgb[p + 2]});
     if (least < 0.0f) {
-      ++st.negative_pixels;
-      st.min_value = std::min(st.min_value, double(least));
+      ++out.count;
+      out.least = std::min(out.least, double(least));
     }
   }
-  return result;
+  return out;
 }
 
 }  // namespace clothbake::render

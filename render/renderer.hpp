@@ -60,6 +60,14 @@ struct RenderStats {
   double min_value = 0;
 };
 
+// The pixels of an RGB image (3 floats a pixel) with a channel below 0, and the least channel
+// among them (0 when there are none): RenderStats::negative_pixels and min_value. No allocation.
+struct NegativePixels {
+  uint64_t count = 0;
+  double least = 0;
+};
+NegativePixels count_negative_pixels(const std::vector<float>& rgb) noexcept;
+
 struct RenderResult {
   int width = 0, height = 0;
   std::vector<float> rgb;  // width * height * 3, linear radiance, row 0 at the top
