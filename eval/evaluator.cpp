@@ -363,8 +363,11 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
                          "method multiscale needs compressed Integral-Radiance tables (the raw "
                          "ones have no images to integrate under the parallax); use "
                          "multiscale-paper, brute or reference with raw tables");
-  const bool without_cv =
-      method == Method::Multiscale && !direct && !point && !uses_control_variate(*data_, footprint);
+  // The block of whole periods, once per estimate: it decides the branch and the estimator uses it.
+  const PeriodBlock block =
+      method == Method::Multiscale && !direct ? period_block(data_->n, footprint) : PeriodBlock{};
+  const bool without_cv = method == Method::Multiscale && !direct &&
+                          block.remainder > data_->options.max_remainder_fraction;
   if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
                                                // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
@@ -387,7 +390,7 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   } else if (method == Method::MultiscalePaper) {
     s = paper_control_variates(*data_, frame, footprint, spp, rng, out);
   } else {
-    s = pushforward_control_variates(*data_, frame, footprint, spp, rng, out);
+    s = pushforward_control_variates(*data_, frame, footprint, block, spp, rng, out);
   }
   if (!s.ok()) return s;
   sum_value(out);

@@ -22,15 +22,6 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame,
                               const Footprint& footprint, uint32_t spp, Rng& rng,
                               Estimate* out) noexcept;
 
-// The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
-// each texel's low-rank visibility at every sample's own destination; its mean over the whole
-// periods of P from the bin's push-forward sums, over the rest from remainder_samples() cheap
-// samples. P has positive area; the compressed specular tables are open. Errors: Unsupported when
-// the bin's push-forward sums cannot be allocated.
-Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
-                                    const Footprint& footprint, uint32_t spp, Rng& rng,
-                                    Estimate* out) noexcept;
-
 // The block A of whole periods the unbiased form integrates from its tables: kx by ky tiles at
 // P's corner (x0, y0), each count ⌊w/N⌋ or ⌈w/N⌉ (and the same for h), at least 1, whichever pair
 // makes the symmetric difference of A and P least. The rest of P is B = (P \ A) − (A \ P): at most
@@ -48,14 +39,19 @@ struct PeriodBlock {
 };
 PeriodBlock period_block(uint32_t n, const Footprint& footprint) noexcept;
 
-// Whether the unbiased form uses its control variate on P: |B| / |P| at most
-// EvalOptions::max_remainder_fraction; otherwise P is sampled as brute force.
-bool uses_control_variate(const EvalData& data, const Footprint& footprint) noexcept;
+// The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
+// each texel's low-rank visibility at every sample's own destination; its mean over P's block of
+// whole periods (`block`, period_block(data.n, P)) from the bin's push-forward sums, over the rest
+// from remainder_samples() cheap samples. P has positive area; the compressed specular tables are
+// open. Errors: Unsupported when the bin's push-forward sums cannot be allocated.
+Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
+                                    const Footprint& footprint, const PeriodBlock& block,
+                                    uint32_t spp, Rng& rng, Estimate* out) noexcept;
 
 inline constexpr uint32_t kMaxRemainderSamples = 1u << 16;
-// The cheap samples of g the unbiased form draws over B for spp samples
+// The cheap samples of g the unbiased form draws over B (`block` of the footprint) for spp samples
 // (EvalOptions::remainder_sample_scale): at least 1 per rectangle of B that has an area; 0 when P
 // is made of whole periods.
-uint32_t remainder_samples(const EvalData& data, const Footprint& footprint, uint32_t spp) noexcept;
+uint32_t remainder_samples(const EvalData& data, const PeriodBlock& block, uint32_t spp) noexcept;
 
 }  // namespace clothbake::eval

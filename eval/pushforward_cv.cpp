@@ -98,15 +98,13 @@ PeriodBlock period_block(uint32_t n, const Footprint& p) noexcept {
   const double t = double(n);
   const double w = p.x1 - p.x0, h = p.y1 - p.y0;
   PeriodBlock best;
-  double best_difference = 0.0;
-  bool first = true;
+  double best_difference = INFINITY;
   for (const double kx : {std::max(1.0, std::floor(w / t)), std::max(1.0, std::ceil(w / t))})
     for (const double ky : {std::max(1.0, std::floor(h / t)), std::max(1.0, std::ceil(h / t))}) {
-      // |A Δ P| = |A| + |P| − 2 |A ∩ P|, both anchored at the corner.
+      // |A Δ P| = |A| + |P| − 2 |A ∩ P|, both anchored at the corner; ties keep the first pair.
       const double ax = kx * t, ay = ky * t;
       const double difference = ax * ay + w * h - 2.0 * std::min(ax, w) * std::min(ay, h);
-      if (!first && !(difference < best_difference)) continue;
-      first = false;
+      if (!(difference < best_difference)) continue;
       best_difference = difference;
       best.kx = kx;
       best.ky = ky;
@@ -126,12 +124,7 @@ PeriodBlock period_block(uint32_t n, const Footprint& p) noexcept {
   return best;
 }
 
-bool uses_control_variate(const EvalData& data, const Footprint& p) noexcept {
-  return period_block(data.n, p).remainder <= data.options.max_remainder_fraction;
-}
-
-uint32_t remainder_samples(const EvalData& data, const Footprint& p, uint32_t spp) noexcept {
-  const PeriodBlock block = period_block(data.n, p);
+uint32_t remainder_samples(const EvalData& data, const PeriodBlock& block, uint32_t spp) noexcept {
   if (!(block.remainder > 0.0)) return 0;
   // Cost-optimal: with a cost c0 per estimate, a per sample and c1 per cheap sample, the product of
   // the cost c0 + a spp + c1 m and the variance var(f - g) / spp + (|B|/|P|)^2 var(g) / m is least
@@ -148,15 +141,13 @@ uint32_t remainder_samples(const EvalData& data, const Footprint& p, uint32_t sp
 }
 
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
-                                    const Footprint& p, uint32_t spp, Rng& rng,
-                                    Estimate* out) noexcept {
-  const uint32_t n = data.n, clusters = data.cluster_count();
-  const double w = p.x1 - p.x0, h = p.y1 - p.y0, area = w * h;
-  // One view bin for the estimate, then the whole-period block A at P's corner: any N-long window
-  // covers every texel column once, so A's push-forward is kx ky times the tile's.
+                                    const Footprint& p, const PeriodBlock& block, uint32_t spp,
+                                    Rng& rng, Estimate* out) noexcept {
+  const uint32_t clusters = data.cluster_count();
+  const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
+  // One view bin for the estimate; `block` is the whole-period block A at P's corner: any N-long
+  // window covers every texel column once, so A's push-forward is kx ky times the tile's.
   const int bin = draw_view_bin(frame, rng.uniform());
-  const PeriodBlock block = period_block(n, p);
-  const double kx = block.kx, ky = block.ky;
   // The view's four bins are built together, whichever is drawn: a view's first estimate (a
   // renderer's first frame, a report's warm-up pass) then prepares everything that view will read,
   // and later estimates never pay a build (6-9 ms per bin at N = 256, docs/evaluator.md).
@@ -244,59 +235,41 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   // The base over A: the per-estimate coefficients dotted with the bin's whole-tile sums.
   Rgb base[model::kLobeCount];
   const uint32_t r1 = k.rank + 1;
-  {  // the base over A
-    if (k.specular) {
-      // Per cluster c: sum_j b_cj(i) sum_{images of c} beta_i S[spec(i, j)]. The images come
-      // cluster by cluster, so the inner sums run in registers, one independent chain per j, and
-      // are folded with b_cj when the cluster changes (a dependent chain per image through
-      // per_cluster[c] cost the satin's 355 images about 3 us an estimate).
-      double per_cluster[reader::kMaxVisibilityClusters] = {};
-      double column[kMaxRank + 1] = {};
-      uint32_t current = layout.images > 0 ? data.image_cluster[0] : 0;
-      auto fold = [&] {
-        double v = 0.0;
-        for (uint32_t j = 0; j < r1; ++j) {
-          v += k.vis[current][j] * column[j];
-          column[j] = 0.0;
-        }
-        per_cluster[current] += v;
-      };
-      for (uint32_t i = 0; i < layout.images; ++i) {
-        const uint32_t c = data.image_cluster[i];
-        if (c != current) {
-          fold();
-          current = c;
-        }
-        const double basis = image_at_h[i];
-        const double* s = sums + layout.spec(i, 0);
-        for (uint32_t j = 0; j < r1; ++j)
-          column[j] += basis * s[j];
-      }
-      fold();
-      Rgb sum;
-      for (uint32_t c = 0; c < clusters; ++c)
-        sum += k.specular_scale[c] * per_cluster[c];
-      base[int(k.specular_lobe)] = sum;
+  if (k.specular) {
+    double per_cluster[reader::kMaxVisibilityClusters] = {};
+    for (uint32_t i = 0; i < layout.images; ++i) {
+      const double basis = image_at_h[i];
+      if (basis == 0.0) continue;
+      const uint32_t c = data.image_cluster[i];
+      const double* s = sums + layout.spec(i, 0);
+      double v = 0.0;
+      for (uint32_t j = 0; j < r1; ++j)
+        v += k.vis[c][j] * s[j];
+      per_cluster[c] += basis * v;
     }
-    const uint32_t diffuse_offset = k.diffuse_lobe == Lobe::DiffuseReflection ? 0 : 3;
-    Rgb diffuse;
-    double sheen = 0.0, delta = 0.0;
+    Rgb sum;
     for (uint32_t c = 0; c < clusters; ++c)
-      for (uint32_t j = 0; j < r1; ++j) {
-        const double* s = sums + layout.lobe(c, j);
-        const double b = k.vis[c][j];
-        if (k.diffuse)
-          diffuse += Rgb(s[diffuse_offset], s[diffuse_offset + 1], s[diffuse_offset + 2]) * b;
-        sheen += s[6] * b;
-        delta += s[7] * b;
-      }
-    if (k.diffuse) base[int(k.diffuse_lobe)] = k.diffuse_scale * diffuse;
-    if (k.sheen) base[int(Lobe::Sheen)] = k.sheen_scale * sheen;
-    if (k.delta) base[int(Lobe::DeltaTransmission)] = k.delta_scale * delta;
-    for (Rgb& b : base)
-      b = b * (kx * ky);
-    out->counters.table_queries += 1;
+      sum += k.specular_scale[c] * per_cluster[c];
+    base[int(k.specular_lobe)] = sum;
   }
+  const uint32_t diffuse_offset = k.diffuse_lobe == Lobe::DiffuseReflection ? 0 : 3;
+  Rgb diffuse;
+  double sheen = 0.0, delta = 0.0;
+  for (uint32_t c = 0; c < clusters; ++c)
+    for (uint32_t j = 0; j < r1; ++j) {
+      const double* s = sums + layout.lobe(c, j);
+      const double b = k.vis[c][j];
+      if (k.diffuse)
+        diffuse += Rgb(s[diffuse_offset], s[diffuse_offset + 1], s[diffuse_offset + 2]) * b;
+      sheen += s[6] * b;
+      delta += s[7] * b;
+    }
+  if (k.diffuse) base[int(k.diffuse_lobe)] = k.diffuse_scale * diffuse;
+  if (k.sheen) base[int(Lobe::Sheen)] = k.sheen_scale * sheen;
+  if (k.delta) base[int(Lobe::DeltaTransmission)] = k.delta_scale * delta;
+  for (Rgb& b : base)
+    b = b * (block.kx * block.ky);
+  out->counters.table_queries += 1;
 
   // The residual f - g at spp stratified points over P, both at the sample's destination.
   Rgb residual[model::kLobeCount];
@@ -312,7 +285,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   });
   // The integral of g over the rest B by cheap samples, stratified over B's two rectangles in
   // proportion to their areas, each rectangle's mean times its area and its sign (period_block).
-  const uint32_t m = remainder_samples(data, p, spp);
+  const uint32_t m = remainder_samples(data, block, spp);
   Rgb remainder[model::kLobeCount];
   if (m > 0) {
     const double* areas = block.areas;

@@ -382,7 +382,7 @@ TEST(Multiscale, IsUnbiasedWithAThinRemainder) {
     const Stats st = repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 1, 8000, 13);
     expect_mean_within_3se(st, reference(o->evaluator, p, dirs.wi, dirs.wo), 1e-6, "multiscale");
   }
-  EXPECT_EQ(eval::remainder_samples(*o->evaluator.data(), p, 1), 2u);
+  EXPECT_EQ(eval::remainder_samples(*o->evaluator.data(), eval::period_block(64, p), 1), 2u);
 }
 
 // The block of whole periods and its two signed rectangles add up to the footprint, point by
