@@ -184,12 +184,13 @@ void resolve_radiance_dirs(Fabric& f) {
   resolve_radiance_dirs(f.bake, roughness);
 }
 
-// A WIF draft given where a fabric is expected: by its name or by its [WIF] section.
-bool is_wif_input(const std::string& path, std::string_view bytes) {
+// What a file given as a fabric holds: a WIF draft by its name (".wif", any case) or by its [WIF]
+// section, else what its bytes say (input_kind.hpp).
+inputs::InputKind fabric_input_kind(const std::string& path, std::string_view bytes) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return char(std::tolower(c)); });
-  return ext == ".wif" || inputs::sniff_input_kind(bytes) == inputs::InputKind::Wif;
+  return ext == ".wif" ? inputs::InputKind::Wif : inputs::sniff_input_kind(bytes);
 }
 
 std::vector<YarnMaterial> default_weave_yarns() {
@@ -494,7 +495,8 @@ void load_weave(LoadedFabric& out, const TomlSection& w, const std::string& base
   if (const auto times = w.numbers("repeat", 2, Range{1, 16})) {
     if ((*times)[0] != std::floor((*times)[0]) || (*times)[1] != std::floor((*times)[1]))
       w.fail("repeat", "must be [ends_times, picks_times]: two whole numbers in [1, 16]");
-    spec = weave::repeat_weave_spec(spec, int((*times)[0]), int((*times)[1]));
+    spec = weave::repeat_weave_spec(spec, int((*times)[0]), int((*times)[1]),
+                                    w.where("repeat") + ": weave.repeat");
   }
   build_weave_maps(out, std::move(spec), fmt::format("{}: [weave]", toml_path));
 }
@@ -503,14 +505,15 @@ void load_weave(LoadedFabric& out, const TomlSection& w, const std::string& base
 
 LoadedFabric load_fabric_description(const std::string& toml_path, const LoadOptions& options) {
   const std::string text = inputs::read_file_bytes(toml_path);
-  if (is_wif_input(toml_path, text)) {
+  const inputs::InputKind kind = fabric_input_kind(toml_path, text);
+  if (kind == inputs::InputKind::Wif) {
     LoadedFabric out =
         fabric_from_wif(toml_path, options.resolution.value_or(kDefaultWeaveResolution));
     out.fabric.bake.radiance_dirs = 0;  // automatic, as for a [weave] without [bake]
     resolve_radiance_dirs(out.fabric);
     return out;
   }
-  inputs::require_input_kind(text, toml_path, inputs::InputKind::Fabric,
+  inputs::require_input_kind(kind, toml_path, inputs::InputKind::Fabric,
                              "this command needs a fabric (a .toml description, "
                              "docs/fabric-format.md, or a .wif draft); render, plan and report "
                              "error-time take scenes");
@@ -587,7 +590,7 @@ std::optional<FabricSettingsPeek> peek_fabric_settings(const std::string& toml_p
   try {
     FabricSettingsPeek out;
     const std::string text = inputs::read_file_bytes(toml_path);
-    if (is_wif_input(toml_path, text)) {
+    if (fabric_input_kind(toml_path, text) == inputs::InputKind::Wif) {
       out.bake.resolution = options.resolution.value_or(kDefaultWeaveResolution);
       out.bake.radiance_dirs = 0;
       resolve_radiance_dirs(out.bake, {YarnMaterial{}.roughness});

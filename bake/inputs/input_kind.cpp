@@ -6,11 +6,10 @@
 #include <cstring>
 
 #include "common/error.hpp"
+#include "formats/reader/layout.hpp"
 
 namespace clothbake::inputs {
 namespace {
-
-constexpr unsigned char kAssetMagic[8] = {0x89, 'C', 'B', 'K', '\r', '\n', 0x1a, '\n'};
 
 bool starts_with_header(std::string_view line, std::string_view header) {
   if (line.size() < header.size()) return false;
@@ -42,7 +41,8 @@ const char* input_kind_name(InputKind kind) {
 }
 
 InputKind sniff_input_kind(std::string_view bytes) {
-  if (bytes.size() >= sizeof kAssetMagic && std::memcmp(bytes.data(), kAssetMagic, 8) == 0)
+  if (bytes.size() >= sizeof reader::kMagic &&
+      std::memcmp(bytes.data(), reader::kMagic, sizeof reader::kMagic) == 0)
     return InputKind::Asset;
   static constexpr std::string_view kScene[] = {"[camera]", "[[light]]", "[[object]]", "[render]"};
   static constexpr std::string_view kFabric[] = {"[maps]", "[weave]", "[weave.", "[[yarn]]",
@@ -69,9 +69,8 @@ InputKind sniff_input_kind(std::string_view bytes) {
   return InputKind::Unknown;
 }
 
-void require_input_kind(std::string_view bytes, const std::string& path, InputKind expected,
+void require_input_kind(InputKind kind, const std::string& path, InputKind expected,
                         const std::string& needs) {
-  const InputKind kind = sniff_input_kind(bytes);
   if (kind == InputKind::Unknown || kind == expected) return;
   throw_input_error(path + " is a " + input_kind_name(kind) + ", not a " +
                     input_kind_name(expected) + ": " + needs);

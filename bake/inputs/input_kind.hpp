@@ -20,9 +20,10 @@ const char* input_kind_name(InputKind kind);
 // Safe on any bytes; no allocation beyond the result.
 InputKind sniff_input_kind(std::string_view bytes);
 
-// Throws Error(Input) "PATH is a KIND, not a EXPECTED: NEEDS" when the sniffed kind is known and
-// differs from `expected` (Unknown passes: the loader's own error names the problem).
-void require_input_kind(std::string_view bytes, const std::string& path, InputKind expected,
+// Throws Error(Input) "PATH is a KIND, not a EXPECTED: NEEDS" when `kind` (sniff_input_kind of
+// the file) is known and differs from `expected` (Unknown passes: the loader's own error names the
+// problem).
+void require_input_kind(InputKind kind, const std::string& path, InputKind expected,
                         const std::string& needs);
 
 }  // namespace clothbake::inputs

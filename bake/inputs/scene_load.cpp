@@ -173,7 +173,7 @@ render::Object load_object(const TomlSection& o, std::size_t index, const fs::pa
 
 LoadedScene load_scene(const std::string& path) {
   const std::string text = read_file_bytes(path);
-  require_input_kind(text, path, InputKind::Scene,
+  require_input_kind(sniff_input_kind(text), path, InputKind::Scene,
                      "this command needs a scene (docs/scene-format.md); bake, inspect and "
                      "pattern take fabrics");
   const toml::table root_table = parse_toml_text(text, path);

@@ -141,12 +141,11 @@ void validate_weave_spec(const WeaveSpec& spec, const std::string& where) {
   check_per_thread(spec.pick_geometry, picks, "pick_geometry", "pick");
 }
 
-WeaveSpec repeat_weave_spec(const WeaveSpec& spec, int ends_times, int picks_times) {
+WeaveSpec repeat_weave_spec(const WeaveSpec& spec, int ends_times, int picks_times,
+                            const std::string& where) {
   WeaveSpec out = spec;
   const WeaveMatrix& m = spec.matrix;
-  out.matrix.ends = m.ends * ends_times;
-  out.matrix.picks = m.picks * picks_times;
-  out.matrix.cells.assign(std::size_t(out.matrix.ends) * std::size_t(out.matrix.picks), 0);
+  out.matrix = make_matrix(m.picks * picks_times, m.ends * ends_times, where);  // size checked
   for (int p = 0; p < out.matrix.picks; ++p)
     for (int e = 0; e < out.matrix.ends; ++e)
       out.matrix.set(p, e, m.warp_up(p % m.picks, e % m.ends));

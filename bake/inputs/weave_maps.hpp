@@ -71,8 +71,10 @@ TileSize weave_tile_size(const WeaveSpec& spec);
 // The spec repeated `ends_times` across the ends and `picks_times` along the picks (each >= 1): the
 // matrix tiled, the per-thread colours and geometry repeated in the same way (empty lists stay
 // empty). A tile of several repeats, for a repeat far from square (docs/weaves.md, "Non-square
-// repeats"). Allocation: the new matrix and lists.
-WeaveSpec repeat_weave_spec(const WeaveSpec& spec, int ends_times, int picks_times);
+// repeats"). Throws Error(Input) naming `where` when the tiled matrix exceeds the largest repeat
+// (make_matrix). Allocation: the new matrix and lists.
+WeaveSpec repeat_weave_spec(const WeaveSpec& spec, int ends_times, int picks_times,
+                            const std::string& where = "weave repeat");
 
 // The surface at one point of the tile, in tile units (for tests, tools and inspection).
 struct WeaveSample {

@@ -115,6 +115,21 @@ TEST(WeaveMaps, RepeatedSpecTilesTheMatrixAndItsThreads) {
   const WeaveSpec same = repeat_weave_spec(spec, 1, 1);
   EXPECT_EQ(same.matrix, spec.matrix);
   EXPECT_EQ(same.end_colors, spec.end_colors);
+  // A tile beyond the largest repeat (kMaxRepeat ends) is refused, naming where it was asked.
+  WeaveSpec wide = spec;
+  wide.matrix = make_matrix(2, 300);
+  wide.end_colors.clear();
+  wide.end_geometry.clear();
+  wide.pick_colors.clear();
+  wide.pick_geometry.clear();
+  try {
+    (void)repeat_weave_spec(wide, 16, 1, "f.toml:3:10: weave.repeat");
+    FAIL() << "no error for 4800 ends";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ExitCode::Input);
+    EXPECT_NE(std::string(e.what()).find("f.toml:3:10: weave.repeat"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(WeaveMaps, EveryMapIsWellFormed) {
