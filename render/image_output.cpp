@@ -26,13 +26,8 @@ void check_output_path(const std::string& exr_path) {
   std::error_code ec;
   if (fs::is_directory(p, ec)) throw_input_error(exr_path + ": is a directory");
   // A missing folder is created when the images are written (not now: a render that fails
-  // leaves nothing behind), so its nearest existing ancestor must be a folder.
-  fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
-  while (!fs::exists(fs::symlink_status(dir, ec)) && dir.has_parent_path() &&
-         dir.parent_path() != dir)
-    dir = dir.parent_path();
-  if (!fs::is_directory(dir, ec))
-    throw_input_error(exr_path + ": " + dir.string() + " is not a folder");
+  // leaves nothing behind).
+  formats::check_creatable_folder(p.parent_path(), exr_path);
 }
 
 void write_image_atomically(const fs::path& path, const Image& image, PixelType type) {

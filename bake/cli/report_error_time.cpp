@@ -3,7 +3,6 @@
 #include "bake/cli/report_error_time.hpp"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -131,16 +130,9 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw_input_error(o.output + ": exists and is not a directory");
-  {
-    // Refused now if it could not be created later: the folder itself is made only when the
-    // renders are done, so that an interrupted report leaves nothing (not even an empty folder).
-    fs::path existing = fs::absolute(out, ec);
-    while (!existing.empty() && !fs::exists(existing, ec) && existing != existing.parent_path())
-      existing = existing.parent_path();
-    if (!fs::is_directory(existing, ec) || ::access(existing.c_str(), W_OK | X_OK) != 0)
-      throw_input_error(o.output + ": cannot be created (" + existing.string() +
-                        " is not a writable folder)");
-  }
+  // Refused now if it could not be made later: the folder itself is made only when the renders
+  // are done, so that an interrupted report leaves nothing (not even an empty folder).
+  formats::check_creatable_folder(out, o.output);
 
   // Everything that can refuse the scene comes before anything is written.
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
@@ -258,7 +250,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   pipeline::ProgressBar bar(!o.json && pipeline::ProgressBar::stderr_is_terminal());
   auto progress = [&bar](double f) { bar.update(f); };
   if (reference.rgb.empty()) {
-    if (!o.json && pipeline::ProgressBar::stderr_is_terminal())
+    if (bar.enabled())
       std::fprintf(stderr,
                    "rendering the reference once (then cached): %dx%d pixels, every footprint "
                    "summed exactly; its time grows with the pixels and their footprints "

@@ -18,6 +18,8 @@ class ProgressBar {
 
   // True when stderr is a terminal (the default for the bar: off in logs and pipes).
   static bool stderr_is_terminal();
+  // Whether the bar draws (what it was made with): a command's other terminal-only lines follow it.
+  bool enabled() const noexcept { return enabled_; }
 
   void begin_stage(int index, int count, const std::string& name);
   // Any label ("[3/28] multiscale 8 spp"); the fraction restarts at 0.

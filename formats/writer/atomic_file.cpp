@@ -157,6 +157,20 @@ void check_output_path(const fs::path& path, const OutputOptions& options) {
                       " is not writable (" + errno_text(errno) + ")");
 }
 
+void check_creatable_folder(const fs::path& dir, const std::string& what) {
+  std::error_code ec;
+  fs::path existing = dir.empty() ? fs::path(".") : dir;
+  while (!fs::exists(fs::symlink_status(existing, ec)) && existing.has_parent_path() &&
+         existing.parent_path() != existing)
+    existing = existing.parent_path();
+  if (!fs::exists(fs::symlink_status(existing, ec))) existing = ".";  // a relative path's root
+  if (!fs::is_directory(existing, ec))
+    throw_input_error(what + ": " + existing.string() + " is not a folder");
+  if (::access(existing.c_str(), W_OK | X_OK) != 0)
+    throw_input_error(what + ": " + existing.string() + " is not a writable folder (" +
+                      errno_text(errno) + ")");
+}
+
 TempFile::TempFile(const fs::path& destination, const std::string& suffix)
     : destination_(destination) {
   const fs::path dir = directory_of(destination);

@@ -41,6 +41,12 @@ struct OutputOptions {
 // the directory is not writable.
 void check_output_path(const std::filesystem::path& path, const OutputOptions& options);
 
+// Checks that the folder `dir` exists or can be made later by create_directories (not now: a
+// command that fails leaves nothing behind): its nearest existing ancestor, `dir` itself included,
+// must be a writable folder. Throws Error(Input) "WHAT: ANCESTOR is not a folder" or "... is not a
+// writable folder". Safe on any path; allocates only the paths.
+void check_creatable_folder(const std::filesystem::path& dir, const std::string& what);
+
 // A temporary file beside `destination` (same directory, so rename is atomic), removed by the
 // destructor unless commit() succeeded. Its name is temp_file_prefix(destination), six random
 // characters [A-Za-z0-9] (mkstemps) and `suffix`. It holds an exclusive flock until it is renamed

@@ -114,6 +114,21 @@ TEST_F(Output, TextReplacesAnyRegularFileAndNamesTheFailingPath) {
   EXPECT_TRUE(others("table.hpp").empty());
 }
 
+// A folder made later (render's image folder, report's output folder): fine when it exists or its
+// nearest existing ancestor is a folder, refused (naming the ancestor) under a file.
+TEST_F(Output, CreatableFolderNeedsAFolderAsItsNearestExistingAncestor) {
+  EXPECT_NO_THROW(formats::check_creatable_folder(dir_, "out"));
+  EXPECT_NO_THROW(formats::check_creatable_folder(dir_ / "a" / "b" / "c", "out"));
+  EXPECT_NO_THROW(formats::check_creatable_folder("", "out"));  // the working directory
+  std::ofstream(dir_ / "file") << "x";
+  const std::string message =
+      error_of([&] { formats::check_creatable_folder(dir_ / "file" / "sub", "out"); });
+  EXPECT_NE(message.find("out: " + (dir_ / "file").string() + " is not a folder"),
+            std::string::npos)
+      << message;
+  EXPECT_FALSE(fs::exists(dir_ / "a"));  // nothing made
+}
+
 TEST_F(Output, RefusesAnUnwritablePath) {
   // /proc accepts no new files, even for root.
   const std::string message = error_of(
