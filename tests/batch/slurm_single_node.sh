@@ -75,6 +75,11 @@ job=$(sbatch --parsable "$work/out/clothbake-batch.sbatch")
 for _ in $(seq 300); do [[ -z "$(squeue -h -j "$job" 2>/dev/null)" ]] && break; sleep 1; done
 [[ -z "$(squeue -h -j "$job")" ]] || { echo "job $job did not finish"; exit 1; }
 status=0
+# One array task per fabric: each writes its own log (#SBATCH --output=...slurm-%A_%a.log).
+for task in 0 1 2; do
+  [[ -f "$work/out/.clothbake-batch/slurm-${job}_${task}.log" ]] ||
+    { echo "array task $task of job $job left no log: not run as a job array"; ls -la "$work/out/.clothbake-batch"; status=1; }
+done
 for name in plain twill21 satin5; do
   "$exe" bake "$work/lib/$name.toml" -o "$work/local-$name.cbk" --quiet
   if cmp -s "$work/out/$name.cbk" "$work/local-$name.cbk"; then
