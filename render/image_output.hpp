@@ -19,9 +19,15 @@ struct OutputFiles {
 // it). Throws clothbake::Error(Input) naming the path.
 void check_output_path(const std::string& exr_path);
 
-// Creates exr_path's folder when missing, then writes exr_path and the same path with .png. Throws
-// clothbake::Error(Input) on I/O failure, leaving neither file changed.
-OutputFiles write_render_images(const std::string& exr_path, const RenderResult& image);
+// Creates exr_path's folder when missing, then writes exr_path (linear radiance, as rendered) and
+// the same path with .png (preview_value of each channel). Throws clothbake::Error(Input) on I/O
+// failure, leaving neither file changed.
+OutputFiles write_render_images(const std::string& exr_path, const RenderResult& image,
+                                const Preview& preview = {});
+
+// The PNG preview's display value in [0, 1] of pixel `rgb` (linear radiance, any floats; NaN and
+// negative values give 0): scaled by 2^exposure, tone mapped (scene.hpp, ToneMap), sRGB-encoded.
+void preview_value(const float rgb[3], const Preview& preview, float out[3]);
 
 // Writes `image` to `path` through OpenImageIO (the format from the extension) under a temporary
 // name (formats::TempFile: locked, removed on a signal, stale ones of a killed writer removed

@@ -201,7 +201,8 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
                        bool first_pass) -> Rgb {
     const CameraRay cr = impl.camera.generate(x, y);
     const SurfaceHit hit = intersect_scene(cr.ray, scene.objects, 0.0, INFINITY);
-    if (!hit.hit()) return impl.background ? impl.background->radiance(cr.ray.direction) : Rgb();
+    if (!hit.hit())
+      return impl.background ? impl.background->radiance(cr.ray.direction) : scene.background;
     const Object& object = scene.objects[std::size_t(hit.object)];
     const Material& m = impl.materials[std::size_t(hit.object)];
     const Frame frame(hit);
@@ -316,6 +317,12 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
           radiance += bsdf(-wo_world, kDeltaBit, samples) * env.radiance(-wo_world);
       }
     }
+    // The scene's backdrop straight through the gaps, as an environment's above (it lights nothing
+    // else: it is not a light).
+    const Rgb& backdrop = scene.background;
+    if (m.cloth && !impl.background && (backdrop.r > 0 || backdrop.g > 0 || backdrop.b > 0) &&
+        !occluded({shadow_origin(-wo_world), -wo_world}, scene.objects, 0.0, INFINITY))
+      radiance += bsdf(-wo_world, kDeltaBit, samples) * backdrop;
     return radiance;
   };
   // One pixel of pass `pass`: the pixel centre's footprint, or spp jittered rays.

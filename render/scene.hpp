@@ -64,8 +64,24 @@ struct Object {
   Vec3 axis{0, 1, 0};
   double radius = 1, height = 1;
   std::string asset;  // the fabric's .cbk; empty: a Lambertian surface of colour `diffuse`
+  // Fabric tiles per world unit: given, or the scene's unit length over the tile's physical side
+  // (`units` with `tile_mm` or the fabric's own tile size, docs/scene-format.md).
   double tiles_per_unit = 1;
   Rgb diffuse{0.5};
+};
+
+// How the 8-bit PNG preview maps linear radiance to display values (the EXR stays linear):
+// Clamp: min(x, 1); Reinhard: the luminance L to L / (1 + L), the colour scaled with it, then
+// clamped; Filmic: Narkowicz's fit of the ACES curve per channel, x (2.51 x + 0.03) / (x (2.43 x +
+// 0.59) + 0.14) clamped to [0, 1]. Then the sRGB transfer function (image_output.hpp).
+enum class ToneMap : uint8_t { Clamp, Reinhard, Filmic };
+
+// Largest |exposure| accepted, in stops (2^32: any radiance a render can have fits in the range).
+inline constexpr double kMaxExposureStops = 32;
+
+struct Preview {
+  double exposure = 0;  // stops: the linear values are scaled by 2^exposure before the tone map
+  ToneMap tone_map = ToneMap::Clamp;
 };
 
 struct Scene {
@@ -74,6 +90,11 @@ struct Scene {
   std::vector<Light> lights;
   std::vector<Object> objects;
   double max_error = 0.008;  // [render] max_error: the scene's error budget (relative)
+  Preview preview;           // [render] exposure, tone_map: the PNG preview only
+  // [render] background: the radiance camera rays see where they leave the scene, directly and
+  // through the cloth's gaps (the delta lobe); it lights nothing. Only without an environment
+  // light (whose map is then the background).
+  Rgb background{0};
 };
 
 }  // namespace clothbake::render

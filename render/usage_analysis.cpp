@@ -162,6 +162,15 @@ SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& sha
               ++p.lit_opposite;
           }
         }
+        // The scene's backdrop (no environment light) through the gaps: the delta lobe as well.
+        const Rgb& backdrop = scene.background;
+        const bool any_environment =
+            std::any_of(scene.lights.begin(), scene.lights.end(),
+                        [](const Light& l) { return l.type == LightType::Environment; });
+        const Vec3 behind = cr.ray.direction;
+        if (!any_environment && (backdrop.r > 0 || backdrop.g > 0 || backdrop.b > 0) &&
+            !occluded({shadow_ray_origin(hit, behind), behind}, scene.objects, 0.0, INFINITY))
+          ++p.lit_opposite;
       }
     }
   });

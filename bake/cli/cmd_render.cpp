@@ -1,10 +1,11 @@
 // clothbake render: renders a scene with the evaluator (docs/rendering.md, docs/scene-format.md).
 //
 //   clothbake render SCENE.toml -o OUT.exr [--method M] [--spp N] [--time-budget S] [--threads N]
-//                    [--seed S] [--tables auto|raw|compressed]
+//                    [--seed S] [--tables auto|raw|compressed] [--exposure EV]
 //                    [--sheen-convention published|converged] [--cache DIR] [--json]
 //
-// Writes OUT.exr (linear float RGB) and OUT.png (sRGB preview) atomically (temporary names renamed
+// Writes OUT.exr (linear float RGB) and OUT.png (the scene's [render] exposure and tone map, sRGB)
+// atomically (temporary names renamed
 // on success). Objects with `fabric =` are baked into the cache first (scene_bake.hpp).
 // Exit codes: 1 bad options, 2 a bad scene, missing file or unwritable output, 3 an invalid asset.
 #include <fmt/format.h>
@@ -17,6 +18,7 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
@@ -41,6 +43,7 @@ struct RenderCliOptions {
   double time_budget = 0;
   int threads = 0;
   uint64_t seed = 1;
+  std::optional<double> exposure;
   bool json = false;
 };
 
@@ -60,6 +63,7 @@ int run_render(const RenderCliOptions& o) {
     loaded.scene.camera.height = wh[1];
   }
   check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp, "--spp");
+  if (o.exposure) loaded.scene.preview.exposure = *o.exposure;
   bake_scene_fabrics(loaded, o.cache, /*quiet=*/o.json);
   std::unique_ptr<tbb::global_control> limit;
   if (o.threads > 0)
@@ -78,7 +82,8 @@ int run_render(const RenderCliOptions& o) {
                         loaded.scene.camera.height, eval::method_name(method), o.spp));
   const render::RenderResult result = renderer.render([&](double f) { bar.update(f); });
   bar.finish();
-  const render::OutputFiles files = render::write_render_images(o.output, result);
+  const render::OutputFiles files =
+      render::write_render_images(o.output, result, loaded.scene.preview);
   const render::RenderStats& s = result.stats;
   if (o.json) {
     print_json({{"scene", o.scene},
@@ -142,6 +147,10 @@ const bool registered = register_command(
                       "machine's speed)");
        add_threads_option(app, o->threads, "rendering threads (the image is identical for any N)");
        app.add_option("--seed", o->seed, "seed of every sample (default 1)");
+       app.add_option("--exposure", o->exposure,
+                      "stops: the PNG preview's exposure, instead of the scene's [render] "
+                      "exposure (the EXR stays linear)")
+           ->check(CLI::Range(-render::kMaxExposureStops, render::kMaxExposureStops));
        add_tables_option(app, o->tables);
        app.add_option("--sheen-convention", o->sheen_convention,
                       "sheen table: published (Zeltner et al.'s, as Cycles ships it; default) or "

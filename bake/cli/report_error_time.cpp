@@ -80,10 +80,12 @@ double loglog_at(const std::vector<std::pair<double, double>>& pts, double x, bo
   return NAN;
 }
 
-void write_png(const fs::path& path, const render::RenderResult& r) {
+// The picture of one render as `clothbake render` previews it (the scene's exposure, tone map).
+void write_png(const fs::path& path, const render::RenderResult& r,
+               const render::Preview& preview) {
   Image img(r.width, r.height, 3);
-  for (std::size_t k = 0; k < r.rgb.size(); ++k)
-    img.pixels[k] = float(render::srgb_encode(r.rgb[k]));
+  for (std::size_t k = 0; k + 2 < r.rgb.size(); k += 3)
+    render::preview_value(&r.rgb[k], preview, &img.pixels[k]);
   render::write_image_atomically(path, img, PixelType::UInt8);
 }
 
@@ -260,7 +262,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     reference = renderer.render(ref_options, progress);
     bar.finish();
     reference_seconds = reference.stats.seconds;
-    render::write_render_images(cached.string(), reference);
+    render::write_render_images(cached.string(), reference, scene.preview);
   }
   // Each method's first render at 1 spp, untimed in the rows: it builds what the method reads on
   // first use (its time is reported as `warmup`).
@@ -407,10 +409,10 @@ int run_error_time_report(const ErrorTimeOptions& o) {
         if (r.method == "brute" && (!equal_error || r.relmse < equal_error->relmse))
           equal_error = &r;
     const double scale = std::max(0.05, 2 * std::sqrt(operating->relmse));
-    write_png(out / "images" / "reference.png", reference);
+    write_png(out / "images" / "reference.png", reference, scene.preview);
     grid.push_back({{"label", "reference"}, {"image", "images/reference.png"}});
     auto panel = [&](const Row* r, const std::string& name, const std::string& label) {
-      write_png(out / "images" / (name + ".png"), r->image);
+      write_png(out / "images" / (name + ".png"), r->image, scene.preview);
       write_error_png(out / "images" / (name + "-error.png"), r->image, reference, scale);
       grid.push_back({{"label", fmt::format("{} {} spp ({:.2g} s, relMSE {:.2g})", label, r->spp,
                                             r->seconds, r->relmse)},
@@ -456,8 +458,8 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     render::RenderOptions flat = ref_options;
     flat.parallax = false;
     const render::RenderResult no_offsets = render::Renderer(scene, flat).render();
-    write_png(out / "images" / "raytraced.png", traced.image);
-    write_png(out / "images" / "no-offsets.png", no_offsets);
+    write_png(out / "images" / "raytraced.png", traced.image, scene.preview);
+    write_png(out / "images" / "no-offsets.png", no_offsets, scene.preview);
     near_field = {
         {"object", scene.objects[object].name},
         {"samples_per_pixel", o.near_field_samples * o.near_field_samples},
@@ -466,7 +468,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
         {"relmse_without_offsets", masked_relmse(no_offsets, traced.image, traced.mask)},
         {"images", {"images/raytraced.png", "images/reference.png", "images/no-offsets.png"}}};
     if (!fs::exists(out / "images" / "reference.png"))
-      write_png(out / "images" / "reference.png", reference);
+      write_png(out / "images" / "reference.png", reference, scene.preview);
   }
 
   // CSV and JSON.

@@ -205,13 +205,10 @@ int run_plan_report(const PlanReportOptions& o) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const std::size_t p = std::size_t(y) * w + x;
-      for (int c = 0; c < 3; ++c) {
-        const std::size_t k = 3 * p + std::size_t(c);
-        side.pixels[(std::size_t(y) * 3 * w + x) * 3 + c] =
-            float(render::srgb_encode(full_image.rgb[k]));
-        side.pixels[(std::size_t(y) * 3 * w + w + x) * 3 + c] =
-            float(render::srgb_encode(planned_image.rgb[k]));
-      }
+      render::preview_value(&full_image.rgb[3 * p], loaded.scene.preview,
+                            &side.pixels[(std::size_t(y) * 3 * w + x) * 3]);
+      render::preview_value(&planned_image.rgb[3 * p], loaded.scene.preview,
+                            &side.pixels[(std::size_t(y) * 3 * w + w + x) * 3]);
       if (hit[p] < 0) continue;  // no object: stays black
       const double term = relmse_of_means_term(planned_image, full_image, planned_image2,
                                                full_image2, reference, p, floor2_all);
@@ -235,9 +232,9 @@ int run_plan_report(const PlanReportOptions& o) {
       side.pixels[q] = r, side.pixels[q + 1] = g, side.pixels[q + 2] = 0;
     }
   render::write_image_atomically(out / "side-by-side.png", side, PixelType::UInt8);
-  render::write_render_images((out / "full.exr").string(), full_image);
-  render::write_render_images((out / "planned.exr").string(), planned_image);
-  render::write_render_images((out / "reference.exr").string(), reference);
+  render::write_render_images((out / "full.exr").string(), full_image, loaded.scene.preview);
+  render::write_render_images((out / "planned.exr").string(), planned_image, loaded.scene.preview);
+  render::write_render_images((out / "reference.exr").string(), reference, loaded.scene.preview);
 
   const nlohmann::json doc = {{"scene", o.scene},
                               {"budget", budget},

@@ -56,15 +56,6 @@ const Range kMinCos{0.0, 0.95};                                      // [0, 0.95
 
 const std::vector<std::string> kLengthUnits = {"tile", "um", "mm", "cm", "m", "in"};
 
-double unit_in_mm(const std::string& unit) {
-  if (unit == "um") return 1e-3;
-  if (unit == "mm") return 1.0;
-  if (unit == "cm") return 10.0;
-  if (unit == "m") return 1000.0;
-  if (unit == "in") return 25.4;
-  return 0.0;  // "tile": no physical size
-}
-
 YarnMaterial parse_yarn(const TomlSection& s, const std::string& default_name) {
   s.check_keys({"name", "roughness", "optical_thickness", "specular_albedo", "diffuse_reflectance",
                 "diffuse_transmittance", "color"});
@@ -322,14 +313,15 @@ void load_image_maps(LoadedFabric& out, const TomlSection& maps,
                                      tile_units));
     if (size) tile_size = *size;
   }
-  f.tile_size_mm = tile_units == "tile" ? 0.0 : tile_size * unit_in_mm(tile_units);
+  f.tile_size_mm = tile_units == "tile" ? 0.0 : tile_size * inputs::length_unit_in_mm(tile_units);
   std::string height_units = maps.choice("height_units", kLengthUnits).value_or(tile_units);
   if (height_units != "tile" && tile_units == "tile")
     maps.fail("height_units",
               fmt::format("= \"{}\" needs the tile's physical size: set [tile] size and units",
                           height_units));
   double height_scale = maps.real("height_scale", kPositiveScale).value_or(1.0);
-  double to_tile_units = height_units == "tile" ? 1.0 : unit_in_mm(height_units) / f.tile_size_mm;
+  double to_tile_units =
+      height_units == "tile" ? 1.0 : inputs::length_unit_in_mm(height_units) / f.tile_size_mm;
   bool srgb = maps.choice("albedo_encoding", {"linear", "srgb"}).value_or("linear") == "srgb";
 
   struct Entry {

@@ -645,4 +645,13 @@ std::optional<std::vector<TomlSection>> TomlSection::table_array(std::string_vie
   return out;
 }
 
+double length_unit_in_mm(std::string_view unit) {
+  if (unit == "um") return 1e-3;
+  if (unit == "mm") return 1.0;
+  if (unit == "cm") return 10.0;
+  if (unit == "m") return 1000.0;
+  if (unit == "in") return 25.4;
+  return 0.0;  // "tile": no physical size
+}
+
 }  // namespace clothbake::inputs

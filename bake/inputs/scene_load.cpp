@@ -5,12 +5,16 @@
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
 #include "bake/inputs/fabric_files.hpp"
+#include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_toml.hpp"
 #include "bake/inputs/input_kind.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
+#include "formats/reader/asset.hpp"
+#include "formats/reader/fabric_sections.hpp"
 #include "render/shapes.hpp"
 
 namespace clothbake::inputs {
@@ -124,14 +128,54 @@ render::Light load_light(const TomlSection& l, std::size_t index, const fs::path
   return light;
 }
 
+// The physical side of the tile of the fabric an object names, in mm (0: the fabric gives none):
+// from the asset's FabricInfo record, or from loading the fabric description.
+double fabric_tile_mm(const TomlSection& o, const render::Object& obj, const std::string& fabric) {
+  if (!fabric.empty()) return load_fabric_description(fabric).fabric.tile_size_mm;
+  reader::Asset asset;
+  const reader::FabricInfoRecord* info = nullptr;
+  if (!asset.open_file(obj.asset.c_str()).ok() || !reader::read_fabric_info(asset, &info).ok())
+    o.fail("asset", fmt::format("= {}: cannot read the asset's tile size (`clothbake validate` "
+                                "says why); give tile_mm or tiles_per_unit",
+                                obj.asset));
+  return std::isfinite(info->tile_size_mm) && info->tile_size_mm > 0 ? info->tile_size_mm : 0.0;
+}
+
+// How many tiles of the object's fabric cover one world unit: `tiles_per_unit`, or the scene's
+// unit length (`units`, unit_mm > 0) over `tile_mm` or over the fabric's own tile side.
+double tiles_per_unit(const TomlSection& o, const render::Object& obj, const std::string& fabric,
+                      double unit_mm) {
+  if (o.has("tiles_per_unit") && o.has("tile_mm"))
+    o.fail("tile_mm",
+           "and tiles_per_unit are exclusive: give the tile's physical side (with the "
+           "scene's units) or the tiles per world unit");
+  if (o.has("tiles_per_unit")) return *o.real("tiles_per_unit", kPositive);
+  if (o.has("tile_mm")) {
+    const double tile_mm = *o.real("tile_mm", kPositive);
+    if (!(unit_mm > 0))
+      o.fail("tile_mm",
+             "needs the scene's length unit: a top-level units = \"m\" (or \"cm\", "
+             "\"mm\", \"in\") before the first table");
+    return unit_mm / tile_mm;
+  }
+  if (!(unit_mm > 0) || (obj.asset.empty() && fabric.empty())) return obj.tiles_per_unit;
+  const double tile_mm = fabric_tile_mm(o, obj, fabric);
+  if (!(tile_mm > 0))
+    o.fail(fabric.empty() ? "asset" : "fabric",
+           fmt::format("= {}: the fabric gives no physical tile size ([tile] units = \"tile\"), so "
+                       "the scene's units cannot place it; give tile_mm or tiles_per_unit",
+                       fabric.empty() ? obj.asset : fabric));
+  return unit_mm / tile_mm;
+}
+
 render::Object load_object(const TomlSection& o, std::size_t index, const fs::path& base,
-                           std::string* fabric) {
+                           double unit_mm, std::string* fabric) {
   render::Object obj;
   obj.name = fmt::format("object[{}]", index);
   if (!o.has("shape")) o.fail("shape", "is required (plane, cylinder or sphere)");
   const std::string shape = *o.choice("shape", {"plane", "cylinder", "sphere"});
-  std::vector<std::string> keys = {"shape",  "name",           "center", "asset",
-                                   "fabric", "tiles_per_unit", "color"};
+  std::vector<std::string> keys = {"shape",  "name",           "center",  "asset",
+                                   "fabric", "tiles_per_unit", "tile_mm", "color"};
   if (shape == "plane") {
     obj.shape = render::ShapeType::Plane;
     keys.insert(keys.end(), {"normal", "tangent", "size"});
@@ -164,7 +208,10 @@ render::Object load_object(const TomlSection& o, std::size_t index, const fs::pa
     o.fail("fabric", "and asset are exclusive: give the baked asset or the fabric to bake");
   if (o.has("asset")) obj.asset = resolve(o, "asset", base);
   if (o.has("fabric")) *fabric = resolve(o, "fabric", base);
-  obj.tiles_per_unit = o.real("tiles_per_unit", kPositive).value_or(obj.tiles_per_unit);
+  obj.tiles_per_unit = tiles_per_unit(o, obj, *fabric, unit_mm);
+  if (!(obj.tiles_per_unit <= 1e12) || !(obj.tiles_per_unit > 0))
+    o.fail("tile_mm",
+           fmt::format("gives {} tiles per world unit, outside (0, 1e12]", obj.tiles_per_unit));
   obj.diffuse = colour(o, "color", obj.diffuse, Range{0, 1});
   return obj;
 }
@@ -178,7 +225,10 @@ LoadedScene load_scene(const std::string& path) {
                      "pattern take fabrics");
   const toml::table root_table = parse_toml_text(text, path);
   const TomlSection root(root_table, path, "");
-  root.check_keys({"camera", "light", "object", "render"});
+  root.check_keys({"units", "camera", "light", "object", "render"});
+  double unit_mm = 0;  // the length of one world unit; 0: not given (arbitrary units)
+  if (const auto units = root.choice("units", {"um", "mm", "cm", "m", "in"}))
+    unit_mm = length_unit_in_mm(*units);
   const fs::path base = fs::path(path).parent_path();
   LoadedScene out;
   render::Scene& scene = out.scene;
@@ -187,9 +237,18 @@ LoadedScene load_scene(const std::string& path) {
   if (!camera)
     root.fail("camera", "is required: [camera] position, look_at, up, fov_deg, resolution");
   scene.camera = load_camera(*camera);
-  if (const auto r = root.table("render")) {
-    r->check_keys({"max_error"});
+  std::optional<TomlSection> render_table = root.table("render");
+  if (const auto& r = render_table) {
+    r->check_keys({"max_error", "exposure", "tone_map", "background"});
     scene.max_error = r->real("max_error", Range{0, 1, true, false}).value_or(scene.max_error);
+    scene.preview.exposure =
+        r->real("exposure", Range{-render::kMaxExposureStops, render::kMaxExposureStops})
+            .value_or(scene.preview.exposure);
+    if (const auto tone = r->choice("tone_map", {"clamp", "reinhard", "filmic"}))
+      scene.preview.tone_map = *tone == "clamp"      ? render::ToneMap::Clamp
+                               : *tone == "reinhard" ? render::ToneMap::Reinhard
+                                                     : render::ToneMap::Filmic;
+    scene.background = colour(*r, "background", scene.background, kNonNegative);
   }
   if (const auto lights = root.table_array("light"))
     for (std::size_t k = 0; k < lights->size(); ++k)
@@ -197,11 +256,17 @@ LoadedScene load_scene(const std::string& path) {
   if (const auto objects = root.table_array("object"))
     for (std::size_t k = 0; k < objects->size(); ++k) {
       std::string fabric;
-      scene.objects.push_back(load_object((*objects)[k], k, base, &fabric));
+      scene.objects.push_back(load_object((*objects)[k], k, base, unit_mm, &fabric));
       out.fabrics.push_back(fabric);
     }
   if (scene.objects.empty()) root.fail("object", "the scene has no [[object]]");
   if (scene.lights.empty()) root.fail("light", "the scene has no [[light]]");
+  if (render_table && render_table->has("background"))
+    for (const render::Light& l : scene.lights)
+      if (l.type == render::LightType::Environment)
+        render_table->fail("background", fmt::format("and {}, an environment light, are exclusive: "
+                                                     "the environment map is the background",
+                                                     l.name));
   const auto lights = root.table_array("light");
   for (std::size_t k = 0; k < scene.lights.size(); ++k) {
     const render::Light& l = scene.lights[k];

@@ -9,8 +9,10 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <tuple>
 
 #include "common/image_io/image_io.hpp"
+#include "render/image_output.hpp"
 #include "tests/eval/eval_fixtures.hpp"
 
 namespace clothbake::render {
@@ -52,6 +54,113 @@ TEST(RenderCli, WritesTheExrAndThePreview) {
   const std::string sa((std::istreambuf_iterator<char>(a)), {}),
       sb((std::istreambuf_iterator<char>(b)), {});
   EXPECT_EQ(sa, sb);
+}
+
+// The PNG preview's display values in closed form: exposure in stops, the three tone maps, sRGB;
+// negative and NaN radiance show black.
+TEST(RenderPreview, ToneMapsInClosedForm) {
+  float out[3];
+  const float grey[3] = {0.25f, 0.25f, 0.25f};
+  preview_value(grey, Preview{}, out);
+  EXPECT_FLOAT_EQ(out[0], float(srgb_encode(0.25)));
+  preview_value(grey, Preview{2.0, ToneMap::Clamp}, out);  // x 4: clipped at 1
+  EXPECT_FLOAT_EQ(out[1], 1.0f);
+  preview_value(grey, Preview{-1.0, ToneMap::Clamp}, out);
+  EXPECT_FLOAT_EQ(out[2], float(srgb_encode(0.125)));
+  // Filmic at x = 1: (2.51 + 0.03) / (2.43 + 0.59 + 0.14).
+  preview_value(grey, Preview{2.0, ToneMap::Filmic}, out);
+  EXPECT_NEAR(out[0], srgb_encode(2.54 / 3.16), 1e-6);
+  // Reinhard on the luminance: a grey x goes to x / (1 + x); a colour keeps its channel ratios.
+  preview_value(grey, Preview{2.0, ToneMap::Reinhard}, out);
+  EXPECT_NEAR(out[0], srgb_encode(0.5), 1e-6);
+  const float colour[3] = {0.5f, 0.25f, 0.0f};
+  preview_value(colour, Preview{0.0, ToneMap::Reinhard}, out);
+  const double l = 0.2126 * 0.5 + 0.7152 * 0.25;
+  EXPECT_NEAR(out[0], srgb_encode(0.5 / (1 + l)), 1e-6);
+  EXPECT_NEAR(out[1], srgb_encode(0.25 / (1 + l)), 1e-6);
+  const float bad[3] = {-0.5f, std::nanf(""), 0.0f};
+  for (ToneMap t : {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Filmic}) {
+    preview_value(bad, Preview{0.0, t}, out);
+    EXPECT_EQ(out[0], 0.0f);
+    EXPECT_EQ(out[1], 0.0f);
+  }
+}
+
+// [render] exposure, tone_map and background: the EXR has the backdrop's radiance where the camera
+// sees nothing and is linear otherwise; the PNG is the preview of the EXR's values; --exposure
+// changes the PNG only.
+TEST(RenderCli, PreviewFollowsTheSceneAndTheBackdropShowsWhereNothingIs) {
+  std::string text = good_scene();
+  text.replace(text.find("size = [2, 2]"), 13, "size = [0.3, 0.3]");
+  text.replace(text.find("[[light]]"), 9,
+               "[render]\nexposure = 1\ntone_map = \"filmic\"\nbackground = [0.1, 0.2, "
+               "0.3]\n[[light]]");
+  const fs::path scene = write_scene("preview.toml", text);
+  const fs::path out = assets().dir / "preview.exr", brighter = assets().dir / "preview2.exr";
+  ASSERT_EQ(run_clothbake({"render", scene.string(), "-o", out.string(), "--method", "brute"}).code,
+            0);
+  ASSERT_EQ(run_clothbake({"render", scene.string(), "-o", brighter.string(), "--exposure", "3",
+                           "--method", "brute"})
+                .code,
+            0);
+  const Image exr = read_image(out.string()), png = read_image(assets().dir / "preview.png");
+  const Image exr2 = read_image(brighter.string()),
+              png2 = read_image(assets().dir / "preview2.png");
+  ASSERT_EQ(exr.width, 16);
+  EXPECT_FLOAT_EQ(exr.at(0, 0, 0), 0.1f);  // a corner: the plane covers only the centre
+  EXPECT_FLOAT_EQ(exr.at(0, 0, 2), 0.3f);
+  EXPECT_EQ(exr.pixels, exr2.pixels);  // --exposure leaves the EXR alone
+  int cloth = 0;
+  for (int y = 0; y < exr.height; ++y)
+    for (int x = 0; x < exr.width; ++x) {
+      const float rgb[3] = {exr.at(x, y, 0), exr.at(x, y, 1), exr.at(x, y, 2)};
+      float shown[3], shown2[3];
+      preview_value(rgb, Preview{1.0, ToneMap::Filmic}, shown);
+      preview_value(rgb, Preview{3.0, ToneMap::Filmic}, shown2);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(png.at(x, y, c), shown[c], 0.5 / 255 + 1e-6) << x << "," << y;
+        EXPECT_NEAR(png2.at(x, y, c), shown2[c], 0.5 / 255 + 1e-6) << x << "," << y;
+      }
+      cloth += rgb[0] != 0.1f;
+    }
+  EXPECT_GT(cloth, 0);
+  EXPECT_LT(cloth, exr.width * exr.height);
+  // Through the cloth's gaps the camera sees the backdrop (the delta lobe): linear in it, with the
+  // same samples (seeds) whatever its colour, so twice the backdrop adds the same again. A small
+  // plain weave of thin yarns has gaps (the twill above has none).
+  const fs::path gappy = assets().dir / "gappy.toml";
+  std::ofstream(gappy) << "[weave]\nname = \"plain\"\n[weave.warp]\nwidth = 0.5\n[weave.weft]\n"
+                          "width = 0.5\n[bake]\nresolution = 16\nparallax_dirs = 4\n"
+                          "visibility_dirs = 4\nradiance_dirs = 6\nclusters = 2\n";
+  text.replace(text.find("asset = \""), 9 + assets().twill.size() + 1,
+               "fabric = \"" + gappy.string() + "\"");
+  ASSERT_EQ(
+      run_clothbake({"render", write_scene("preview-gappy.toml", text).string(), "-o", out.string(),
+                     "--method", "brute", "--cache", (assets().dir / "cache-gappy").string()})
+          .code,
+      0);
+  const Image exr_gappy = read_image(out.string());
+  std::string doubled = text, black = text;
+  doubled.replace(doubled.find("background = [0.1, 0.2, 0.3]"), 28, "background = [0.2, 0.4, 0.6]");
+  black.replace(black.find("background = [0.1, 0.2, 0.3]"), 28, "background = [0.0, 0.0, 0.0]");
+  const fs::path twice = assets().dir / "preview-twice.exr", none = assets().dir / "preview-0.exr";
+  for (const auto& [name, scene_text, exr_path] : {std::tuple{"preview-twice.toml", doubled, twice},
+                                                   std::tuple{"preview-0.toml", black, none}})
+    ASSERT_EQ(
+        run_clothbake({"render", write_scene(name, scene_text).string(), "-o", exr_path.string(),
+                       "--method", "brute", "--cache", (assets().dir / "cache-gappy").string()})
+            .code,
+        0);
+  const Image exr_twice = read_image(twice.string()), exr_none = read_image(none.string());
+  double through = 0;  // the most the backdrop adds to a cloth pixel
+  for (std::size_t k = 0; k < exr_gappy.pixels.size(); ++k) {
+    const double once = exr_gappy.pixels[k] - exr_none.pixels[k];
+    EXPECT_NEAR(exr_twice.pixels[k] - exr_none.pixels[k], 2 * once,
+                1e-5 * (1 + exr_gappy.pixels[k]))
+        << k;
+    if (exr_none.pixels[k - k % 3] != 0.0f) through = std::max(through, once);
+  }
+  EXPECT_GT(through, 0.01);  // the gaps show it
 }
 
 // --image-size overrides the camera's pixels (the EXR has them) and the footprints are reported
