@@ -128,10 +128,20 @@ render::Light load_light(const TomlSection& l, std::size_t index, const fs::path
   return light;
 }
 
+constexpr int kTileSideResolution = 64;
+
 // The physical side of the tile of the fabric an object names, in mm (0: the fabric gives none):
 // from the asset's FabricInfo record, or from loading the fabric description.
 double fabric_tile_mm(const TomlSection& o, const render::Object& obj, const std::string& fabric) {
-  if (!fabric.empty()) return load_fabric_description(fabric).fabric.tile_size_mm;
+  if (!fabric.empty()) {
+    // A weave's tile side does not depend on its resolution: generated at 64 texels it costs
+    // milliseconds whatever [bake] resolution says (the bake's memory check comes later, before
+    // the real load). Image fabrics are loaded as they are (their maps' sizes are bounded).
+    LoadOptions options;
+    const auto peek = peek_fabric_settings(fabric);
+    if (peek && !peek->image_maps) options.resolution = kTileSideResolution;
+    return load_fabric_description(fabric, options).fabric.tile_size_mm;
+  }
   reader::Asset asset;
   const reader::FabricInfoRecord* info = nullptr;
   if (!asset.open_file(obj.asset.c_str()).ok() || !reader::read_fabric_info(asset, &info).ok())
