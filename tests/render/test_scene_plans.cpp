@@ -275,8 +275,8 @@ TEST(ScenePlanReport, EveryExampleSceneIsWithinItsBudget) {
     std::string text((std::istreambuf_iterator<char>(in)), {});
     text = std::regex_replace(text, std::regex("fabric = \"[^\"]*\""),
                               "fabric = \"" + twill_toml() + "\"");
-    text = std::regex_replace(text, std::regex("map = \"([^\"]*)\""),
-                              "map = \"" + examples.string() + "/$1\"");
+    text = std::regex_replace(text, std::regex("\nmap = \"([^\"]*)\""),
+                              "\nmap = \"" + examples.string() + "/$1\"");
     const std::string name = entry.path().stem().string();
     const fs::path scene = write_scene("example-" + name + ".toml", text);
     const fs::path dir = assets().dir / ("report-" + name);
