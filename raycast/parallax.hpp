@@ -84,7 +84,8 @@ ParallaxTable bake_parallax(const FabricMaps& maps, const ParallaxSettings& sett
 // Per-direction summed-area tables of the depth codes: sat[dir][y * N + x] = sum of codes over
 // texels [0, x] x [0, y], modulo 2^32 (unsigned wrap-around). Rectangle sums taken with the same
 // modular arithmetic are exact whenever the true sum is below 2^32, i.e. for any rectangle of at
-// most 65537 texels (formats/reader/parallax_query.hpp splits larger ones).
+// most 65537 texels (ParallaxView::footprint_depth in formats/reader/parallax_sections.hpp sums
+// larger ones in bands).
 std::vector<uint32_t> parallax_sat(const ParallaxTable& table);
 // The same from raw codes [dir][texel] (dir_count * resolution^2 values) into `out` (as many).
 void parallax_sat(const uint16_t* codes, int resolution, int dir_count, uint32_t* out);

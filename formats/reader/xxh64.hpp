@@ -1,7 +1,7 @@
 // XXH64, the 64-bit xxHash of Yann Collet, implemented from the public specification
 // (github.com/Cyan4973/xxHash, doc/xxhash_spec.md) so that the reader library needs no third-party
 // code. It is the checksum of the asset format (header, table and every section). The writer uses
-// Debian's libxxhash; tests/formats/xxh64_test.cpp cross-checks both on many lengths and seeds.
+// Debian's libxxhash; tests/formats/test_xxh64.cpp cross-checks both on many lengths and seeds.
 //
 // C++17, standard library only. Safe on any input: reads exactly `size` bytes from `data`.
 #pragma once
