@@ -1,5 +1,6 @@
 // Compression settings (compress_settings.hpp).
 #include "compress/compress_settings.hpp"
+#include "compress/cpca.hpp"
 
 #include <cstdio>
 

@@ -10,17 +10,22 @@
 #include <string>
 #include <vector>
 
-#include "compress/cpca.hpp"
-
 namespace clothbake {
 struct BakeSettings;
 }
 
 namespace clothbake::compress {
 
+// compress/cpca.hpp (declared here only: that header brings Eigen into every command-line source
+// that names a compression setting).
+struct CpcaOptions;
+
 // Default target: relative RMS error of the stored texel values (1-texel footprints). Footprints
 // of 4^2 texels and larger then measure below 1 % on the example fabrics (docs/compression.md).
 inline constexpr double kDefaultMaxError = 0.008;
+// The largest C-PCA shape a bake accepts: rank per cluster, clusters per visibility cluster.
+inline constexpr int kMaxCpcaRank = 255;
+inline constexpr int kMaxCpcaClustersPerStratum = 64;
 // Rank cap per C-PCA cluster in target mode.
 inline constexpr int kDefaultRankCap = 64;
 

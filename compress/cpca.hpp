@@ -32,12 +32,10 @@
 #include <span>
 #include <vector>
 
+#include "compress/compress_settings.hpp"  // kMaxCpcaRank, kMaxCpcaClustersPerStratum
 #include "compress/randomized_svd.hpp"
 
 namespace clothbake::compress {
-
-inline constexpr int kMaxCpcaRank = 255;
-inline constexpr int kMaxCpcaClustersPerStratum = 64;
 
 struct CpcaOptions {
   int clusters_per_stratum = 1;  // k, 1..64

@@ -126,7 +126,7 @@ BakeSettings parse_bake(const TomlSection& s) {
   b.visibility_rank = int(s.integer("visibility_rank", 0, 16).value_or(b.visibility_rank));
   b.compress = s.boolean("compress").value_or(b.compress);
   // 0 means "auto" (the compress stage's target-error mode); the upper bounds are the C-PCA's
-  // (compress/cpca.hpp: kMaxCpcaClustersPerStratum, kMaxCpcaRank).
+  // (compress/compress_settings.hpp: kMaxCpcaClustersPerStratum, kMaxCpcaRank).
   b.compress_clusters = int(s.integer("compress_clusters", 0, 64).value_or(b.compress_clusters));
   b.compress_rank = int(s.integer("compress_rank", 0, 255).value_or(b.compress_rank));
   b.seed = uint64_t(s.integer("seed", 0, INT64_MAX).value_or(int64_t(b.seed)));

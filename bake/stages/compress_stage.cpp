@@ -20,6 +20,7 @@
 #include "compress/coefficient_coding.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/compressed_set.hpp"
+#include "compress/cpca.hpp"
 #include "compress/directional_texels.hpp"
 #include "fabric/fabric.hpp"
 #include "formats/writer/asset_writer.hpp"

@@ -17,6 +17,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/compressed_set.hpp"
+#include "compress/cpca.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"

@@ -6,6 +6,7 @@
 
 #include "common/error.hpp"
 #include "compress/compress_settings.hpp"
+#include "compress/cpca.hpp"
 #include "fabric/fabric.hpp"
 
 namespace {
