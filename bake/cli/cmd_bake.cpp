@@ -315,7 +315,7 @@ Action setup_bake(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool bake_registered = register_command(
     {"bake", "Bake a fabric description into an asset (stages, threads, report)", setup_bake});
 
 }  // namespace

@@ -443,7 +443,7 @@ Action setup_batch(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool batch_registered = register_command(
     {"batch", "Bake a folder or list of fabrics: up-to-date skips, parallel, farm scripts",
      setup_batch});
 

@@ -336,7 +336,7 @@ Action setup_bsdf(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool bsdf_registered = register_command(
     {"bsdf", "Evaluate the cloth BSDF (Eq. 3-4) of one texel, or write a lobe slice image",
      setup_bsdf});
 

@@ -80,7 +80,7 @@ Action setup_cache(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool cache_registered = register_command(
     {"cache", "The content-keyed cache of stage outputs: info, prune", setup_cache});
 
 }  // namespace

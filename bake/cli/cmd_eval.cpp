@@ -162,7 +162,7 @@ int run_eval(const EvalCliOptions& o) {
   return 0;
 }
 
-const bool registered = register_command(
+const bool eval_registered = register_command(
     {"eval",
      "estimate the footprint average of the cloth BSDF (Eq. 5) by the multi-scale evaluator, brute "
      "force or the exact reference",

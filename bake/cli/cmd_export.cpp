@@ -287,7 +287,7 @@ Action setup_export(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool export_registered = register_command(
     {"export", "Write one section of an asset as an image (EXR) for inspection", setup_export});
 
 }  // namespace

@@ -172,7 +172,7 @@ Action setup_fit_sheen(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool fit_sheen_registered = register_command(
     {"fit-sheen",
      "Fit the sheen LTC table (model/sheen_table.hpp, or model/sheen_table_converged.hpp with "
      "--convention converged) to a Monte Carlo simulation of the sheen layer",

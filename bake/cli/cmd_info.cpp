@@ -311,7 +311,7 @@ Action setup_info(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool info_registered = register_command(
     {"info", "Describe an asset: sections, sizes, parameters and provenance", setup_info});
 
 }  // namespace

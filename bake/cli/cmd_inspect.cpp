@@ -41,7 +41,7 @@ Action setup_inspect(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool inspect_registered = register_command(
     {"inspect", "Load and validate a fabric description; print its maps and resolved parameters",
      setup_inspect});
 

@@ -108,7 +108,7 @@ Action setup_pattern(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool pattern_registered = register_command(
     {"pattern",
      "Write a weave's or a fabric's feature maps (EXR + PNG previews) and an editable fabric.toml",
      setup_pattern});

@@ -58,7 +58,7 @@ int run_plan(const PlanCliOptions& o) {
   return 0;
 }
 
-const bool registered = register_command(
+const bool plan_registered = register_command(
     {"plan", "what each fabric of a scene needs: sections and lobes kept, left out or reduced",
      [](CLI::App& app) -> Action {
        auto o = std::make_shared<PlanCliOptions>();

@@ -213,7 +213,7 @@ int run_query(const QueryOptions& o) {
   return o.kind == "parallax" ? query_parallax(o) : query_visibility(o);
 }
 
-const bool registered = register_command(
+const bool query_registered = register_command(
     {"query", "answer per-texel and footprint queries on an asset (parallax, visibility, radiance)",
      [](CLI::App& app) -> Action {
        auto o = std::make_shared<QueryOptions>();

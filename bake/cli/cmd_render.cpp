@@ -126,7 +126,7 @@ int run_render(const RenderCliOptions& o) {
   return 0;
 }
 
-const bool registered = register_command(
+const bool render_registered = register_command(
     {"render", "render a scene (TOML) with the multi-scale evaluator: EXR and a PNG preview",
      [](CLI::App& app) -> Action {
        auto o = std::make_shared<RenderCliOptions>();

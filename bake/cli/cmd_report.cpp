@@ -329,7 +329,7 @@ Action setup_report(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool report_registered = register_command(
     {"report", "Write a report as CSV, JSON and plots: compression, error-time, plan or stability",
      setup_report});
 

@@ -87,7 +87,7 @@ Action setup_validate(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool validate_registered = register_command(
     {"validate", "Check an asset's integrity; findings carry stable IDs (CBK-Ennn)",
      setup_validate});
 

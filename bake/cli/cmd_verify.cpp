@@ -235,7 +235,7 @@ Action setup_verify(CLI::App& app) {
   };
 }
 
-const bool registered = register_command(
+const bool verify_registered = register_command(
     {"verify",
      "Check an asset's Integral-Radiance tables (raw and compressed) and compressed parallax "
      "against the fabric they came from",
