@@ -15,10 +15,14 @@
 // Files are written to a temporary directory next to DIR and moved into place at the end.
 // Exit codes: 0, 1 usage, 2 bad fabric or unwritable output.
 //
-// clothbake report stability -o DIR [--large] [--json]: report_stability.hpp (exit 5 when a row
-// fails, after writing DIR/stability.csv and .json).
+// One subcommand per report, each with its own options:
+//   clothbake report error-time SCENE -o DIR ...  report_error_time.hpp (docs/rendering.md)
+//   clothbake report plan SCENE -o DIR ...        report_plan.hpp (docs/scene-plans.md)
+//   clothbake report stability -o DIR [--large] [--json]: report_stability.hpp (exit 5 when a
+//   row fails, after writing DIR/stability.csv and .json).
 #include <fmt/format.h>
 
+#include <array>
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
@@ -53,7 +57,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ReportCliOptions {
-  std::string what, fabric, output;
+  std::string fabric, output;
   std::optional<int> resolution;
   int sat_resolution = 64;
   std::string clusters = "1,2,4", ranks = "2,4,8,16,32", targets = "0.03,0.02,0.01,0.008,0.005";
@@ -112,225 +116,249 @@ std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<
   return k;
 }
 
+// The sweep of `report compression` (its options: ReportCliOptions).
+int run_compression_report(const ReportCliOptions& o);
+
+// `report` has one subcommand per report, each with its own options (docs/cli.md).
 Action setup_report(CLI::App& app) {
+  app.require_subcommand(1);
+  // compression
   auto o = std::make_shared<ReportCliOptions>();
-  app.add_option("WHAT", o->what,
-                 "report to produce: compression (FABRIC), error-time (SCENE, "
-                 "docs/rendering.md), plan (SCENE, docs/scene-plans.md) or stability (no input, "
-                 "docs/hardening.md)")
-      ->required()
-      ->check(CLI::IsMember({"compression", "error-time", "plan", "stability"}));
-  app.add_option("INPUT", o->fabric,
-                 "the fabric description (compression) or the scene (error-time, plan); none for "
-                 "stability");
-  auto large = std::make_shared<bool>(false);
-  app.add_flag("--large", *large,
-               "stability: bake the table case at 2048^2 instead of 256^2 (minutes, ~2 GB)");
-  auto et = std::make_shared<ErrorTimeOptions>();
-  std::string methods = "multiscale,multiscale-paper,brute,brute-path",
-              spp = "1,2,4,8,16,32,64,128,256";
-  auto m = std::make_shared<std::string>(methods);
-  auto s = std::make_shared<std::string>(spp);
-  app.add_option("--methods", *m, "error-time: methods to compare (default " + methods + ")");
-  app.add_option("--spp", *s, "error-time: spp sweep (default " + spp + ")");
-  app.add_option("--reference-spp", et->reference_spp,
-                 "error-time: light samples of the reference when the scene has environment "
-                 "lights (default 256)");
-  app.add_option("--seed", et->seed, "error-time: seed of the renders (default 1)");
-  app.add_option("--cache", et->cache, "error-time: asset and reference cache folder");
-  auto resolution = std::make_shared<std::string>();
-  app.add_option("--image-size", *resolution,
-                 "error-time: render at W,H pixels instead of the scene camera's resolution");
-  app.add_flag("--raw-tables", et->raw_tables,
-               "error-time: also render the multi-scale methods with the raw and the compressed "
-               "tables (fabrics baked with --keep-raw into the cache: 2 GB for a 256^2 twill)");
-  app.add_flag("--near-field", et->near_field,
-               "error-time: also ray-trace the first cloth plane's relief and compare the model "
-               "with and without parallax offsets against it");
-  app.add_option("-o,--output", o->output, "output directory (created; other files kept)")
+  auto* compression = app.add_subcommand(
+      "compression",
+      "C-PCA compression of a fabric's specular tables over clusters, ranks and target errors, and "
+      "the paper's whole-SAT layout: size against error and decode time (docs/compression.md)");
+  compression->add_option("FABRIC", o->fabric, "the fabric description (.toml)")->required();
+  compression->add_option("-o,--output", o->output, "output directory (created; other files kept)")
       ->required();
-  app.add_option("--resolution", o->resolution, "texels per tile side (default: the fabric's)")
+  compression
+      ->add_option("--resolution", o->resolution, "texels per tile side (default: the fabric's)")
       ->check(CLI::Range(kMinResolution, 1024));
-  app.add_option("--sat-resolution", o->sat_resolution,
-                 "resolution of the paper's whole-SAT layout rows (default 64; it holds "
-                 "clusters x bins x N^2 floats)")
+  compression
+      ->add_option("--sat-resolution", o->sat_resolution,
+                   "resolution of the paper's whole-SAT layout rows (default 64; it holds "
+                   "clusters x bins x N^2 floats)")
       ->check(CLI::Range(8, 256));
-  app.add_option("--clusters", o->clusters,
-                 "C-PCA clusters per visibility cluster (default 1,2,4)");
-  app.add_option("--ranks", o->ranks, "fixed ranks (default 2,4,8,16,32)");
-  app.add_option("--targets", o->targets,
-                 "target relative RMS texel errors (default 0.03,0.02,0.01,0.008,0.005)");
-  app.add_option("--samples", o->samples, "footprints per size (default 300)")
+  compression->add_option("--clusters", o->clusters,
+                          "C-PCA clusters per visibility cluster (default 1,2,4)");
+  compression->add_option("--ranks", o->ranks, "fixed ranks (default 2,4,8,16,32)");
+  compression->add_option("--targets", o->targets,
+                          "target relative RMS texel errors (default 0.03,0.02,0.01,0.008,0.005)");
+  compression->add_option("--samples", o->samples, "footprints per size (default 300)")
       ->check(CLI::Range(10, 100000));
-  app.add_flag("--no-sat", o->no_sat, "skip the paper's whole-SAT layout");
-  app.add_flag("--no-raw", o->no_raw, "skip the raw tables (built in memory: 2 GiB at 256^2)");
-  app.add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
-  add_json_flag(app, o->json, "print the rows as JSON on stdout");
-  return [o, et, m, s, resolution, large] {
-    if (o->what == "stability") {
-      if (!o->fabric.empty())
-        throw Error(ExitCode::Usage, "report stability takes no INPUT (fabric or scene)");
-      StabilityOptions so;
-      so.output = o->output;
-      so.large = *large;
-      so.json = o->json;
-      return run_stability_report(so);
-    }
-    if (o->fabric.empty())
-      throw Error(ExitCode::Usage,
-                  "report " + o->what + ": INPUT (" +
-                      std::string(o->what == "compression" ? "a fabric" : "a scene") +
-                      ") is required");
-    if (*large) throw Error(ExitCode::Usage, "--large applies to report stability only");
-    if (o->what == "plan") {
-      PlanReportOptions po;
-      po.scene = o->fabric;
-      po.output = o->output;
-      po.json = o->json;
-      po.seed = et->seed;
-      if (*s != "1,2,4,8,16,32,64" && s->find(',') != std::string::npos)
-        throw Error(ExitCode::Usage, "report plan: --spp takes one number (the renders' spp)");
-      po.spp = *s == "1,2,4,8,16,32,64" ? 2u : uint32_t(positive_list<int>(*s, "--spp").front());
-      po.reference_spp = et->reference_spp == 256 ? 64 : et->reference_spp;
-      if (!resolution->empty()) {
-        const std::array<int, 2> wh = parse_image_size(*resolution);
-        po.width = wh[0];
-        po.height = wh[1];
+  compression->add_flag("--no-sat", o->no_sat, "skip the paper's whole-SAT layout");
+  compression->add_flag("--no-raw", o->no_raw,
+                        "skip the raw tables (built in memory: 2 GiB at 256^2)");
+  compression->add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
+  add_json_flag(*compression, o->json, "print the rows as JSON on stdout");
+
+  // error-time
+  auto et = std::make_shared<ErrorTimeOptions>();
+  auto et_cli = std::make_shared<std::array<std::string, 3>>();  // methods, spp, image size
+  (*et_cli)[0] = "multiscale,multiscale-paper,brute,brute-path";
+  (*et_cli)[1] = "1,2,4,8,16,32,64,128,256";
+  auto* error_time = app.add_subcommand(
+      "error-time",
+      "error against run time of the evaluator's methods on a scene, against its exact reference "
+      "(docs/rendering.md)");
+  error_time->add_option("SCENE", et->scene, "the scene (.toml, docs/scene-format.md)")->required();
+  error_time->add_option("-o,--output", et->output, "output directory (created; other files kept)")
+      ->required();
+  error_time->add_option("--methods", (*et_cli)[0],
+                         "methods to compare (default " + (*et_cli)[0] + ")");
+  error_time->add_option("--spp", (*et_cli)[1], "spp sweep (default " + (*et_cli)[1] + ")");
+  error_time->add_option("--reference-spp", et->reference_spp,
+                         "light samples of the reference when the scene has environment lights "
+                         "(default 256)");
+  error_time->add_option("--seed", et->seed, "seed of the renders (default 1)");
+  error_time->add_option("--cache", et->cache, "asset and reference cache folder");
+  error_time->add_option("--image-size", (*et_cli)[2],
+                         "W,H: render at W x H pixels instead of the scene camera's resolution");
+  error_time->add_flag("--raw-tables", et->raw_tables,
+                       "also render the multi-scale methods with the raw and the compressed tables "
+                       "(fabrics baked with --keep-raw into the cache: 2 GB for a 256^2 twill)");
+  error_time->add_flag("--near-field", et->near_field,
+                       "also ray-trace the first cloth plane's relief and compare the model with "
+                       "and without parallax offsets against it");
+  error_time->add_flag("--no-plots", et->no_plots, "write the CSV and JSON only");
+  add_json_flag(*error_time, et->json, "print the rows as JSON on stdout");
+
+  // plan
+  auto po = std::make_shared<PlanReportOptions>();
+  po->spp = 2;
+  po->reference_spp = 64;
+  auto plan_size = std::make_shared<std::string>();
+  auto* plan = app.add_subcommand(
+      "plan",
+      "a scene rendered with fully baked and with scene-planned assets, against its reference "
+      "(docs/scene-plans.md)");
+  plan->add_option("SCENE", po->scene, "the scene (.toml, docs/scene-format.md)")->required();
+  plan->add_option("-o,--output", po->output, "output directory (created; other files kept)")
+      ->required();
+  plan->add_option("--spp", po->spp, "samples per pixel of the two renders (default 2)")
+      ->check(CLI::Range(1u, 1u << 20));
+  plan->add_option("--reference-spp", po->reference_spp,
+                   "light samples of the reference when the scene has environment lights "
+                   "(default 64)");
+  plan->add_option("--seed", po->seed, "seed of the renders (default 1)");
+  plan->add_option("--image-size", *plan_size,
+                   "W,H: render at W x H pixels instead of the scene camera's resolution");
+  add_json_flag(*plan, po->json, "print the report as JSON on stdout");
+
+  // stability
+  auto so = std::make_shared<StabilityOptions>();
+  auto* stability = app.add_subcommand(
+      "stability",
+      "the model and baked queries at the edges of the accepted inputs against direct "
+      "computations (docs/hardening.md)");
+  stability->add_option("-o,--output", so->output, "output directory (created)")->required();
+  stability->add_flag("--large", so->large,
+                      "bake the table case at 2048^2 instead of 256^2 (minutes, ~2 GB)");
+  add_json_flag(*stability, so->json, "print the rows as JSON on stdout");
+
+  return [o, et, et_cli, po, plan_size, so, error_time, plan, stability] {
+    if (stability->parsed()) return run_stability_report(*so);
+    if (plan->parsed()) {
+      if (!plan_size->empty()) {
+        const std::array<int, 2> wh = parse_image_size(*plan_size);
+        po->width = wh[0];
+        po->height = wh[1];
       }
-      return run_plan_report(po);
+      return run_plan_report(*po);
     }
-    if (o->what == "error-time") {
-      if (!resolution->empty()) {
-        const std::array<int, 2> wh = parse_image_size(*resolution);
+    if (error_time->parsed()) {
+      if (!(*et_cli)[2].empty()) {
+        const std::array<int, 2> wh = parse_image_size((*et_cli)[2]);
         et->width = wh[0];
         et->height = wh[1];
       }
-      et->scene = o->fabric;
-      et->output = o->output;
-      et->no_plots = o->no_plots;
-      et->json = o->json;
       et->methods.clear();
-      std::stringstream in(*m);
+      std::stringstream in((*et_cli)[0]);
       for (std::string item; std::getline(in, item, ',');)
         et->methods.push_back(item);
       et->spp.clear();
-      for (int v : positive_list<int>(*s, "--spp"))
+      for (int v : positive_list<int>((*et_cli)[1], "--spp"))
         et->spp.push_back(uint32_t(v));
       return run_error_time_report(*et);
     }
-    compress::ReportOptions options;
-    options.clusters = positive_list<int>(o->clusters, "--clusters");
-    options.ranks = positive_list<int>(o->ranks, "--ranks");
-    options.targets = positive_list<double>(o->targets, "--targets");
-    options.samples = o->samples;
-    options.sat = !o->no_sat;
-    options.raw = !o->no_raw;
-    const fs::path out(o->output);
-    if (fs::exists(out) && !fs::is_directory(out))
-      throw_input_error(o->output + ": exists and is not a directory");
-
-    const auto full = load_kind_data(o->fabric, o->resolution);
-    options.seed = full->fabric.bake.seed;
-    std::unique_ptr<KindData> low;
-    if (options.sat) low = load_kind_data(o->fabric, o->sat_resolution);
-    compress::RawTablesBuilder raw_builder = [&]() {
-      tables::RadianceOptions ro;
-      ro.bins_per_side = full->data.bins_per_side;
-      ro.samples_per_side = full->data.samples_per_bin_side;
-      ro.warn_unresolved = false;
-      std::vector<formats::Section> sections =
-          tables::radiance_sections(tables::build_specular_tables(full->inputs.view, ro));
-      return formats::serialize_asset(sections);
-    };
-    const auto rows =
-        compress::compression_sweep(full->data, low ? &low->data : nullptr, options, raw_builder,
-                                    [](int done, int total, const std::string& label) {
-                                      info(fmt::format("report: [{}/{}] {}", done, total, label));
-                                    });
-
-    // Write into a temporary directory, then move the files into place.
-    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    const fs::path tmp = parent / (out.filename().string() + ".tmp-report");
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-    if (!fs::create_directories(tmp, ec) && ec)
-      throw_input_error(tmp.string() + ": cannot create: " + ec.message());
-    const std::string csv =
-        compress::report_csv(rows, compress::report_sides(full->data.resolution));
-    nlohmann::json doc;
-    doc["fabric"] = o->fabric;
-    doc["resolution"] = full->data.resolution;
-    doc["sat_resolution"] = low ? low->data.resolution : 0;
-    doc["bins_per_side"] = full->data.bins_per_side;
-    doc["clusters"] = full->clusters;
-    doc["cluster_source"] = full->label_source;
-    doc["footprint_sides"] = {"1", "2", "4", "8", "16", "64", "tile", "3 tiles"};
-    nlohmann::json jrows = nlohmann::json::array();
-    for (const auto& r : rows)
-      jrows.push_back({{"layout", r.layout},
-                       {"normalisation", r.normalisation},
-                       {"mode", r.mode},
-                       {"resolution", r.resolution},
-                       {"clusters", r.clusters},
-                       {"rank", r.rank},
-                       {"target", r.target},
-                       {"images", r.images},
-                       {"stored_bytes", r.stored_bytes},
-                       {"raw_float_bytes", r.raw_float_bytes},
-                       {"ratio", r.ratio},
-                       {"decoded_bytes", r.decoded_bytes},
-                       {"texel_error", r.texel_error},
-                       {"normalised_mse", r.normalised_mse},
-                       {"footprint_error", r.footprint_error},
-                       {"query_ns", r.query_ns},
-                       {"compress_cpu_seconds", r.compress_cpu_seconds},
-                       {"compress_wall_seconds", r.compress_wall_seconds},
-                       {"paper_point", r.paper_point}});
-    doc["rows"] = jrows;
-    auto write = [&](const std::string& name, const std::string& text) {
-      std::ofstream f(tmp / name, std::ios::binary);
-      f << text;
-      f.close();
-      if (!f) throw_input_error((tmp / name).string() + ": cannot write");
-    };
-    write("compression.csv", csv);
-    write("compression.json",
-          doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-    std::vector<std::string> plots;
-    if (!o->no_plots) {
-      // $CLOTHBAKE_PLOT_SCRIPT, else the source tree this file was compiled from.
-      const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT");
-      const fs::path script =
-          env ? fs::path(env) : fs::path(CLOTHBAKE_SOURCE_DIR) / "scripts" / "plot_compression.py";
-      // Debian's interpreter (python3-matplotlib) when present, else whatever python3 is.
-      const std::string python =
-          fs::exists("/usr/bin/python3") ? std::string("/usr/bin/python3") : std::string("python3");
-      const std::string command = python + " '" + script.string() + "' '" +
-                                  (tmp / "compression.csv").string() + "' '" + tmp.string() +
-                                  "' > /dev/null";
-      if (!fs::exists(script) || std::system(command.c_str()) != 0)
-        warn("report: plotting failed (python3-matplotlib missing?); the CSV is written");
-    }
-    fs::create_directories(out, ec);
-    for (const auto& entry : fs::directory_iterator(tmp)) {
-      fs::rename(entry.path(), out / entry.path().filename(), ec);
-      if (ec) throw_input_error((out / entry.path().filename()).string() + ": " + ec.message());
-      plots.push_back((out / entry.path().filename()).string());
-    }
-    fs::remove_all(tmp, ec);
-    if (o->json) {
-      doc["files"] = plots;
-      doc["warnings"] = take_warnings();
-      print_json(doc);
-    } else {
-      std::cout << csv;
-    }
-    return 0;
+    return run_compression_report(*o);
   };
 }
 
+int run_compression_report(const ReportCliOptions& o) {
+  compress::ReportOptions options;
+  options.clusters = positive_list<int>(o.clusters, "--clusters");
+  options.ranks = positive_list<int>(o.ranks, "--ranks");
+  options.targets = positive_list<double>(o.targets, "--targets");
+  options.samples = o.samples;
+  options.sat = !o.no_sat;
+  options.raw = !o.no_raw;
+  const fs::path out(o.output);
+  if (fs::exists(out) && !fs::is_directory(out))
+    throw_input_error(o.output + ": exists and is not a directory");
+
+  const auto full = load_kind_data(o.fabric, o.resolution);
+  options.seed = full->fabric.bake.seed;
+  std::unique_ptr<KindData> low;
+  if (options.sat) low = load_kind_data(o.fabric, o.sat_resolution);
+  compress::RawTablesBuilder raw_builder = [&]() {
+    tables::RadianceOptions ro;
+    ro.bins_per_side = full->data.bins_per_side;
+    ro.samples_per_side = full->data.samples_per_bin_side;
+    ro.warn_unresolved = false;
+    std::vector<formats::Section> sections =
+        tables::radiance_sections(tables::build_specular_tables(full->inputs.view, ro));
+    return formats::serialize_asset(sections);
+  };
+  const auto rows =
+      compress::compression_sweep(full->data, low ? &low->data : nullptr, options, raw_builder,
+                                  [](int done, int total, const std::string& label) {
+                                    info(fmt::format("report: [{}/{}] {}", done, total, label));
+                                  });
+
+  // Write into a temporary directory, then move the files into place.
+  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  const fs::path tmp = parent / (out.filename().string() + ".tmp-report");
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
+  if (!fs::create_directories(tmp, ec) && ec)
+    throw_input_error(tmp.string() + ": cannot create: " + ec.message());
+  const std::string csv = compress::report_csv(rows, compress::report_sides(full->data.resolution));
+  nlohmann::json doc;
+  doc["fabric"] = o.fabric;
+  doc["resolution"] = full->data.resolution;
+  doc["sat_resolution"] = low ? low->data.resolution : 0;
+  doc["bins_per_side"] = full->data.bins_per_side;
+  doc["clusters"] = full->clusters;
+  doc["cluster_source"] = full->label_source;
+  doc["footprint_sides"] = {"1", "2", "4", "8", "16", "64", "tile", "3 tiles"};
+  nlohmann::json jrows = nlohmann::json::array();
+  for (const auto& r : rows)
+    jrows.push_back({{"layout", r.layout},
+                     {"normalisation", r.normalisation},
+                     {"mode", r.mode},
+                     {"resolution", r.resolution},
+                     {"clusters", r.clusters},
+                     {"rank", r.rank},
+                     {"target", r.target},
+                     {"images", r.images},
+                     {"stored_bytes", r.stored_bytes},
+                     {"raw_float_bytes", r.raw_float_bytes},
+                     {"ratio", r.ratio},
+                     {"decoded_bytes", r.decoded_bytes},
+                     {"texel_error", r.texel_error},
+                     {"normalised_mse", r.normalised_mse},
+                     {"footprint_error", r.footprint_error},
+                     {"query_ns", r.query_ns},
+                     {"compress_cpu_seconds", r.compress_cpu_seconds},
+                     {"compress_wall_seconds", r.compress_wall_seconds},
+                     {"paper_point", r.paper_point}});
+  doc["rows"] = jrows;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream f(tmp / name, std::ios::binary);
+    f << text;
+    f.close();
+    if (!f) throw_input_error((tmp / name).string() + ": cannot write");
+  };
+  write("compression.csv", csv);
+  write("compression.json",
+        doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  std::vector<std::string> plots;
+  if (!o.no_plots) {
+    // $CLOTHBAKE_PLOT_SCRIPT, else the source tree this file was compiled from.
+    const char* env = std::getenv("CLOTHBAKE_PLOT_SCRIPT");
+    const fs::path script =
+        env ? fs::path(env) : fs::path(CLOTHBAKE_SOURCE_DIR) / "scripts" / "plot_compression.py";
+    // Debian's interpreter (python3-matplotlib) when present, else whatever python3 is.
+    const std::string python =
+        fs::exists("/usr/bin/python3") ? std::string("/usr/bin/python3") : std::string("python3");
+    const std::string command = python + " '" + script.string() + "' '" +
+                                (tmp / "compression.csv").string() + "' '" + tmp.string() +
+                                "' > /dev/null";
+    if (!fs::exists(script) || std::system(command.c_str()) != 0)
+      warn("report: plotting failed (python3-matplotlib missing?); the CSV is written");
+  }
+  fs::create_directories(out, ec);
+  for (const auto& entry : fs::directory_iterator(tmp)) {
+    fs::rename(entry.path(), out / entry.path().filename(), ec);
+    if (ec) throw_input_error((out / entry.path().filename()).string() + ": " + ec.message());
+    plots.push_back((out / entry.path().filename()).string());
+  }
+  fs::remove_all(tmp, ec);
+  if (o.json) {
+    doc["files"] = plots;
+    doc["warnings"] = take_warnings();
+    print_json(doc);
+  } else {
+    std::cout << csv;
+  }
+  return 0;
+}
+
 const bool report_registered = register_command(
-    {"report", "Write a report as CSV, JSON and plots: compression, error-time, plan or stability",
+    {"report",
+     "write a report as CSV, JSON and plots: compression, error-time, plan or stability (clothbake "
+     "report REPORT --help lists each one's options)",
      setup_report});
 
 }  // namespace

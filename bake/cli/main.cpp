@@ -74,8 +74,18 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version: printed on stdout
     // One error style for every message (docs/cli.md): "clothbake: error: ..." and where the
     // options are listed, instead of CLI11's bare text and "Run with --help".
-    std::string where = "clothbake --help";
-    if (argc >= 2 && argv[1][0] != '-') where = "clothbake " + std::string(argv[1]) + " --help";
+    // The deepest subcommand named ("clothbake report plan --help"), where the options are.
+    std::string where = "clothbake";
+    const CLI::App* level = &app;
+    for (int i = 1; i < argc; ++i) {
+      const CLI::App* next = nullptr;
+      for (const CLI::App* sub : level->get_subcommands({}))
+        if (sub->get_name() == argv[i]) next = sub;
+      if (next == nullptr) break;
+      where += " " + next->get_name();
+      level = next;
+    }
+    where += " --help";
     report_error(std::string(e.what()) + " (" + where + " lists the options)");
     return int(ExitCode::Usage);
   }

@@ -509,6 +509,15 @@ TEST_F(Cli, UnknownCommandSuggestsTheClosest) {
   EXPECT_EQ(r.err.rfind("clothbake: error: --threads", 0), 0u) << r.err;
   EXPECT_IN("(clothbake bake --help lists the options)", r.err);
   EXPECT_EQ(r.err.find("Run with --help"), std::string::npos) << r.err;
+  // A subcommand's subcommand names its own help, where its options are listed; an option of
+  // another report is unknown to this one.
+  r = run({"report", "stability", "-o", "r", "--image-size", "8,8"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_IN("(clothbake report stability --help lists the options)", r.err);
+  r = run({"report", "plan", "scene.toml", "-o", "r", "--spp", "1,2"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_IN("--spp", r.err);
+  EXPECT_IN("(clothbake report plan --help lists the options)", r.err);
 }
 
 // bake takes a WIF draft directly (the README's input) and --resolution N for a weave's maps (what
