@@ -35,7 +35,6 @@ namespace {
 
 struct QueryOptions {
   std::string asset;
-  std::string kind;
   std::string dir;
   std::string texel;
   std::string rect;
@@ -124,8 +123,6 @@ int query_visibility(const QueryOptions& o) {
   if (o.dir.empty())
     throw CLI::ValidationError("--dir", "visibility queries need --dir x,y,z (light direction)");
   if (o.texel.empty()) throw CLI::ValidationError("--texel", "visibility queries need --texel i,j");
-  if (!o.rect.empty())
-    throw CLI::ValidationError("--rect", "visibility queries are per texel: use --texel");
   const std::array<double, 3> dir = parse_direction(o.dir, "--dir");
   const std::vector<double> texel = parse_number_list(o.texel, "--texel", kTexel);
   const reader::Asset asset = formats::open_valid_asset(o.asset);
@@ -173,10 +170,6 @@ int query_radiance(const QueryOptions& o) {
   if (o.h.empty()) throw CLI::ValidationError("--h", "radiance queries need --h x,y,z");
   if (o.rect.empty())
     throw CLI::ValidationError("--rect", "radiance queries need --rect x0,y0,x1,y1");
-  if (!o.dir.empty())
-    throw CLI::ValidationError("--dir", "radiance queries take the half vector as --h, not --dir");
-  if (!o.texel.empty())
-    throw CLI::ValidationError("--texel", "radiance queries take a footprint --rect, not --texel");
   RadianceQueryArgs args;
   args.lobe = o.lobe;
   args.cluster = o.cluster;
@@ -203,40 +196,49 @@ int query_radiance(const QueryOptions& o) {
   return 0;
 }
 
-int run_query(const QueryOptions& o) {
-  if (o.kind == "radiance") return query_radiance(o);
-  if (!o.lobe.empty() || o.cluster || !o.h.empty())
-    throw CLI::ValidationError(!o.lobe.empty() ? "--lobe"
-                               : o.cluster     ? "--cluster"
-                                               : "--h",
-                               "only radiance queries take --lobe, --cluster and --h");
-  return o.kind == "parallax" ? query_parallax(o) : query_visibility(o);
+// `query ASSET KIND`: one subcommand per kind, each with only the options that kind reads, so
+// that an option of another kind is an unknown option (exit 1) naming it.
+Action setup_query(CLI::App& app) {
+  auto o = std::make_shared<QueryOptions>();
+  add_asset_argument(app, o->asset);
+  app.require_subcommand(1);
+  const std::string dir_help = "direction x,y,z in the local frame (z = macro normal): ";
+  auto* parallax = app.add_subcommand(
+      "parallax", "the parallax depth r and its Eq. 2 offset at a texel or over a footprint");
+  parallax->add_option("--dir", o->dir, dir_help + "the view direction (towards the viewer)");
+  parallax->add_option("--texel", o->texel, "texel i,j (integers; the tile wraps)");
+  parallax->add_option("--rect", o->rect,
+                       "footprint x0,y0,x1,y1 in texel units, half-open, any size, wraps (the mean "
+                       "over it)");
+  add_json_flag(*parallax, o->json, "print the answer as JSON on stdout");
+  auto* visibility =
+      app.add_subcommand("visibility", "the visibility V of a texel for a light direction");
+  visibility->add_option("--dir", o->dir, dir_help + "the light direction");
+  visibility->add_option("--texel", o->texel, "texel i,j (integers; the tile wraps)");
+  add_json_flag(*visibility, o->json, "print the answer as JSON on stdout");
+  auto* radiance = app.add_subcommand(
+      "radiance", "F_c(rect, h) of a lobe's Integral-Radiance table over a footprint");
+  radiance->add_option("--lobe", o->lobe,
+                       "lobe as in `clothbake bsdf` (specular_reflection, specular_transmission, "
+                       "delta_transmission)");
+  radiance->add_option("--cluster", o->cluster, "one visibility cluster (default: all)");
+  radiance->add_option("--h", o->h, "half vector x,y,z in the local frame");
+  radiance->add_option("--rect", o->rect,
+                       "footprint x0,y0,x1,y1 in texel units, half-open, any size, wraps");
+  add_tables_option(*radiance, o->tables);
+  add_json_flag(*radiance, o->json, "print the answer as JSON on stdout");
+  return [o, parallax, visibility] {
+    if (parallax->parsed()) return query_parallax(*o);
+    if (visibility->parsed()) return query_visibility(*o);
+    return query_radiance(*o);
+  };
 }
 
 const bool query_registered = register_command(
-    {"query", "answer per-texel and footprint queries on an asset (parallax, visibility, radiance)",
-     [](CLI::App& app) -> Action {
-       auto o = std::make_shared<QueryOptions>();
-       add_asset_argument(app, o->asset);
-       app.add_option("KIND", o->kind, "what to query: parallax, visibility or radiance")
-           ->required()
-           ->check(CLI::IsMember({"parallax", "visibility", "radiance"}));
-       app.add_option("--dir", o->dir,
-                      "direction x,y,z in the local frame (z = macro normal): the view direction "
-                      "(towards the viewer) for parallax, the light direction for visibility");
-       app.add_option("--texel", o->texel, "texel i,j (integers; the tile wraps)");
-       app.add_option("--rect", o->rect,
-                      "footprint x0,y0,x1,y1 in texel units, half-open, any size, wraps (parallax: "
-                      "mean over it; radiance: F over it)");
-       app.add_option("--lobe", o->lobe,
-                      "radiance: lobe as in `clothbake bsdf` (specular_reflection, "
-                      "specular_transmission, delta_transmission)");
-       app.add_option("--cluster", o->cluster, "radiance: one visibility cluster (default: all)");
-       app.add_option("--h", o->h, "radiance: half vector x,y,z in the local frame");
-       add_tables_option(app, o->tables, "radiance: ");
-       add_json_flag(app, o->json, "print the answer as JSON on stdout");
-       return [o] { return run_query(*o); };
-     }});
+    {"query",
+     "answer per-texel and footprint queries on an asset: query ASSET parallax|visibility|radiance "
+     "(clothbake query ASSET KIND --help lists each one's options)",
+     setup_query});
 
 }  // namespace
 }  // namespace clothbake::cli

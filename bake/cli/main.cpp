@@ -81,12 +81,21 @@ int main(int argc, char** argv) {
       const CLI::App* next = nullptr;
       for (const CLI::App* sub : level->get_subcommands({}))
         if (sub->get_name() == argv[i]) next = sub;
-      if (next == nullptr) break;
+      if (next == nullptr) continue;  // a positional or an option ("query ASSET radiance")
       where += " " + next->get_name();
       level = next;
     }
     where += " --help";
-    report_error(std::string(e.what()) + " (" + where + " lists the options)");
+    // A missing or mistyped subcommand of a command that has them: name the valid ones.
+    std::string message = e.what();
+    if (level != &app && !level->get_subcommands({}).empty() &&
+        message.find("subcommand is required") != std::string::npos) {
+      const std::vector<const CLI::App*> subs = level->get_subcommands({});
+      message = level->get_name() + " needs one of ";
+      for (std::size_t k = 0; k < subs.size(); ++k)
+        message += (k == 0 ? "" : k + 1 == subs.size() ? " or " : ", ") + subs[k]->get_name();
+    }
+    report_error(message + " (" + where + " lists the options)");
     return int(ExitCode::Usage);
   }
   try {

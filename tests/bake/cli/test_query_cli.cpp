@@ -136,8 +136,13 @@ TEST_F(QueryCli, BadArgumentsExitOneNamingTheOption) {
       {" parallax --dir 0,nan,1 --texel 1,1", "--dir"},
       {" visibility --dir 0,0,1", "--texel"},
       {" visibility --texel 1,1", "--dir"},
-      {" visibility --dir 0,0,1 --rect 0,0,1,1", "--texel"},
-      {" radiance --dir 0,0,1 --texel 1,1", "--lobe"},  // radiance is a kind now (needs --lobe)
+      // An option of another kind is unknown to this one, named with where the options are.
+      {" visibility --dir 0,0,1 --texel 1,1 --rect 0,0,1,1", "--rect"},
+      {" visibility --dir 0,0,1 --texel 1,1 --rect 0,0,1,1", "query visibility --help"},
+      {" radiance --dir 0,0,1 --texel 1,1", "--dir"},
+      {" parallax --dir 0,0,1 --texel 1,1 --lobe specular_reflection", "--lobe"},
+      {" radiance --h 0,0,1 --rect 0,0,1,1", "--lobe"},  // radiance needs a lobe
+      {" hologram --dir 0,0,1", "query needs one of parallax, visibility or radiance"},
   };
   for (const Case& c : cases) {
     CliRun r = run(asset() + c.args);
