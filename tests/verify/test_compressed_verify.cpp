@@ -5,7 +5,7 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "common/error.hpp"
-#include "compress_test_util.hpp"
+#include "tests/compress/compress_test_util.hpp"
 #include "tables/radiance_fill.hpp"
 #include "verify/compressed_verify.hpp"
 
