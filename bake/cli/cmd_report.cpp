@@ -119,6 +119,20 @@ std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<
 // The sweep of `report compression` (its options: ReportCliOptions).
 int run_compression_report(const ReportCliOptions& o);
 
+// What the reports that render a scene (error-time, plan) share: SCENE, -o, --reference-spp (its
+// default `reference_spp` as given), --seed and --image-size W,H (parsed when the report runs).
+void add_scene_report_options(CLI::App& sub, std::string& scene, std::string& output,
+                              uint32_t& reference_spp, uint64_t& seed, std::string& image_size) {
+  sub.add_option("SCENE", scene, "the scene (.toml, docs/scene-format.md)")->required();
+  sub.add_option("-o,--output", output, "output directory (created; other files kept)")->required();
+  sub.add_option("--reference-spp", reference_spp,
+                 "light samples of the reference when the scene has environment lights (default " +
+                     std::to_string(reference_spp) + ")");
+  sub.add_option("--seed", seed, "seed of the renders (default 1)");
+  sub.add_option("--image-size", image_size,
+                 "W,H: render at W x H pixels instead of the scene camera's resolution");
+}
+
 // `report` has one subcommand per report, each with its own options (docs/cli.md).
 Action setup_report(CLI::App& app) {
   app.require_subcommand(1);
@@ -161,19 +175,12 @@ Action setup_report(CLI::App& app) {
       "error-time",
       "error against run time of the evaluator's methods on a scene, against its exact reference "
       "(docs/rendering.md)");
-  error_time->add_option("SCENE", et->scene, "the scene (.toml, docs/scene-format.md)")->required();
-  error_time->add_option("-o,--output", et->output, "output directory (created; other files kept)")
-      ->required();
+  add_scene_report_options(*error_time, et->scene, et->output, et->reference_spp, et->seed,
+                           (*et_cli)[2]);
   error_time->add_option("--methods", (*et_cli)[0],
                          "methods to compare (default " + (*et_cli)[0] + ")");
   error_time->add_option("--spp", (*et_cli)[1], "spp sweep (default " + (*et_cli)[1] + ")");
-  error_time->add_option("--reference-spp", et->reference_spp,
-                         "light samples of the reference when the scene has environment lights "
-                         "(default 256)");
-  error_time->add_option("--seed", et->seed, "seed of the renders (default 1)");
   error_time->add_option("--cache", et->cache, "asset and reference cache folder");
-  error_time->add_option("--image-size", (*et_cli)[2],
-                         "W,H: render at W x H pixels instead of the scene camera's resolution");
   error_time->add_flag("--raw-tables", et->raw_tables,
                        "also render the multi-scale methods with the raw and the compressed tables "
                        "(fabrics baked with --keep-raw into the cache: 2 GB for a 256^2 twill)");
@@ -192,17 +199,9 @@ Action setup_report(CLI::App& app) {
       "plan",
       "a scene rendered with fully baked and with scene-planned assets, against its reference "
       "(docs/scene-plans.md)");
-  plan->add_option("SCENE", po->scene, "the scene (.toml, docs/scene-format.md)")->required();
-  plan->add_option("-o,--output", po->output, "output directory (created; other files kept)")
-      ->required();
+  add_scene_report_options(*plan, po->scene, po->output, po->reference_spp, po->seed, *plan_size);
   plan->add_option("--spp", po->spp, "samples per pixel of the two renders (default 2)")
       ->check(CLI::Range(1u, 1u << 20));
-  plan->add_option("--reference-spp", po->reference_spp,
-                   "light samples of the reference when the scene has environment lights "
-                   "(default 64)");
-  plan->add_option("--seed", po->seed, "seed of the renders (default 1)");
-  plan->add_option("--image-size", *plan_size,
-                   "W,H: render at W x H pixels instead of the scene camera's resolution");
   add_json_flag(*plan, po->json, "print the report as JSON on stdout");
 
   // stability

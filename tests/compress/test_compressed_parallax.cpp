@@ -19,7 +19,9 @@
 #include "model/directions.hpp"
 #include "raycast/parallax.hpp"
 #include "raycast/raycast_sections.hpp"
+#include "tests/compress/parallax_test_util.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
+#include "tests/support/memory_asset.hpp"
 
 using namespace clothbake;
 using namespace clothbake::raycast;
@@ -27,24 +29,9 @@ using reader::ErrorCode;
 
 namespace {
 
-struct MemoryAsset {
-  std::vector<uint64_t> storage;
-  std::size_t size = 0;
-  reader::Asset asset;
-  reader::Status status;
-  explicit MemoryAsset(const std::vector<formats::Section>& sections) {
-    std::vector<std::byte> bytes = formats::serialize_asset(sections);
-    size = bytes.size();
-    storage.resize((bytes.size() + 7) / 8);
-    std::memcpy(storage.data(), bytes.data(), bytes.size());
-    status = asset.open_memory(storage.data(), bytes.size());
-  }
-  uint16_t minor() const {
-    uint16_t m;
-    std::memcpy(&m, reinterpret_cast<const char*>(storage.data()) + 10, 2);
-    return m;
-  }
-};
+using compress::test::baked;
+using compress::test::spiky_maps;
+using test_support::MemoryAsset;
 
 compress::ParallaxCodes codes_of(const ParallaxTable& t) {
   return {t.depth.data(),     t.resolution,        t.dirs, t.min_cos, t.depth_scale,
@@ -62,12 +49,6 @@ std::vector<formats::Section> both_forms(const ParallaxTable& table,
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   if (packed_out) *packed_out = std::move(packed);
   return s;
-}
-
-ParallaxTable baked(const FabricMaps& maps, int dirs = 8) {
-  ParallaxSettings settings;
-  settings.dirs = dirs;
-  return bake_parallax(maps, settings);
 }
 
 // Decoded values against raw: every texel and bin within the recorded max depth error, which is
@@ -129,14 +110,7 @@ void expect_close_to_raw(const ParallaxTable& table, const char* what) {
 TEST(CompressedParallax, DecodesWithinTheRecordedErrorOnWovenTallAndSpikyFields) {
   expect_close_to_raw(baked(rctest::plain_weave_maps(16)), "plain weave");
   expect_close_to_raw(baked(rctest::plain_weave_maps(16, 2, 0.4, 0.1)), "tall yarns");
-  expect_close_to_raw(
-      baked(rctest::maps_from(16,
-                              [](double x, double y) {
-                                return (std::fmod(x * 4, 1) < 0.1 && std::fmod(y * 4, 1) < 0.1)
-                                           ? 0.5
-                                           : 0.0;
-                              })),
-      "spikes");
+  expect_close_to_raw(baked(spiky_maps()), "spikes");
 }
 
 TEST(CompressedParallax, FlatMapStaysExactlyZero) {

@@ -22,7 +22,9 @@
 #include "model/directions.hpp"
 #include "raycast/parallax.hpp"
 #include "raycast/raycast_sections.hpp"
+#include "tests/compress/parallax_test_util.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
+#include "tests/support/memory_asset.hpp"
 
 using namespace clothbake;
 using namespace clothbake::raycast;
@@ -31,44 +33,16 @@ using reader::SectionType;
 
 namespace {
 
-struct MemoryAsset {
-  std::vector<uint64_t> storage;
-  reader::Asset asset;
-  reader::Status status;
-  explicit MemoryAsset(const std::vector<formats::Section>& sections) {
-    std::vector<std::byte> bytes = formats::serialize_asset(sections);
-    storage.resize((bytes.size() + 7) / 8);
-    std::memcpy(storage.data(), bytes.data(), bytes.size());
-    status = asset.open_memory(storage.data(), bytes.size());
-  }
-};
-
-ParallaxTable baked(const FabricMaps& maps, int dirs = 8) {
-  ParallaxSettings settings;
-  settings.dirs = dirs;
-  return bake_parallax(maps, settings);
-}
+using compress::test::baked;
+using compress::test::spiky_maps;
+using test_support::MemoryAsset;
+using test_support::validate_ids;
+using test_support::with_metadata;
 
 compress::QuantisedParallax eight_bits(const ParallaxTable& t) {
   return compress::quantise_parallax({t.depth.data(), t.resolution, t.dirs, t.min_cos,
                                       t.depth_scale, t.reference_height, t.stats.max_sideways},
                                      1.0);
-}
-
-std::vector<formats::Section> with_metadata(std::vector<formats::Section> s) {
-  s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
-  return s;
-}
-
-std::string validate_ids(const reader::Asset& asset) {
-  std::string ids;
-  reader::validate_asset(
-      asset,
-      [](void* u, reader::Check c, uint32_t, const char*) {
-        *static_cast<std::string*>(u) += std::string(reader::check_id(c)) + " ";
-      },
-      &ids);
-  return ids;
 }
 
 // Entropy form and 1.1 form of one table decode to the same codes and answer alike.
@@ -111,14 +85,7 @@ void expect_same_as_plain_codes(const ParallaxTable& table, const char* what) {
 TEST(EntropyParallax, DecodesToTheEightBitCodesOnWovenTallSpikyAndFlatFields) {
   expect_same_as_plain_codes(baked(rctest::plain_weave_maps(16)), "plain weave");
   expect_same_as_plain_codes(baked(rctest::plain_weave_maps(24, 2, 0.4, 0.1), 6), "tall yarns");
-  expect_same_as_plain_codes(
-      baked(rctest::maps_from(16,
-                              [](double x, double y) {
-                                return (std::fmod(x * 4, 1) < 0.1 && std::fmod(y * 4, 1) < 0.1)
-                                           ? 0.5
-                                           : 0.0;
-                              })),
-      "spikes");
+  expect_same_as_plain_codes(baked(spiky_maps()), "spikes");
   // Flat: every step 0 and every code 0, decoded as exactly r = 0.
   const ParallaxTable flat = baked(rctest::maps_from(8, [](double, double) { return 0.25; }));
   expect_same_as_plain_codes(flat, "flat");
@@ -213,26 +180,8 @@ TEST(EntropyParallax, HostileSectionsFailWithStableIds) {
   const compress::QuantisedParallax p = eight_bits(table);
   const auto base =
       with_metadata(compress::entropy_parallax_sections(p, compress::entropy_code_parallax(p)));
-  auto find = [](std::vector<formats::Section>& s, uint32_t instance) -> formats::Section& {
-    for (auto& x : s)
-      if (x.type == SectionType::ParallaxEntropy && x.instance == instance) return x;
-    throw std::runtime_error("no such section");
-  };
-  auto check = [](const std::vector<formats::Section>& s, const char* open_id,
-                  const char* validate_id) {
-    MemoryAsset m(s);
-    ASSERT_TRUE(m.status.ok()) << m.status.message();
-    reader::ParallaxView view;
-    const reader::Status st = view.open(m.asset);
-    EXPECT_EQ(std::string(reader::check_id(st.check())), open_id) << st.message();
-    EXPECT_NE(validate_ids(m.asset).find(validate_id), std::string::npos) << validate_ids(m.asset);
-    if (st.ok()) {  // queries stay in bounds and answer
-      const double v[3] = {0.3, 0.2, 0.9};
-      reader::ParallaxSample out;
-      EXPECT_TRUE(view.depth(1, 2, v, &out).ok());
-      EXPECT_TRUE(view.footprint_depth({0, 0, 5, 5}, v, &out).ok());
-    }
-  };
+  const auto find = compress::test::parallax_entropy_section;
+  const auto check = compress::test::expect_hostile_parallax;
   {
     MemoryAsset m(base);
     EXPECT_EQ(validate_ids(m.asset), "");

@@ -21,6 +21,7 @@
 #include "model/directions.hpp"
 #include "raycast/raycast_sections.hpp"
 #include "tests/raycast/synthetic_fields.hpp"
+#include "tests/support/memory_asset.hpp"
 
 using namespace clothbake;
 using namespace clothbake::raycast;
@@ -29,23 +30,8 @@ using reader::ErrorCode;
 
 namespace {
 
-// An asset in memory (8-byte aligned) and the reader opened on it.
-struct MemoryAsset {
-  std::vector<uint64_t> storage;
-  reader::Asset asset;
-  reader::Status status;
-  explicit MemoryAsset(const std::vector<formats::Section>& sections) {
-    std::vector<std::byte> bytes = formats::serialize_asset(sections);
-    storage.resize((bytes.size() + 7) / 8);
-    std::memcpy(storage.data(), bytes.data(), bytes.size());
-    status = asset.open_memory(storage.data(), bytes.size());
-  }
-};
-
-std::vector<formats::Section> with_metadata(std::vector<formats::Section> sections) {
-  sections.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
-  return sections;
-}
+using test_support::MemoryAsset;
+using test_support::with_metadata;
 
 // A table of pseudo-random codes (no ray casting): for the SAT and query tests.
 ParallaxTable random_table(int n, int dirs, uint64_t seed, uint16_t max_code = 65535) {
