@@ -68,24 +68,25 @@ int main(int argc, char** argv) {
       return int(ExitCode::Usage);
     }
   }
+  // Where a usage error's options are listed: the deepest subcommand named on the command line
+  // ("clothbake report plan --help"), for CLI11's refusals and for the actions' own alike.
+  std::string where = "clothbake";
+  const CLI::App* level = &app;
+  for (int i = 1; i < argc; ++i) {
+    const CLI::App* next = nullptr;
+    for (const CLI::App* sub : level->get_subcommands({}))
+      if (sub->get_name() == argv[i]) next = sub;
+    if (next == nullptr) continue;  // a positional or an option ("query ASSET radiance")
+    where += " " + next->get_name();
+    level = next;
+  }
+  where += " --help";
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version: printed on stdout
     // One error style for every message (docs/cli.md): "clothbake: error: ..." and where the
     // options are listed, instead of CLI11's bare text and "Run with --help".
-    // The deepest subcommand named ("clothbake report plan --help"), where the options are.
-    std::string where = "clothbake";
-    const CLI::App* level = &app;
-    for (int i = 1; i < argc; ++i) {
-      const CLI::App* next = nullptr;
-      for (const CLI::App* sub : level->get_subcommands({}))
-        if (sub->get_name() == argv[i]) next = sub;
-      if (next == nullptr) continue;  // a positional or an option ("query ASSET radiance")
-      where += " " + next->get_name();
-      level = next;
-    }
-    where += " --help";
     // A missing or mistyped subcommand of a command that has them: name the valid ones.
     std::string message = e.what();
     if (level != &app && !level->get_subcommands({}).empty() &&
@@ -104,7 +105,7 @@ int main(int argc, char** argv) {
     return int(ExitCode::Usage);
   } catch (const CLI::ParseError& e) {
     // Validation that needs more than CLI11 can express (thrown by an action before any output).
-    report_error(e.what());
+    report_error(std::string(e.what()) + " (" + where + " lists the options)");
     return int(ExitCode::Usage);
   } catch (const Error& e) {
     report_error(e.what());

@@ -132,6 +132,9 @@ TEST_F(QueryCli, BadArgumentsExitOneNamingTheOption) {
       {" parallax --dir 0,0,1 --texel 1,a", "--texel"},
       {" parallax --dir 0,0,1 --texel 1", "--texel"},
       {" parallax --dir 0,0,1 --rect 2,0,1,1", "--rect"},
+      // The commands' own checks point at the options too, as CLI11's refusals do.
+      {" parallax --dir 0,0,1 --rect 2,0,1,1",
+       "(clothbake query parallax --help lists the options)"},
       {" parallax --dir 0,0,0 --texel 1,1", "--dir"},
       {" parallax --dir 0,nan,1 --texel 1,1", "--dir"},
       {" visibility --dir 0,0,1", "--texel"},
