@@ -45,6 +45,13 @@ void preview_value(const float rgb[3], const Preview& preview, float out[3]) {
     out[k] = float(srgb_encode(c[k]));
 }
 
+Image preview_image(const RenderResult& r, const Preview& preview) {
+  Image shown(r.width, r.height, 3);
+  for (std::size_t k = 0; k + 2 < r.rgb.size(); k += 3)
+    preview_value(&r.rgb[k], preview, &shown.pixels[k]);
+  return shown;
+}
+
 void check_output_path(const std::string& exr_path) {
   const fs::path p(exr_path);
   if (p.extension() != ".exr")
@@ -75,10 +82,9 @@ OutputFiles write_render_images(const std::string& exr_path, const RenderResult&
     fs::create_directories(dir, ec);
     if (ec) throw_input_error(exr_path + ": cannot create its folder (" + ec.message() + ")");
   }
-  Image linear(r.width, r.height, 3), shown(r.width, r.height, 3);
+  Image linear(r.width, r.height, 3);
   std::copy(r.rgb.begin(), r.rgb.end(), linear.pixels.begin());
-  for (std::size_t k = 0; k + 2 < r.rgb.size(); k += 3)
-    preview_value(&r.rgb[k], preview, &shown.pixels[k]);
+  const Image shown = preview_image(r, preview);
   // formats::TempFile: locked, registered for the signal handlers, and any stale temporaries of a
   // killed render are removed first. The extension stays last: OpenImageIO picks the format by it.
   formats::TempFile exr_tmp(files.exr, ".exr"), png_tmp(files.png, ".png");

@@ -29,6 +29,10 @@ OutputFiles write_render_images(const std::string& exr_path, const RenderResult&
 // negative values give 0): scaled by 2^exposure, tone mapped (scene.hpp, ToneMap), sRGB-encoded.
 void preview_value(const float rgb[3], const Preview& preview, float out[3]);
 
+// The preview of a whole render: preview_value of every pixel (values in [0, 1], 3 channels), the
+// image the PNGs of `render` and the reports hold. Allocates the image.
+Image preview_image(const RenderResult& image, const Preview& preview);
+
 // Writes `image` to `path` through OpenImageIO (the format from the extension) under a temporary
 // name (formats::TempFile: locked, removed on a signal, stale ones of a killed writer removed
 // first) renamed when complete. Throws clothbake::Error(Input) naming the path; `path` is then

@@ -195,6 +195,8 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   Counters counters;
   const uint32_t spp = pass_options.spp;
 
+  // The backdrop, when no environment light is the background, is seen through the gaps.
+  const bool backdrop_behind = !impl.background && scene.background.max_component() > 0;
   // The direct lighting at the primary hit of camera ray (x, y) (image coordinates), with `spp`
   // evaluator samples over the pixel's footprint, or at the hit's point when path tracing.
   auto shade_ray = [&](double x, double y, uint32_t samples, bool point, eval::Rng& rng,
@@ -319,10 +321,9 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     }
     // The scene's backdrop straight through the gaps, as an environment's above (it lights nothing
     // else: it is not a light).
-    const Rgb& backdrop = scene.background;
-    if (m.cloth && !impl.background && (backdrop.r > 0 || backdrop.g > 0 || backdrop.b > 0) &&
+    if (m.cloth && backdrop_behind &&
         !occluded({shadow_origin(-wo_world), -wo_world}, scene.objects, 0.0, INFINITY))
-      radiance += bsdf(-wo_world, kDeltaBit, samples) * backdrop;
+      radiance += bsdf(-wo_world, kDeltaBit, samples) * scene.background;
     return radiance;
   };
   // One pixel of pass `pass`: the pixel centre's footprint, or spp jittered rays.

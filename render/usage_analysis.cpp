@@ -91,6 +91,12 @@ SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& sha
     }
   }
 
+  // The scene's backdrop, when no environment light is the background, is seen through the gaps.
+  const bool backdrop_behind =
+      scene.background.max_component() > 0 &&
+      std::none_of(scene.lights.begin(), scene.lights.end(),
+                   [](const Light& l) { return l.type == LightType::Environment; });
+
   const std::vector<Partial> empty_row(objects);
   std::vector<std::vector<Partial>> rows(std::size_t(h), empty_row);
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& range) {
@@ -162,14 +168,10 @@ SceneUsage analyse_usage(const Scene& scene, const std::vector<FabricShape>& sha
               ++p.lit_opposite;
           }
         }
-        // The scene's backdrop (no environment light) through the gaps: the delta lobe as well.
-        const Rgb& backdrop = scene.background;
-        const bool any_environment =
-            std::any_of(scene.lights.begin(), scene.lights.end(),
-                        [](const Light& l) { return l.type == LightType::Environment; });
-        const Vec3 behind = cr.ray.direction;
-        if (!any_environment && (backdrop.r > 0 || backdrop.g > 0 || backdrop.b > 0) &&
-            !occluded({shadow_ray_origin(hit, behind), behind}, scene.objects, 0.0, INFINITY))
+        // The backdrop through the gaps: the delta lobe as well.
+        if (backdrop_behind &&
+            !occluded({shadow_ray_origin(hit, cr.ray.direction), cr.ray.direction}, scene.objects,
+                      0.0, INFINITY))
           ++p.lit_opposite;
       }
     }

@@ -5,8 +5,8 @@
 //                    [--sheen-convention published|converged] [--cache DIR] [--json]
 //
 // Writes OUT.exr (linear float RGB) and OUT.png (the scene's [render] exposure and tone map, sRGB)
-// atomically (temporary names renamed
-// on success). Objects with `fabric =` are baked into the cache first (scene_bake.hpp).
+// atomically (temporary names renamed on success). Objects with `fabric =` are baked into the
+// cache first (scene_bake.hpp).
 // Exit codes: 1 bad options, 2 a bad scene, missing file or unwritable output, 3 an invalid asset.
 #include <fmt/format.h>
 #include <tbb/global_control.h>

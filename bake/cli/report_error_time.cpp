@@ -83,10 +83,7 @@ double loglog_at(const std::vector<std::pair<double, double>>& pts, double x, bo
 // The picture of one render as `clothbake render` previews it (the scene's exposure, tone map).
 void write_png(const fs::path& path, const render::RenderResult& r,
                const render::Preview& preview) {
-  Image img(r.width, r.height, 3);
-  for (std::size_t k = 0; k + 2 < r.rgb.size(); k += 3)
-    render::preview_value(&r.rgb[k], preview, &img.pixels[k]);
-  render::write_image_atomically(path, img, PixelType::UInt8);
+  render::write_image_atomically(path, render::preview_image(r, preview), PixelType::UInt8);
 }
 
 // A grey relative-error map, |x - r| / r of the channel mean, scaled to [0, 1] by `scale`.

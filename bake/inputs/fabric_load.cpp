@@ -54,7 +54,13 @@ const Range kWidthFraction{0.0, 1.0, true, false};                   // (0, 1]
 const Range kTwist{-90.0, 90.0, true, true};                         // (-90, 90) degrees
 const Range kMinCos{0.0, 0.95};                                      // [0, 0.95]
 
-const std::vector<std::string> kLengthUnits = {"tile", "um", "mm", "cm", "m", "in"};
+// "tile" (no physical size) and the physical units.
+const std::vector<std::string> kLengthUnits = [] {
+  std::vector<std::string> units = {"tile"};
+  units.insert(units.end(), inputs::kPhysicalLengthUnits.begin(),
+               inputs::kPhysicalLengthUnits.end());
+  return units;
+}();
 
 YarnMaterial parse_yarn(const TomlSection& s, const std::string& default_name) {
   s.check_keys({"name", "roughness", "optical_thickness", "specular_albedo", "diffuse_reflectance",

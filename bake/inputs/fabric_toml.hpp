@@ -104,8 +104,9 @@ class TomlSection {
 // "FILE:LINE:COLUMN" of a node (just FILE when toml++ has no position for it).
 std::string toml_location(const std::string& file, const toml::source_region& source);
 
-// Millimetres in one of the length units descriptions use ("um", "mm", "cm", "m", "in"); 0 for
-// "tile" and anything else (no physical size).
+// The physical length units descriptions use (fabric [tile] units, a scene's units), and their
+// length in mm; 0 for "tile" and anything else (no physical size).
+inline const std::vector<std::string> kPhysicalLengthUnits = {"um", "mm", "cm", "m", "in"};
 double length_unit_in_mm(std::string_view unit);
 
 }  // namespace clothbake::inputs

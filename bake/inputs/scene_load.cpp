@@ -160,22 +160,30 @@ double tiles_per_unit(const TomlSection& o, const render::Object& obj, const std
            "and tiles_per_unit are exclusive: give the tile's physical side (with the "
            "scene's units) or the tiles per world unit");
   if (o.has("tiles_per_unit")) return *o.real("tiles_per_unit", kPositive);
+  // The unit's length over a tile side, within tiles_per_unit's own range (naming `key`).
+  auto per_unit = [&](double tile_mm, const char* key) {
+    const double tiles = unit_mm / tile_mm;
+    if (!(tiles <= kPositive.hi))
+      o.fail(key, fmt::format("gives {} tiles per world unit, more than {}", tiles, kPositive.hi));
+    return tiles;
+  };
   if (o.has("tile_mm")) {
     const double tile_mm = *o.real("tile_mm", kPositive);
     if (!(unit_mm > 0))
       o.fail("tile_mm",
              "needs the scene's length unit: a top-level units = \"m\" (or \"cm\", "
              "\"mm\", \"in\") before the first table");
-    return unit_mm / tile_mm;
+    return per_unit(tile_mm, "tile_mm");
   }
   if (!(unit_mm > 0) || (obj.asset.empty() && fabric.empty())) return obj.tiles_per_unit;
+  const char* key = fabric.empty() ? "asset" : "fabric";
   const double tile_mm = fabric_tile_mm(o, obj, fabric);
   if (!(tile_mm > 0))
-    o.fail(fabric.empty() ? "asset" : "fabric",
-           fmt::format("= {}: the fabric gives no physical tile size ([tile] units = \"tile\"), so "
-                       "the scene's units cannot place it; give tile_mm or tiles_per_unit",
+    o.fail(key,
+           fmt::format("= {}: the fabric gives no physical tile size ([tile] units = \"tile\"), "
+                       "so the scene's units cannot place it; give tile_mm or tiles_per_unit",
                        fabric.empty() ? obj.asset : fabric));
-  return unit_mm / tile_mm;
+  return per_unit(tile_mm, key);
 }
 
 render::Object load_object(const TomlSection& o, std::size_t index, const fs::path& base,
@@ -219,9 +227,6 @@ render::Object load_object(const TomlSection& o, std::size_t index, const fs::pa
   if (o.has("asset")) obj.asset = resolve(o, "asset", base);
   if (o.has("fabric")) *fabric = resolve(o, "fabric", base);
   obj.tiles_per_unit = tiles_per_unit(o, obj, *fabric, unit_mm);
-  if (!(obj.tiles_per_unit <= 1e12) || !(obj.tiles_per_unit > 0))
-    o.fail("tile_mm",
-           fmt::format("gives {} tiles per world unit, outside (0, 1e12]", obj.tiles_per_unit));
   obj.diffuse = colour(o, "color", obj.diffuse, Range{0, 1});
   return obj;
 }
@@ -237,7 +242,7 @@ LoadedScene load_scene(const std::string& path) {
   const TomlSection root(root_table, path, "");
   root.check_keys({"units", "camera", "light", "object", "render"});
   double unit_mm = 0;  // the length of one world unit; 0: not given (arbitrary units)
-  if (const auto units = root.choice("units", {"um", "mm", "cm", "m", "in"}))
+  if (const auto units = root.choice("units", kPhysicalLengthUnits))
     unit_mm = length_unit_in_mm(*units);
   const fs::path base = fs::path(path).parent_path();
   LoadedScene out;

@@ -82,6 +82,11 @@ TEST(SceneUnits, MissingOrContradictoryScalesNameTheKey) {
   EXPECT_NE(bad_unit.find("\"mm\""), std::string::npos) << bad_unit;  // did you mean
   const std::string zero = message(scene_with("units = \"m\"", "tile_mm = 0\ncolor = 0.5\n"));
   EXPECT_NE(zero.find("object[0].tile_mm"), std::string::npos) << zero;
+  // A tile so small that the count leaves tiles_per_unit's range (1e15 per metre).
+  const std::string tiny =
+      message(scene_with("units = \"m\"", "fabric = \"plain.toml\"\ntile_mm = 1e-12\n"));
+  EXPECT_NE(tiny.find("object[0].tile_mm"), std::string::npos) << tiny;
+  EXPECT_NE(tiny.find("tiles per world unit"), std::string::npos) << tiny;
   // The fabric in tile units: the message says what to give instead.
   const std::string unknown_side =
       message(scene_with("units = \"m\"", "fabric = \"" + tile_units.toml + "\"\n"));
