@@ -455,7 +455,13 @@ bool DiskCache::store(const pipeline::Stage& stage, const pipeline::Artifacts& a
 void DiskCache::enforce_bound() {
   try {
     const CacheInfo info = cache_info(options_.dir);
-    if (info.bytes > options_.max_bytes) prune_cache(options_.dir, options_.max_bytes);
+    if (info.bytes <= options_.max_bytes) return;
+    // The entries this run was answered from stay: their payloads may not have been read yet (a
+    // later stage reads them), and removing one would be reported as a corrupt entry.
+    std::set<std::string> in_use;
+    for (const std::string& path : hit_paths_)
+      in_use.insert(fs::path(path).filename().string());
+    prune_cache(options_.dir, options_.max_bytes, in_use);
   } catch (const Error&) {
   }
 }
@@ -515,7 +521,8 @@ CacheInfo cache_info(const std::string& dir) {
   return info;
 }
 
-PruneResult prune_cache(const std::string& dir, uint64_t max_bytes) {
+PruneResult prune_cache(const std::string& dir, uint64_t max_bytes,
+                        const std::set<std::string>& in_use) {
   std::vector<EntryFile> temporary;
   std::vector<EntryFile> entries = list_entries(dir, &temporary);
   std::sort(entries.begin(), entries.end(), [](const EntryFile& a, const EntryFile& b) {
@@ -527,7 +534,7 @@ PruneResult prune_cache(const std::string& dir, uint64_t max_bytes) {
   PruneResult result;
   std::error_code ec;
   for (const auto& e : entries) {
-    if (total > max_bytes || max_bytes == 0) {
+    if ((total > max_bytes || max_bytes == 0) && !in_use.count(e.path.filename().string())) {
       if (fs::remove(e.path, ec)) {
         ++result.removed_entries;
         result.removed_bytes += e.bytes;

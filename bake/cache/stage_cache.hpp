@@ -120,6 +120,9 @@ struct PruneResult {
 };
 // Removes least recently used entries and assets (oldest mtime first; a hit refreshes the mtime)
 // until the rest fit in `max_bytes` (0: remove all), and temporary files older than an hour.
-PruneResult prune_cache(const std::string& dir, uint64_t max_bytes);
+// Files named in `in_use` (file names, not paths: the entries a running bake was answered from)
+// are never removed; they still count towards the bound.
+PruneResult prune_cache(const std::string& dir, uint64_t max_bytes,
+                        const std::set<std::string>& in_use = {});
 
 }  // namespace clothbake::cache
