@@ -16,7 +16,8 @@ void info(const std::string& message);
 void report_error(const std::string& message);
 // Every message that warn(), info() and report_error() print passes through `filter` first
 // (recorded warnings stay as given); nullptr prints them as given. clothbake's main() sets
-// cli::terminal_safe, so that control bytes in file names and keys never reach a terminal raw.
+// terminal_safe (bake/inputs/terminal_text.hpp), so that control bytes in file names and keys never
+// reach a terminal raw.
 void set_message_filter(std::string (*filter)(std::string_view));
 // Suppresses warn()/info() output (warnings are still recorded).
 void set_quiet(bool quiet);

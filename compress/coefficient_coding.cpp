@@ -151,22 +151,4 @@ std::vector<uint8_t> code_compressed_coefficients(const CompressedTableSet& set)
   return best;
 }
 
-void code_coefficient_sections(std::vector<formats::Section>& sections,
-                               const CompressedTableSet& set) {
-  if (set.empty()) return;
-  const auto kind = reader::RadianceTableKind(set.info.kind);
-  const uint32_t raw = reader::compressed_instance(kind, reader::CompressedPart::Coefficients);
-  const auto it = std::find_if(sections.begin(), sections.end(), [&](const formats::Section& s) {
-    return s.type == reader::SectionType::RadianceCompressedTables && s.instance == raw;
-  });
-  if (it == sections.end()) throw_internal_error("coefficient coding: no part 5 to replace");
-  const std::vector<uint8_t> stream = code_compressed_coefficients(set);
-  if (stream.size() >= set.coefficients.size() * sizeof(int16_t)) return;  // raw is smaller
-  const uint16_t version = it->version;
-  *it = formats::make_array_section<uint8_t>(
-      reader::SectionType::RadianceCompressedTables,
-      reader::compressed_instance(kind, reader::CompressedPart::CodedCoefficients), stream,
-      {uint32_t(stream.size())}, version);
-}
-
 }  // namespace clothbake::compress

@@ -1,6 +1,8 @@
 // C-PCA compression and quantisation of one table kind (compressed_set.hpp).
 #include "compress/compressed_set.hpp"
 
+#include "compress/coefficient_coding.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -270,9 +272,10 @@ std::vector<formats::Section> compressed_sections(const CompressedTableSet& set)
   out.push_back(formats::make_array_section<reader::Half>(SectionType::RadianceCompressedTables,
                                                           instance(CompressedPart::Basis),
                                                           set.basis, {images, bins}));
-  out.push_back(formats::make_array_section<int16_t>(
-      SectionType::RadianceCompressedTables, instance(CompressedPart::Coefficients),
-      set.coefficients, {uint32_t(set.coefficients.size())}));
+  const std::vector<uint8_t> coded = code_compressed_coefficients(set);
+  out.push_back(formats::make_array_section<uint8_t>(SectionType::RadianceCompressedTables,
+                                                     instance(CompressedPart::Coefficients), coded,
+                                                     {uint32_t(coded.size())}));
   return out;
 }
 

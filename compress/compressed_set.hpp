@@ -58,7 +58,9 @@ struct CompressionStats {
 CompressedTableSet compress_tables(const DirectionalTexels& data, const CpcaOptions& options,
                                    CompressionStats* stats = nullptr);
 
-// The six sections (none for an empty set). Throws Error(Internal) for an inconsistent set.
+// The six sections (none for an empty set), part 5 the entropy-coded coefficients
+// (coefficient_coding.hpp); set.info.flags as set (kCompressedPlannedFlag for a planned kind).
+// Throws Error(Internal) for an inconsistent set.
 std::vector<formats::Section> compressed_sections(const CompressedTableSet& set);
 
 // Decompressed texel values of a set with the reader's arithmetic (scale * half basis * weight),

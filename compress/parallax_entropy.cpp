@@ -1,17 +1,14 @@
-// Encoder of the entropy-coded parallax section (parallax_entropy.hpp).
+// The block coder's encoder (parallax_entropy.hpp).
 #include "compress/parallax_entropy.hpp"
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 
 #include "common/error.hpp"
 #include "formats/reader/parallax_entropy.hpp"
-#include "formats/reader/parallax_sections.hpp"
-#include "formats/writer/asset_writer.hpp"
 
 namespace clothbake::compress {
 namespace {
@@ -199,93 +196,6 @@ std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8
   return out;
 }
 
-EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
-                                      const std::vector<uint8_t>& keep) {
-  const auto begin = std::chrono::steady_clock::now();
-  if (packed.bits != 8) throw_internal_error("entropy_code_parallax: needs 8-bit codes");
-  const uint32_t n = uint32_t(packed.resolution);
-  const std::size_t d_count = std::size_t(packed.dirs) * packed.dirs;
-  const uint64_t plane = uint64_t(n) * n;
-  if (!keep.empty() && keep.size() != d_count)
-    throw_internal_error("entropy_code_parallax: keep needs one entry per direction");
-  auto kept = [&](std::size_t d) { return keep.empty() || keep[d] != 0; };
-  EntropyParallax out;
-  {
-    const int mid = packed.dirs / 2;
-    std::size_t d = std::size_t(mid) * packed.dirs + mid;
-    for (std::size_t i = 0; !kept(d) && i < d_count; ++i)
-      d = i;
-    out.candidates = parallax_shift_candidates(packed.codes.data() + d * plane, n);
-  }
-  // Shift per block by the entropy of its own residuals (an estimate of its coded size).
-  std::vector<ShiftChoice> choice(d_count);
-  tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
-    if (!kept(d)) {  // an empty block: no counts
-      choice[d].counts.assign(std::size_t(kEntropyContexts) * 256, 0);
-      return;
-    }
-    const uint8_t* codes = packed.codes.data() + d * plane;
-    choice[d] = choose_shift(out.candidates, [&](uint32_t sx, uint32_t sy) {
-      return parallax_residual_counts(codes, n, sx, sy);
-    });
-  });
-  // One table set per row of the direction grid (counts summed in block order: deterministic).
-  const uint32_t dirs = uint32_t(packed.dirs);
-  out.groups = dirs;
-  out.tables.assign(std::size_t(dirs) * kEntropyContexts * 256, 0);
-  for (uint32_t g = 0; g < dirs; ++g) {
-    std::vector<uint64_t> sum(std::size_t(kEntropyContexts) * 256, 0);
-    for (uint32_t i = 0; i < dirs; ++i) {
-      const ShiftChoice& c = choice[std::size_t(g) * dirs + i];
-      for (std::size_t k = 0; k < sum.size(); ++k)
-        sum[k] += c.counts[k];
-    }
-    const std::vector<uint16_t> f = parallax_frequencies(sum);
-    std::copy(f.begin(), f.end(), out.tables.begin() + std::ptrdiff_t(g) * f.size());
-  }
-  std::vector<std::vector<uint8_t>> blocks(d_count);
-  std::vector<uint8_t> shifted(d_count, 0);
-  tbb::parallel_for(std::size_t(0), d_count, [&](std::size_t d) {
-    if (!kept(d)) return;  // empty block
-    const uint32_t g = uint32_t(d / dirs);
-    blocks[d] =
-        encode_parallax_block(packed.codes.data() + d * plane, n, choice[d].sx, choice[d].sy, g,
-                              out.tables.data() + std::size_t(g) * kEntropyContexts * 256);
-    shifted[d] = (choice[d].sx | choice[d].sy) != 0;
-  });
-  out.offsets.assign(d_count + 1, 0);
-  for (std::size_t d = 0; d < d_count; ++d) {
-    out.offsets[d + 1] = out.offsets[d] + blocks[d].size();
-    out.shifted_blocks += shifted[d];
-  }
-  out.stream.reserve(out.offsets.back());
-  for (auto& b : blocks)
-    out.stream.insert(out.stream.end(), b.begin(), b.end());
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-  return out;
-}
-
-std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& p,
-                                                        const EntropyParallax& coded) {
-  std::vector<formats::Section> out = compressed_parallax_sections(p);  // info, steps, codes
-  out.pop_back();                                                       // not the plain codes
-  for (auto& s : out)
-    s.type = reader::SectionType::ParallaxEntropy;
-  const uint32_t d = uint32_t(p.dirs * p.dirs);
-  if (coded.stream.size() > 0xFFFFFFFFull)
-    throw_input_error("parallax: the entropy-coded table exceeds 4 GiB");
-  out.push_back(formats::make_array_section<uint64_t>(reader::SectionType::ParallaxEntropy,
-                                                      reader::kEntropyParallaxOffsetsInstance,
-                                                      coded.offsets, {d + 1}));
-  out.push_back(formats::make_array_section<uint8_t>(
-      reader::SectionType::ParallaxEntropy, reader::kEntropyParallaxStreamInstance, coded.stream,
-      {uint32_t(coded.stream.size())}));
-  out.push_back(formats::make_array_section<uint16_t>(
-      reader::SectionType::ParallaxEntropy, reader::kEntropyParallaxTablesInstance, coded.tables,
-      {coded.groups, uint32_t(reader::kEntropyContexts), 256u}));
-  return out;
-}
-
 double residual_entropy_bits(const std::vector<uint64_t>& counts) {
   double bits = 0.0;
   for (std::size_t c = 0; c < counts.size() / 256; ++c) {
@@ -301,24 +211,6 @@ double residual_entropy_bits(const std::vector<uint64_t>& counts) {
 
 std::size_t kept_direction_count(const std::vector<uint8_t>& keep) {
   return std::size_t(std::count_if(keep.begin(), keep.end(), [](uint8_t k) { return k != 0; }));
-}
-
-std::vector<formats::Section> planned_entropy_parallax_sections(const QuantisedParallax& packed,
-                                                                const EntropyParallax& coded,
-                                                                const std::vector<uint8_t>& keep) {
-  const std::size_t kept = kept_direction_count(keep);
-  if (kept == 0 || keep.size() + 1 != coded.offsets.size())
-    throw_internal_error("planned entropy parallax: keep does not match the coded table");
-  std::vector<formats::Section> out = entropy_parallax_sections(packed, coded);
-  for (formats::Section& s : out)
-    if (s.instance == reader::kEntropyParallaxInfoInstance) {
-      reader::CompressedParallaxInfoRecord info;
-      std::memcpy(&info, s.payload.data(), sizeof info);
-      info.rms_offset_error *= std::sqrt(double(keep.size()) / double(kept));
-      info.flags |= reader::kEntropyPlannedFlag;
-      std::memcpy(s.payload.data(), &info, sizeof info);
-    }
-  return out;
 }
 
 }  // namespace clothbake::compress

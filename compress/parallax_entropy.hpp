@@ -1,18 +1,12 @@
-// Encoder of the entropy-coded parallax section (format 1.2, parallax_entropy 0x0203; the block
-// format and the decoder: formats/reader/parallax_entropy.hpp; why: docs/compression.md,
-// "Entropy-coded parallax").
+// The block coder's encoder: one plane of byte symbols predicted (LOCO-I median edge detector or
+// the tile's repeat shift) and coded with static rANS (the block format and the decoder:
+// formats/reader/parallax_entropy.hpp; docs/format.md, "The block coder"). The feature maps
+// (compress/map_entropy.hpp) code their byte planes with it, the hierarchical parallax
+// (compress/parallax_hierarchy.hpp) and the coded C-PCA coefficients (coefficient_coding.hpp) use
+// its rANS and frequency helpers.
 //
-// Input: the 8-bit per-direction codes of compress/parallax_codes.hpp (bits = 8). Each direction
-// is one block, coded independently (so that a reader decodes only the directions it uses). For
-// each block the encoder estimates the coded size (the entropy of its residuals) without a shift
-// and with each candidate shift and keeps the smallest; the candidates are the tile's
-// translational self-similarities, found once per table on one direction's codes (the shifts
-// (sx, sy) with the most exactly repeated codes). The frequency tables are then those of each
-// group of blocks (one group per row j of the direction grid), and every block is coded with its
-// group's tables.
-//
-// Deterministic: blocks are coded in parallel (TBB) but each one's bytes depend only on its codes
-// and the candidate list, which is computed serially. C++20.
+// Deterministic: the shift search runs rows of shifts in parallel (TBB) and concatenates them in
+// order, so its result does not depend on the thread count. C++20.
 #pragma once
 
 #include <cstddef>
@@ -20,19 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "compress/parallax_codes.hpp"
-
 namespace clothbake::compress {
-
-struct EntropyParallax {
-  std::vector<uint64_t> offsets;  // D + 1 block offsets into stream
-  std::vector<uint8_t> stream;    // the blocks, concatenated
-  std::vector<uint16_t> tables;   // groups x 5 x 256 frequencies
-  uint32_t groups = 0;
-  std::vector<std::pair<uint32_t, uint32_t>> candidates;  // the shifts tried
-  uint32_t shifted_blocks = 0;                            // blocks that use a shift
-  double seconds = 0.0;
-};
 
 // Counts of 256 symbols scaled to frequencies summing to 4096 (reader::kRansScale), every present
 // symbol at least 1 (all 0 when no symbol is present). Deterministic.
@@ -63,17 +45,6 @@ std::vector<std::pair<uint32_t, uint32_t>> parallax_shift_candidates(const uint8
                                                                      uint32_t n, int count = 3,
                                                                      uint32_t min_length = 1);
 
-// Codes every direction of an 8-bit table. Precondition: packed.bits == 8. With `keep` (one entry
-// per direction, a scene plan's view bins; empty: all), a direction whose entry is 0 gets an
-// empty block and adds nothing to its group's tables (format 1.3, kEntropyPlannedFlag); the
-// shift candidates come from the middle direction, or the first kept one if that is left out.
-EntropyParallax entropy_code_parallax(const QuantisedParallax& packed,
-                                      const std::vector<uint8_t>& keep = {});
-
-// ParallaxEntropy instances 0 (info, bits 8), 1 (steps), 2 (offsets), 3 (stream), 4 (tables).
-std::vector<formats::Section> entropy_parallax_sections(const QuantisedParallax& packed,
-                                                        const EntropyParallax& coded);
-
 // Shannon estimate, in bits, of coding residuals with these counts (rows of 256, one per context,
 // as parallax_residual_counts returns): the sum over contexts of −k log2(k / row total).
 double residual_entropy_bits(const std::vector<uint64_t>& counts);
@@ -102,13 +73,5 @@ ShiftChoice choose_shift(const std::vector<std::pair<uint32_t, uint32_t>>& candi
 
 // Directions a plan's keep mask keeps (its non-zero entries; one entry per view bin).
 std::size_t kept_direction_count(const std::vector<uint8_t>& keep);
-
-// The planned form (format 1.3) of a table coded with `keep` (entropy_code_parallax): the same
-// instances, the info record flagged reader::kEntropyPlannedFlag (coverage: bin_map instance 1,
-// written by the scene plan) and its RMS offset error rescaled from all directions to the kept
-// ones (the left-out ones cast no rays: error exactly 0). Precondition: keep has a non-zero entry.
-std::vector<formats::Section> planned_entropy_parallax_sections(const QuantisedParallax& packed,
-                                                                const EntropyParallax& coded,
-                                                                const std::vector<uint8_t>& keep);
 
 }  // namespace clothbake::compress

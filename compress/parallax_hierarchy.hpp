@@ -1,5 +1,5 @@
-// Encoder of the hierarchical parallax form (format 1.5: payload version 2 of parallax_entropy;
-// the prediction, the block format and the decoder: formats/reader/parallax_hierarchy.hpp; why
+// Encoder of the compressed parallax (the hierarchical form, sections parallax_entropy; the
+// prediction, the block format and the decoder: formats/reader/parallax_hierarchy.hpp; why
 // and what it measured: docs/compression.md, "Hierarchical parallax").
 //
 // Quantisation. Each direction d gets its own step from the error target: a uniform quantiser of
@@ -21,11 +21,12 @@
 // warns.)
 //
 // Coding. Every block is predicted from its references (parallax_hierarchy.hpp) and coded with the
-// rANS coder of the 8-bit form; each block tries no shift and the table's translational
-// self-similarities (parallax_shift_candidates on the middle direction's codes) and keeps the one
-// with the smallest estimated size. Blocks share frequency tables by group: all in one group, one
-// group per level, or one per level and ring of the direction grid (hierarchical_group), whichever
-// gives the smallest estimated total with the tables' 11 776 bytes each.
+// block coder's rANS (compress/parallax_entropy.hpp); each block tries no shift and the table's
+// translational self-similarities (parallax_shift_candidates on the middle direction's codes) and
+// keeps the one with the smallest estimated size. Blocks share frequency tables by group: all in
+// one group, one group per level, or one per level and ring of the direction grid
+// (hierarchical_group), whichever gives the smallest estimated total with the tables' 11 776 bytes
+// each.
 //
 // Deterministic: blocks are measured and coded in parallel (TBB), but each block's bytes depend
 // only on its codes and its references', and the tables are summed in block order. C++20. Errors:
@@ -37,6 +38,7 @@
 #include <vector>
 
 #include "compress/parallax_codes.hpp"
+#include "formats/writer/asset_writer.hpp"
 
 namespace clothbake::compress {
 
@@ -52,7 +54,7 @@ struct HierarchicalParallax {
   double share_above_quarter = 0.0;  // share of entries with offset error > 0.25 texel
   double max_depth_error = 0.0;      // tile-side units
   int quantisation_rounds = 0;       // how often the steps were made (1 unless shrunk)
-  bool planned = false;              // only the kept directions are stored (format 1.5 planned)
+  bool planned = false;              // only the kept directions are stored (kEntropyPlannedFlag)
   uint32_t max_code = 0;
   // The coded form.
   std::vector<uint64_t> offsets;  // D + 1 block offsets into stream
@@ -88,7 +90,7 @@ std::vector<uint8_t> encode_hierarchical_block(const HierarchicalParallax& p, ui
                                                const uint16_t* freq);
 
 // parallax_entropy instances 0 (info: bits 16, flags 0 or kEntropyPlannedFlag), 1 (steps),
-// 2 (offsets), 3 (stream), 4 (tables {G, 23, 256}) and 5 (weights), all of payload version 2.
+// 2 (offsets), 3 (stream), 4 (tables {G, 23, 256}) and 5 (weights), all of payload version 1.
 std::vector<formats::Section> hierarchical_parallax_sections(const HierarchicalParallax& p);
 
 }  // namespace clothbake::compress

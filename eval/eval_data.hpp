@@ -53,11 +53,11 @@ struct EvalData {
   reader::ParallaxView parallax;
   reader::VisibilityAsgView visibility;
   reader::VisibilityClusterView clusters;
-  // The clusters' visibility basis (format 1.6; not open for older assets, whose control variate
-  // then has rank 0 with the stored cluster means).
+  // The clusters' visibility basis (not open for an asset without it, whose control variate then
+  // has rank 0 with the stored cluster means).
   reader::VisibilityBasisView basis;
   TableSource specular, gap;
-  // A scene-planned asset (format 1.2): what its bake left out (planned false: nothing).
+  // A scene-planned asset: what its bake left out (planned false: nothing).
   reader::ScenePlanRecord plan{};
   bool planned = false;
   FootprintSums sums;                  // multiscale-paper's footprint sums

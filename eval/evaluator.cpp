@@ -208,7 +208,7 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   });
   if (!built)
     return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate the footprint sums");
-  // The visibility basis (format 1.6): optional; it must describe the label map's clusters.
+  // The visibility basis: optional; it must describe the label map's clusters.
   s = d->basis.open(asset);
   if (s.code() == ErrorCode::NotFound) {
     d->basis = reader::VisibilityBasisView();

@@ -42,27 +42,22 @@ void check_texels(SectionType type, std::size_t have, std::size_t texels, uint32
                       std::to_string(n) + " x " + std::to_string(n) + ")");
 }
 
-// NaN/Inf messages name the element's multi-index [y, x] or [y, x, channel].
-template <class T>
-Section scalar_map(SectionType type, const std::vector<T>& values, std::size_t texels, uint32_t n) {
-  check_texels(type, values.size(), texels, n);
-  return make_array_section<T>(type, 0, values, {n, n});
+// yarn_id, the one map stored as a plain typed array.
+Section yarn_id_map(const std::vector<uint16_t>& values, std::size_t texels, uint32_t n) {
+  check_texels(SectionType::YarnIdMap, values.size(), texels, n);
+  return make_array_section<uint16_t>(SectionType::YarnIdMap, 0, values, {n, n});
 }
 
-Section vector_map(SectionType type, const std::vector<Vec3f>& values, std::size_t texels,
-                   uint32_t n) {
-  check_texels(type, values.size(), texels, n);
-  std::span<const float> flat(values.empty() ? nullptr : values.front().data(), values.size() * 3);
-  return make_array_section<float>(type, 0, flat, {n, n, 3});
-}
+// Payload version of the code arrays (an intermediate form, coded by compress/map_entropy.hpp).
+constexpr uint16_t kCodesVersion = 1;
 
-// Refuses NaN/Inf before a packed encoding would hide them (the f32 path's make_array_section
-// checks its own values): names the map and the texel.
+// Refuses NaN/Inf before the 16-bit codes would hide them: names the map, the element and the
+// texel.
 void check_finite_map(SectionType type, const float* values, std::size_t count, uint32_t channels,
                       uint32_t n) {
   for (std::size_t i = 0; i < count; ++i)
     if (!std::isfinite(values[i])) {
-      // The f32 path's wording (make_array_section): element index and [y, x(, channel)].
+      // make_array_section's wording: element index and [y, x(, channel)].
       const std::size_t t = i / channels;
       throw_input_error(std::string("refusing to write a non-finite value: ") +
                         reader::section_type_name(type) + " element " + std::to_string(i) + " [" +
@@ -83,8 +78,7 @@ Section packed_height(const std::vector<float>& height, std::size_t texels, uint
                         " tile sides, beyond the f16 range of the stored map (|h| <= 65504)");
     codes[t] = formats::float_to_half(height[t]);
   }
-  return make_array_section<reader::Half>(SectionType::HeightMap, 0, codes, {n, n},
-                                          reader::kFeatureMapPackedVersion);
+  return make_array_section<reader::Half>(SectionType::HeightMap, 0, codes, {n, n}, kCodesVersion);
 }
 
 Section packed_unit_vectors(SectionType type, const std::vector<Vec3f>& values, std::size_t texels,
@@ -94,7 +88,7 @@ Section packed_unit_vectors(SectionType type, const std::vector<Vec3f>& values, 
   std::vector<int16_t> codes(values.size() * 2);
   for (std::size_t t = 0; t < values.size(); ++t)
     formats::unit_to_octahedral(values[t].data(), codes.data() + 2 * t);
-  return make_array_section<int16_t>(type, 0, codes, {n, n, 2}, reader::kFeatureMapPackedVersion);
+  return make_array_section<int16_t>(type, 0, codes, {n, n, 2}, kCodesVersion);
 }
 
 Section packed_unorm(SectionType type, const float* values, std::size_t count, uint32_t channels,
@@ -106,7 +100,7 @@ Section packed_unorm(SectionType type, const float* values, std::size_t count, u
     codes[i] = formats::float_to_unorm16(values[i]);
   std::vector<uint32_t> dims = {n, n};
   if (channels > 1) dims.push_back(channels);
-  return make_array_section<uint16_t>(type, 0, codes, dims, reader::kFeatureMapPackedVersion);
+  return make_array_section<uint16_t>(type, 0, codes, dims, kCodesVersion);
 }
 
 }  // namespace
@@ -167,31 +161,22 @@ std::vector<Section> fabric_record_sections(const Fabric& fabric) {
   return sections;
 }
 
-std::vector<Section> feature_map_sections(const FabricMaps& maps, MapEncoding encoding) {
+std::vector<Section> feature_map_codes(const FabricMaps& maps) {
   if (maps.resolution <= 0)
     throw_input_error("feature maps have resolution " + std::to_string(maps.resolution) +
                       "; expected a positive N");
   const uint32_t n = uint32_t(maps.resolution);
   const std::size_t texels = maps.texel_count();
   std::vector<Section> sections;
-  if (encoding == MapEncoding::Packed) {
-    sections.push_back(packed_height(maps.height, texels, n));
-    sections.push_back(packed_unit_vectors(SectionType::TangentMap, maps.tangent, texels, n));
-    sections.push_back(packed_unit_vectors(SectionType::NormalMap, maps.normal, texels, n));
-    sections.push_back(
-        packed_unorm(SectionType::GapMap, maps.gap.data(), maps.gap.size(), 1, texels, n));
-    sections.push_back(scalar_map(SectionType::YarnIdMap, maps.yarn_id, texels, n));
-    sections.push_back(packed_unorm(SectionType::AlbedoMap,
-                                    maps.albedo.empty() ? nullptr : maps.albedo.front().data(),
-                                    maps.albedo.size() * 3, 3, texels, n));
-    return sections;
-  }
-  sections.push_back(scalar_map(SectionType::HeightMap, maps.height, texels, n));
-  sections.push_back(vector_map(SectionType::TangentMap, maps.tangent, texels, n));
-  sections.push_back(vector_map(SectionType::NormalMap, maps.normal, texels, n));
-  sections.push_back(scalar_map(SectionType::GapMap, maps.gap, texels, n));
-  sections.push_back(scalar_map(SectionType::YarnIdMap, maps.yarn_id, texels, n));
-  sections.push_back(vector_map(SectionType::AlbedoMap, maps.albedo, texels, n));
+  sections.push_back(packed_height(maps.height, texels, n));
+  sections.push_back(packed_unit_vectors(SectionType::TangentMap, maps.tangent, texels, n));
+  sections.push_back(packed_unit_vectors(SectionType::NormalMap, maps.normal, texels, n));
+  sections.push_back(
+      packed_unorm(SectionType::GapMap, maps.gap.data(), maps.gap.size(), 1, texels, n));
+  sections.push_back(yarn_id_map(maps.yarn_id, texels, n));
+  sections.push_back(packed_unorm(SectionType::AlbedoMap,
+                                  maps.albedo.empty() ? nullptr : maps.albedo.front().data(),
+                                  maps.albedo.size() * 3, 3, texels, n));
   return sections;
 }
 

@@ -362,7 +362,7 @@ CompressedVerifyReport verify_compressed(const reader::Asset& asset, const Fabri
     r.decoded_bytes = tables.decoded_bytes();
     // Ranks and stored bytes from the sections.
     r.min_rank = 1 << 30;
-    for (uint32_t p = 0; p <= uint32_t(reader::CompressedPart::CodedCoefficients); ++p) {
+    for (uint32_t p = 0; p < reader::kCompressedPartCount; ++p) {
       reader::SectionInfo si;
       if (asset
               .find(reader::SectionType::RadianceCompressedTables,

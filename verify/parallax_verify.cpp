@@ -34,11 +34,9 @@ uint64_t stored_bytes(const reader::Asset& asset, reader::SectionType type) {
 }  // namespace
 
 bool has_compressed_parallax(const reader::Asset& asset) {
-  for (uint32_t i = 0; i < 5; ++i) {
+  for (uint32_t i = 0; i < 6; ++i) {
     reader::SectionInfo info;
-    if (asset.find(reader::SectionType::ParallaxCompressed, i, &info).ok() ||
-        asset.find(reader::SectionType::ParallaxEntropy, i, &info).ok())
-      return true;
+    if (asset.find(reader::SectionType::ParallaxEntropy, i, &info).ok()) return true;
   }
   return false;
 }
@@ -56,7 +54,7 @@ ParallaxVerifyReport verify_parallax(const reader::Asset& asset, const Fabric& f
   report.dirs = dirs;
   report.min_cos = packed.info().min_cos;
   report.bits = int(packed.compressed_info().bits);
-  report.section = packed.is_entropy_coded() ? "parallax_entropy" : "parallax_compressed";
+  report.section = "parallax_entropy";
 
   // The raw reference: the asset's own, else recomputed (the bake's ray casting) and held in an
   // in-memory asset so that the same reader answers both.
@@ -160,10 +158,7 @@ ParallaxVerifyReport verify_parallax(const reader::Asset& asset, const Fabric& f
       report.classes[c].rms_error = std::sqrt(class_err2[c] / double(report.classes[c].footprints));
 
   // Sizes.
-  // The form the view read (an asset holds one; parallax_entropy is preferred when both are).
-  report.compressed_bytes =
-      stored_bytes(asset, packed.is_entropy_coded() ? reader::SectionType::ParallaxEntropy
-                                                    : reader::SectionType::ParallaxCompressed);
+  report.compressed_bytes = stored_bytes(asset, reader::SectionType::ParallaxEntropy);
   report.raw_bytes = 64 + report.entries * 6;
   report.ratio =
       report.compressed_bytes > 0 ? double(report.raw_bytes) / double(report.compressed_bytes) : 0;

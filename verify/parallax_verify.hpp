@@ -12,7 +12,8 @@
 //    tile, many tiles) on random footprints and view directions (the sampled upper-hemisphere
 //    vectors, clamped onto the cap as every query does): |offset of the compressed footprint mean
 //    - offset of the raw footprint mean|, RMS and maximum per class;
-//  - the size ratio: the raw form's bytes (16-bit codes + u32 SATs + info, what format 1.0 stores)
+//  - the size ratio: the raw form's bytes (16-bit codes + u32 SATs + info, what an uncompressed
+//  bake stores)
 //    over the compressed sections' stored bytes.
 // Thresholds (each optional except the two defaults, the targets of docs/performance.md): RMS
 // per-texel error (default 0.05 texel), maximum, share above 0.25 texel, RMS footprint error of
@@ -56,7 +57,7 @@ struct ParallaxVerifyReport {
   int resolution = 0, dirs = 0;
   double min_cos = 0.0;
   int bits = 0;                           // of the compressed codes
-  std::string section;                    // "parallax_entropy" or "parallax_compressed"
+  std::string section;                    // "parallax_entropy"
   bool raw_reference_from_asset = false;  // false: recomputed from the fabric
   uint64_t entries = 0;                   // texels x directions
   double rms_error = 0.0, max_error = 0.0, share_above_quarter = 0.0;  // per texel, texels

@@ -19,11 +19,11 @@
 #include "bake/cli/command.hpp"
 #include "bake/cli/depfile.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/scene_plan.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/plan.hpp"
 #include "bake/pipeline/progress.hpp"
+#include "bake/reports/scene_plan.hpp"
 #include "bake/stages/cache_support.hpp"
 #include "bake/stages/memory_estimate.hpp"
 #include "bake/stages/stages.hpp"
@@ -225,7 +225,7 @@ Action setup_bake(CLI::App& app) {
     if (!compression.given().empty())
       request.seeds.put(stages::kCompressSettingsArtifact, compression);
     if (o->resolution) request.seeds.put(stages::kFabricResolutionArtifact, *o->resolution);
-    std::optional<ScenePlanSeeds> planned;
+    std::optional<reports::ScenePlanSeeds> planned;
     if (!o->scene.empty()) {
       if (o->no_compress || o->keep_raw || !o->stages.empty())
         throw Error(ExitCode::Usage,
@@ -235,7 +235,7 @@ Action setup_bake(CLI::App& app) {
         throw Error(ExitCode::Usage,
                     "--scene plans the fabric at its own resolution: it cannot be combined with "
                     "--resolution (set [bake] resolution in the fabric instead)");
-      planned = seed_scene_plan(o->scene, o->fabric, &request);
+      planned = reports::seed_scene_plan(o->scene, o->fabric, &request);
       for (const auto& what : planned->left_out)
         info("scene plan: left out " + what);
     }

@@ -7,7 +7,7 @@
 #include "bake/cache/stage_cache.hpp"
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/terminal_text.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "common/error.hpp"
 
 namespace clothbake::cli {

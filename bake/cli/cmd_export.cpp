@@ -148,10 +148,10 @@ Image section_export_image(const Asset& asset, const ExportOptions& o, SectionTy
   status = asset.verify_section(section);
   if (!status.ok()) throw Error(ExitCode::InvalidAsset, o.asset + ": " + formats::describe(status));
   const std::string label = o.section + " (instance " + std::to_string(o.instance) + ")";
-  // Feature maps of format 1.4 (payload version 2 or 3: f16, octahedral, unorm16, entropy-coded)
-  // are exported as the floats the reader decodes them to, like the f32 maps of version 1.
+  // The coded feature maps (16-bit codes, entropy-coded) are exported as the floats the reader
+  // decodes them to.
   const uint32_t t = uint32_t(type);
-  if (t >= 0x0100 && t <= 0x0105 && t != 0x0104 && o.instance == 0 && section.version >= 2) {
+  if (t >= 0x0100 && t <= 0x0105 && t != 0x0104 && o.instance == 0) {
     reader::FeatureMaps maps;
     status = reader::read_feature_maps(asset, &maps);
     if (!status.ok())

@@ -13,7 +13,7 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/terminal_text.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/memory_estimate.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -120,7 +120,7 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
   } catch (const nlohmann::json::exception&) {
     raw_total = int64_t(asset.file_size());
   }
-  // A scene-planned asset (format 1.2): what its bake left out, from the binary record (the
+  // A scene-planned asset: what its bake left out, from the binary record (the
   // metadata's words when present).
   ScenePlanRecord plan{};
   bool planned = false;

@@ -6,10 +6,10 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_report.hpp"
 #include "bake/inputs/map_stats.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "common/diagnostics.hpp"
 
 namespace clothbake::cli {

@@ -11,10 +11,10 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/fabric_report.hpp"
 #include "bake/inputs/fabric_write.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "bake/inputs/weave.hpp"
 #include "common/diagnostics.hpp"
 

@@ -12,8 +12,8 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/scene_plan.hpp"
-#include "bake/cli/terminal_text.hpp"
+#include "bake/inputs/terminal_text.hpp"
+#include "bake/reports/scene_plan.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -25,15 +25,15 @@ struct PlanCliOptions {
 
 int run_plan(const PlanCliOptions& o) {
   const inputs::LoadedScene loaded = inputs::load_scene(o.scene);
-  const ScenePlan plan = plan_scene(loaded);
+  const reports::ScenePlan plan = reports::plan_scene(loaded);
   if (o.json) {
-    print_json(plan_json(plan));
+    print_json(reports::plan_json(plan));
     return 0;
   }
   std::printf("plan for %s (error budget %.3g %%)\n", terminal_safe(plan.scene).c_str(),
               100 * plan.max_error);
   if (plan.fabrics.empty()) std::printf("  no object names a fabric: nothing to plan\n");
-  for (const FabricPlan& p : plan.fabrics) {
+  for (const reports::FabricPlan& p : plan.fabrics) {
     const render::ObjectUsage& u = p.usage;
     std::printf("%s: %s (%d^2 texels)\n", terminal_safe(p.object_name).c_str(),
                 terminal_safe(p.fabric_path).c_str(), p.resolution);

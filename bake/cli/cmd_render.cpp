@@ -22,13 +22,14 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/scene_bake.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/scene_load.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "bake/pipeline/progress.hpp"
+#include "bake/reports/scene_bake.hpp"
 #include "common/error.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
+#include "render/sample_limit.hpp"
 
 namespace clothbake::cli {
 namespace {
@@ -62,9 +63,10 @@ int run_render(const RenderCliOptions& o) {
     loaded.scene.camera.width = wh[0];
     loaded.scene.camera.height = wh[1];
   }
-  check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp, "--spp");
+  render::check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp,
+                               "--spp");
   if (o.exposure) loaded.scene.preview.exposure = *o.exposure;
-  bake_scene_fabrics(loaded, o.cache, /*quiet=*/o.json);
+  reports::bake_scene_fabrics(loaded, o.cache, /*quiet=*/o.json);
   std::unique_ptr<tbb::global_control> limit;
   if (o.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -36,12 +36,12 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/report_error_time.hpp"
-#include "bake/cli/report_plan.hpp"
-#include "bake/cli/report_stability.hpp"
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/pipeline/driver.hpp"
 #include "bake/pipeline/stage.hpp"
+#include "bake/reports/report_error_time.hpp"
+#include "bake/reports/report_plan.hpp"
+#include "bake/reports/report_stability.hpp"
 #include "bake/stages/stages.hpp"
 #include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
@@ -116,6 +116,17 @@ std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<
   return k;
 }
 
+// Prints a report's JSON document (--json) or its summary; exit 0, or exit 5 with its failure
+// after printing.
+int print_report(const reports::ReportOutput& report, bool json) {
+  if (json)
+    print_json(report.doc);
+  else
+    std::fputs(report.summary.c_str(), stdout);
+  if (report.failure) throw Error(ExitCode::VerificationFailed, *report.failure);
+  return 0;
+}
+
 // The sweep of `report compression` (its options: ReportCliOptions).
 int run_compression_report(const ReportCliOptions& o);
 
@@ -167,7 +178,8 @@ Action setup_report(CLI::App& app) {
   add_json_flag(*compression, o->json, "print the rows as JSON on stdout");
 
   // error-time
-  auto et = std::make_shared<ErrorTimeOptions>();
+  auto et = std::make_shared<reports::ErrorTimeOptions>();
+  auto json = std::make_shared<bool>(false);                     // --json of whichever report runs
   auto et_cli = std::make_shared<std::array<std::string, 3>>();  // methods, spp, image size
   (*et_cli)[0] = "multiscale,multiscale-paper,brute,brute-path";
   (*et_cli)[1] = "1,2,4,8,16,32,64,128,256";
@@ -188,10 +200,10 @@ Action setup_report(CLI::App& app) {
                        "also ray-trace the first cloth plane's relief and compare the model with "
                        "and without parallax offsets against it");
   error_time->add_flag("--no-plots", et->no_plots, "write the CSV and JSON only");
-  add_json_flag(*error_time, et->json, "print the rows as JSON on stdout");
+  add_json_flag(*error_time, *json, "print the rows as JSON on stdout");
 
   // plan
-  auto po = std::make_shared<PlanReportOptions>();
+  auto po = std::make_shared<reports::PlanReportOptions>();
   po->spp = 2;
   po->reference_spp = 64;
   auto plan_size = std::make_shared<std::string>();
@@ -202,10 +214,10 @@ Action setup_report(CLI::App& app) {
   add_scene_report_options(*plan, po->scene, po->output, po->reference_spp, po->seed, *plan_size);
   plan->add_option("--spp", po->spp, "samples per pixel of the two renders (default 2)")
       ->check(CLI::Range(1u, 1u << 20));
-  add_json_flag(*plan, po->json, "print the report as JSON on stdout");
+  add_json_flag(*plan, *json, "print the report as JSON on stdout");
 
   // stability
-  auto so = std::make_shared<StabilityOptions>();
+  auto so = std::make_shared<reports::StabilityOptions>();
   auto* stability = app.add_subcommand(
       "stability",
       "the model and baked queries at the edges of the accepted inputs against direct "
@@ -213,17 +225,17 @@ Action setup_report(CLI::App& app) {
   stability->add_option("-o,--output", so->output, "output directory (created)")->required();
   stability->add_flag("--large", so->large,
                       "bake the table case at 2048^2 instead of 256^2 (minutes, ~2 GB)");
-  add_json_flag(*stability, so->json, "print the rows as JSON on stdout");
+  add_json_flag(*stability, *json, "print the rows as JSON on stdout");
 
-  return [o, et, et_cli, po, plan_size, so, error_time, plan, stability] {
-    if (stability->parsed()) return run_stability_report(*so);
+  return [o, et, et_cli, po, plan_size, so, json, error_time, plan, stability] {
+    if (stability->parsed()) return print_report(reports::stability_report(*so), *json);
     if (plan->parsed()) {
       if (!plan_size->empty()) {
         const std::array<int, 2> wh = parse_image_size(*plan_size);
         po->width = wh[0];
         po->height = wh[1];
       }
-      return run_plan_report(*po);
+      return print_report(reports::plan_report(*po), *json);
     }
     if (error_time->parsed()) {
       if (!(*et_cli)[2].empty()) {
@@ -238,7 +250,8 @@ Action setup_report(CLI::App& app) {
       et->spp.clear();
       for (int v : positive_list<int>((*et_cli)[1], "--spp"))
         et->spp.push_back(uint32_t(v));
-      return run_error_time_report(*et);
+      et->quiet = *json;
+      return print_report(reports::error_time_report(*et), *json);
     }
     return run_compression_report(*o);
   };

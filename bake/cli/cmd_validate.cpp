@@ -7,7 +7,7 @@
 
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
-#include "bake/cli/terminal_text.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "common/diagnostics.hpp"
 #include "formats/reader/validate.hpp"
 #include "formats/writer/metadata_json.hpp"

@@ -10,8 +10,8 @@
 #include <map>
 
 #include "bake/cli/command.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_toml.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/temp_registry.hpp"
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
   // First: a Ctrl-C at any later point must not leave a temporary output file behind.
   install_temp_file_signal_handlers();
   // Diagnostics name files and keys as given: escape what a terminal would interpret (docs/cli.md).
-  set_message_filter(&cli::terminal_safe);
+  set_message_filter(&terminal_safe);
   CLI::App app{
       "clothbake: offline precompute and asset baking for the multi-scale cloth appearance model"};
   app.set_version_flag("--version", std::string("clothbake ") + CLOTHBAKE_VERSION_STRING);
@@ -108,7 +108,11 @@ int main(int argc, char** argv) {
     report_error(std::string(e.what()) + " (" + where + " lists the options)");
     return int(ExitCode::Usage);
   } catch (const Error& e) {
-    report_error(e.what());
+    // A library's refusal of an option value (Error(Usage), naming the option) reads like the
+    // parser's: it says where the options are listed.
+    report_error(e.code() == ExitCode::Usage
+                     ? std::string(e.what()) + " (" + where + " lists the options)"
+                     : std::string(e.what()));
     return int(e.code());
   } catch (const std::bad_alloc&) {
     report_error("out of memory");

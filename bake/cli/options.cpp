@@ -139,15 +139,4 @@ uint64_t max_memory_option(const std::string& text, double default_share) {
   return bytes;
 }
 
-void check_render_samples(int width, int height, uint64_t spp, const std::string& option) {
-  const double samples = double(width) * double(height) * double(spp);
-  if (samples > kMaxRenderSamplesPerPass)
-    throw CLI::ValidationError(
-        option, std::to_string(spp) + " samples per pixel at " + std::to_string(width) + "x" +
-                    std::to_string(height) + " pixels ask for " + fmt::format("{:.3g}", samples) +
-                    " footprint samples per light and pass; at most 2^36 (" +
-                    fmt::format("{:.3g}", kMaxRenderSamplesPerPass) +
-                    ", hours on one core) are accepted: lower it or the image size");
-}
-
 }  // namespace clothbake::cli

@@ -69,13 +69,6 @@ std::array<double, 3> parse_direction(const std::string& text, const std::string
 // --max-memory for a malformed size or 0, as for the other size options.
 uint64_t max_memory_option(const std::string& text, double default_share);
 
-// Footprint samples one render pass may ask for per light: image pixels x spp at most 2^36
-// (about 7.6 hours on one core at the 0.4 us per sample measured on a small asset, more with
-// environment lights; docs/rendering.md, "Bounds"). Throws CLI::ValidationError(option) naming
-// the size and the product beyond that.
-inline constexpr double kMaxRenderSamplesPerPass = 68719476736.0;  // 2^36
-void check_render_samples(int width, int height, uint64_t spp, const std::string& option);
-
 // Longest --time-budget accepted: one day (render, docs/rendering.md "Bounds").
 inline constexpr double kMaxTimeBudgetSeconds = 86400.0;
 

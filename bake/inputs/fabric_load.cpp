@@ -117,7 +117,7 @@ BakeSettings parse_bake(const TomlSection& s) {
       int(s.integer("resolution", kMinResolution, kMaxResolution).value_or(b.resolution));
   b.parallax_dirs = int(s.integer("parallax_dirs", 2, 256).value_or(b.parallax_dirs));
   b.parallax_min_cos = s.real("parallax_min_cos", kMinCos).value_or(b.parallax_min_cos);
-  // (0, 1] texels (compress/parallax_pca.hpp; docs/compression.md, "Compressed parallax").
+  // (0, 1] texels (docs/compression.md, "Compressed parallax").
   b.parallax_max_error =
       s.real("parallax_max_error", Range{0, 1, true, false}).value_or(b.parallax_max_error);
   b.visibility_dirs = int(s.integer("visibility_dirs", 2, 256).value_or(b.visibility_dirs));

@@ -17,7 +17,6 @@
 #include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
-#include "compress/coefficient_coding.hpp"
 #include "compress/compress_settings.hpp"
 #include "compress/compressed_set.hpp"
 #include "compress/cpca.hpp"
@@ -78,14 +77,10 @@ void run_compress(pipeline::StageContext& ctx) {
              : directional_texels(view, labels);
     ctx.progress(0.5 * i + 0.1);
     CompressionStats stats;
-    const CompressedTableSet set = compress_tables(data, settings.cpca(), &stats);
-    std::vector<formats::Section> sections = compressed_sections(set);
-    // Format 1.5: the coefficients entropy-coded (part 6 instead of part 5, lossless).
-    code_coefficient_sections(sections, set);
-    for (auto& s : sections) {
-      if (reduce) s.version = 2;  // radiance_compressed v2: the bins of bin_map instance 0 only
+    CompressedTableSet set = compress_tables(data, settings.cpca(), &stats);
+    if (reduce) set.info.flags |= reader::kCompressedPlannedFlag;  // bins of bin_map 0 only
+    for (auto& s : compressed_sections(set))
       out.push_back(std::move(s));
-    }
     ctx.progress(0.5 * (i + 1));
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

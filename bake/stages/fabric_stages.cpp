@@ -1,12 +1,11 @@
 // The stages that read the fabric description: load_fabric (bake/inputs: TOML, maps or weave,
 // validation, input hashes) and the two that encode the fabric itself (fabric/fabric_sections.hpp):
-// fabric_records (always: fabric info and yarn materials) and feature_maps (packed and
+// fabric_records (always: fabric info and yarn materials) and feature_maps (16-bit codes,
 // entropy-coded by compress/map_entropy.hpp).
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/stages/stages.hpp"
 #include "compress/map_entropy.hpp"
 #include "fabric/fabric_sections.hpp"
-#include "formats/reader/map_encoding.hpp"
 
 namespace clothbake::stages {
 namespace {
@@ -23,20 +22,10 @@ void run_fabric_records(pipeline::StageContext& ctx) {
   ctx.output("section/fabric_records", fabric_record_sections(ctx.input<Fabric>("fabric")));
 }
 
-// The maps at reduced precision (payload version 2), each then entropy-coded (version 3) where
-// that is smaller: both format 1.4, docs/format.md §6.4.
+// The maps' 16-bit codes, entropy-coded (docs/format.md, "Feature maps").
 void run_feature_maps(pipeline::StageContext& ctx) {
-  std::vector<formats::Section> sections = feature_map_sections(ctx.input<Fabric>("fabric").maps);
-  // The tile's repeat shifts are searched once, on the height map (the first section), and
-  // tried on every map's byte planes.
-  compress::ShiftList shifts;
-  bool searched = false;
-  for (formats::Section& s : sections)
-    if (s.version == reader::kFeatureMapPackedVersion) {
-      s = compress::entropy_code_map(s, searched ? &shifts : nullptr, searched ? nullptr : &shifts);
-      searched = true;
-    }
-  ctx.output("section/feature_maps", std::move(sections));
+  ctx.output("section/feature_maps",
+             compress::feature_map_sections(ctx.input<Fabric>("fabric").maps));
 }
 
 }  // namespace

@@ -11,7 +11,7 @@
 // visibility_dirs^2, per half-vector bin B = radiance_dirs^2, per cluster K = clusters):
 //   load_fabric   feature maps 46 T bytes (plus the decoded images of an image fabric, 48 T)
 //   feature_maps  their sections, another 46 T
-//   parallax      16-bit codes 2 D T, the compressed form (8-bit codes, entropy stream, sections)
+//   parallax      16-bit codes 2 D T, the compressed form (its codes, coded stream, sections)
 //                 or the raw codes and SATs 6 D T, the height field's Embree BVH
 //   visibility    samples T ceil(V / 64) 8, ASG records, decoded lobes and sections
 //   cluster       K-means features and labels

@@ -2,16 +2,15 @@
 // table and their parameters out (raycast/parallax.hpp, formats/reader/parallax_sections.hpp).
 // Settings: [bake] parallax_dirs, parallax_min_cos, parallax_max_error.
 //
-// Form (docs/compression.md, "Compressed parallax"): when compression is on (the default; the
+// Form (docs/compression.md, "Hierarchical parallax"): when compression is on (the default; the
 // bake's compress request, artifact kCompressSettingsArtifact, or [bake] compress), the table is
-// requantised to 8 bits per direction (compress/parallax_codes.hpp) if that meets [bake]
-// parallax_max_error (RMS offset error, texels) and entropy-coded (compress/parallax_entropy.hpp,
-// section parallax_entropy, format 1.2); otherwise a warning and 16-bit codes (parallax_compressed,
-// format 1.1), still without SATs. The raw codes and their SATs are written only with --keep-raw.
-// `--no-compress` (or compress = false) writes the raw codes and SATs alone, exactly as format 1.0
-// did. A scene-planned bake (--scene) entropy-codes the kept directions' 8-bit codes, the left-out
-// ones as empty blocks (parallax_entropy flagged planned, format 1.3), or with 16-bit codes writes
-// the kept directions' codes plainly (parallax_planned, format 1.2; docs/scene-plans.md).
+// quantised per direction to meet [bake] parallax_max_error (RMS offset error, texels), each
+// direction predicted from up to four others and entropy-coded (compress/parallax_hierarchy.hpp,
+// section parallax_entropy), without SATs; a warning when even the finest steps miss the target.
+// The raw codes and their SATs are written only with --keep-raw. `--no-compress` (or compress =
+// false) writes the raw codes and SATs alone. A scene-planned bake (--scene) stores the kept
+// directions (and those they are predicted from), the left-out ones as empty blocks (the table
+// flagged planned; docs/scene-plans.md).
 #include <algorithm>
 #include <cmath>
 #include <cstring>

@@ -48,9 +48,9 @@ inline constexpr const char* kFabricResolutionArtifact = "fabric_resolution";
 inline constexpr const char* kCompressSupersedesArtifact = "supersedes/compress";
 
 // Optional seed of a scene-driven bake (`clothbake bake --scene`, docs/scene-plans.md): a
-// PlannedBake. The parallax stage casts rays only for the kept view directions and writes the
-// planned parallax section (ParallaxPlanned); the tables and compress stages fill and compress only
-// the kept half-vector bins (radiance_compressed payload version 2) and leave the gap kind out
+// PlannedBake. The parallax stage casts rays only for the kept view directions and writes a
+// planned compressed parallax (kEntropyPlannedFlag); the tables and compress stages fill and
+// compress only the kept half-vector bins (kCompressedPlannedFlag) and leave the gap kind out
 // without transmission; the visibility stage samples visibility_dirs^2 light directions when the
 // plan sets it (wide footprints, docs/scene-plans.md). The command seeds the bin_map / scene_plan
 // sections and the plan's metadata itself ("section/scene_plan", "metadata/scene_plan").

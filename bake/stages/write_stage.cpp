@@ -28,11 +28,11 @@ using pipeline::SectionSummary;
 using pipeline::StageContext;
 
 // Metadata: provenance and parameters, deterministic unless timings are asked for.
-// `minor`: the format minor the writer stamps (the largest its sections need).
-nlohmann::json metadata(StageContext& ctx, uint16_t minor) {
+nlohmann::json metadata(StageContext& ctx) {
   nlohmann::json m;
   m["format"] = "clothbake-asset";
-  m["format_version"] = std::to_string(reader::kFormatMajor) + "." + std::to_string(minor);
+  m["format_version"] =
+      std::to_string(reader::kFormatMajor) + "." + std::to_string(reader::kFormatMinor);
   m["tool"] = {{"name", "clothbake"}, {"version", CLOTHBAKE_VERSION_STRING}};
   m["fabric"] = fabric_metadata(ctx.input<Fabric>("fabric"));
   m["stages"] = ctx.stage_order();
@@ -85,12 +85,7 @@ nlohmann::json collect_sections(StageContext& ctx, std::vector<const Section*>* 
     for (const Section& s : ctx.input<std::vector<Section>>(name))
       sections->push_back(&s);
   }
-  uint16_t minor = 0;
-  for (const Section* s : *sections)
-    minor =
-        std::max(minor, reader::format_minor_of_section(uint32_t(s->type), s->version, s->instance,
-                                                        s->bytes().data(), s->bytes().size()));
-  nlohmann::json meta = metadata(ctx, minor);
+  nlohmann::json meta = metadata(ctx);
   if (!omitted->empty()) meta["omitted_sections"] = *omitted;
   return meta;
 }

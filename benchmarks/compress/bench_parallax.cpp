@@ -1,10 +1,10 @@
-// Parallax queries on the raw (16-bit codes + stored SATs) and compressed (8-bit codes, SATs on
-// first use) forms of a 256^2 x 32^2 table of pseudo-random codes (query cost does not depend on
-// the content), opening the compressed form with every checksum, and the requantisation itself
-// (docs/performance.md, "Compressed parallax").
+// Parallax queries on the raw form (16-bit codes + stored SATs) of a 256^2 x 32^2 table of
+// pseudo-random codes (query cost does not depend on the content; docs/performance.md,
+// "Compressed parallax").
 //
-// The entropy-coded form (format 1.2) is measured on a real asset, since its cost depends on the
-// content: CLOTHBAKE_BENCH_ASSET=twill.cbk (a default bake); without it those benchmarks skip.
+// The compressed (hierarchical, entropy-coded) form is measured on a real asset, since its cost
+// depends on the content: CLOTHBAKE_BENCH_ASSET=twill.cbk (a default bake); without it those
+// benchmarks skip.
 //
 //   CLOTHBAKE_BENCH_ASSET=twill.cbk build/bin/bench_parallax --benchmark_min_time=0.3
 #include <benchmark/benchmark.h>
@@ -16,7 +16,6 @@
 #include <memory>
 #include <random>
 
-#include "compress/parallax_codes.hpp"
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -31,10 +30,9 @@ constexpr int kN = 256, kDirs = 32;
 
 struct Fixture {
   raycast::ParallaxTable table;
-  std::vector<uint64_t> raw_bytes, packed_bytes;
-  std::size_t packed_size = 0;
-  reader::Asset raw_asset, packed_asset;
-  reader::ParallaxView raw, packed;
+  std::vector<uint64_t> raw_bytes;
+  reader::Asset raw_asset;
+  reader::ParallaxView raw;
   Fixture() {
     table.resolution = kN;
     table.dirs = kDirs;
@@ -43,9 +41,6 @@ struct Fixture {
     std::mt19937_64 rng(1);
     for (auto& c : table.depth)
       c = uint16_t(rng() >> 48);
-    const compress::QuantisedParallax q = compress::quantise_parallax(
-        {table.depth.data(), kN, kDirs, table.min_cos, table.depth_scale, 0.0, 0.0});
-    auto pack = compress::compressed_parallax_sections(q);
     raycast::ParallaxTable copy = table;
     auto rs = raycast::parallax_sections(std::move(copy));
     auto store = [](const std::vector<formats::Section>& s, std::vector<uint64_t>* out) {
@@ -55,13 +50,8 @@ struct Fixture {
       return bytes.size();
     };
     const std::size_t raw_size = store(rs, &raw_bytes);
-    packed_size = store(pack, &packed_bytes);
     (void)raw_asset.open_memory(raw_bytes.data(), raw_size, {reader::Verify::Structure});
-    (void)packed_asset.open_memory(packed_bytes.data(), packed_size, {reader::Verify::Structure});
     (void)raw.open(raw_asset);
-    (void)packed.open(packed_asset);
-    for (uint32_t b = 0; b < uint32_t(kDirs * kDirs); ++b)
-      (void)packed.ensure_sat(b);  // steady state: the SATs a renderer uses are built
   }
 };
 
@@ -79,8 +69,8 @@ std::vector<double> positions() {
   return p;
 }
 
-void texel_query(benchmark::State& state, bool compressed) {
-  const reader::ParallaxView& view = compressed ? fixture().packed : fixture().raw;
+void BM_TexelRaw(benchmark::State& state) {
+  const reader::ParallaxView& view = fixture().raw;
   const auto p = positions();
   const double v[3] = {0.3, -0.2, 0.9};
   reader::ParallaxSample s;
@@ -93,8 +83,8 @@ void texel_query(benchmark::State& state, bool compressed) {
   state.SetItemsProcessed(int64_t(state.iterations()));
 }
 
-void footprint_query(benchmark::State& state, bool compressed) {
-  const reader::ParallaxView& view = compressed ? fixture().packed : fixture().raw;
+void BM_FootprintRaw(benchmark::State& state) {
+  const reader::ParallaxView& view = fixture().raw;
   const auto p = positions();
   const double size = double(state.range(0)) + 0.5;
   const double v[3] = {0.3, -0.2, 0.9};
@@ -109,32 +99,7 @@ void footprint_query(benchmark::State& state, bool compressed) {
   state.SetItemsProcessed(int64_t(state.iterations()));
 }
 
-void BM_TexelRaw(benchmark::State& s) {
-  texel_query(s, false);
-}
-void BM_TexelCompressed(benchmark::State& s) {
-  texel_query(s, true);
-}
-void BM_FootprintRaw(benchmark::State& s) {
-  footprint_query(s, false);
-}
-void BM_FootprintCompressed(benchmark::State& s) {
-  footprint_query(s, true);
-}
-
-void BM_OpenCompressedWithChecksums(benchmark::State& state) {
-  Fixture& f = fixture();
-  for (auto _ : state) {
-    reader::Asset a;
-    reader::ParallaxView v;
-    benchmark::DoNotOptimize(
-        a.open_memory(f.packed_bytes.data(), f.packed_size, {reader::Verify::Checksums}).ok() &&
-        v.open(a).ok());
-  }
-  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(f.packed_size));
-}
-
-// The asset of CLOTHBAKE_BENCH_ASSET in memory, with its entropy-coded parallax opened and, for
+// The asset of CLOTHBAKE_BENCH_ASSET in memory, with its compressed parallax opened and, for
 // the queries, every plane decoded and every SAT built (a renderer's steady state).
 struct EntropyFixture {
   std::vector<uint64_t> bytes;
@@ -151,7 +116,7 @@ struct EntropyFixture {
     bytes.resize((size + 7) / 8);
     std::memcpy(bytes.data(), b.data(), size);
     ok = asset.open_memory(bytes.data(), size, {reader::Verify::Structure}).ok() &&
-         view.open(asset, reader::ParallaxSource::Compressed).ok() && view.is_entropy_coded();
+         view.open(asset, reader::ParallaxSource::Compressed).ok();
   }
 };
 
@@ -228,25 +193,12 @@ void BM_FootprintEntropy(benchmark::State& state) {
   state.SetItemsProcessed(int64_t(state.iterations()));
 }
 
-void BM_Quantise(benchmark::State& state) {
-  Fixture& f = fixture();
-  for (auto _ : state) {
-    auto q = compress::quantise_parallax(
-        {f.table.depth.data(), kN, kDirs, f.table.min_cos, f.table.depth_scale, 0.0, 0.0});
-    benchmark::DoNotOptimize(q.codes.data());
-  }
-}
-
 }  // namespace
 
 BENCHMARK(BM_TexelRaw);
-BENCHMARK(BM_TexelCompressed);
 BENCHMARK(BM_FootprintRaw)->Arg(1)->Arg(4)->Arg(64);
-BENCHMARK(BM_FootprintCompressed)->Arg(1)->Arg(4)->Arg(64);
-BENCHMARK(BM_OpenCompressedWithChecksums)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_EntropyOpenWithChecksums)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_EntropyDecodeAll)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_TexelEntropy);
 BENCHMARK(BM_FootprintEntropy)->Arg(1)->Arg(4)->Arg(64);
-BENCHMARK(BM_Quantise)->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK_MAIN();

@@ -5,8 +5,9 @@
 //                                        fixed ranks: stored size, offset errors, fit time
 //   parallax_study ASSET codes BITS...   codes requantised to BITS bits with a per-direction step,
 //                                        zstd -19 size (zstd CLI), errors
-//   parallax_study ASSET form            the asset's compressed form (compress/parallax_codes.hpp)
-//                                        through the reader: size, errors, open+checksum time,
+//   parallax_study ASSET form            the compressed form (compress/parallax_hierarchy.hpp) at
+//                                        the default target through the reader: size, errors,
+//                                        open+checksum time,
 //                                        first-footprint (SAT build) cost, footprint errors
 //                                        against the raw table per size class, query rates
 //   parallax_study ASSET sat             raw codes without stored SATs: time to build the SATs
@@ -23,8 +24,9 @@
 #include <string>
 #include <vector>
 
+#include "benchmarks/compress/parallax_pca.hpp"
 #include "compress/parallax_codes.hpp"
-#include "compress/parallax_pca.hpp"
+#include "compress/parallax_hierarchy.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -135,8 +137,9 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   if (mode != "form") return 0;
-  const compress::QuantisedParallax packed = compress::quantise_parallax(pc);
-  std::vector<formats::Section> sections = compress::compressed_parallax_sections(packed);
+  const compress::HierarchicalParallax packed =
+      compress::hierarchical_parallax(pc, compress::kDefaultParallaxMaxError);
+  std::vector<formats::Section> sections = compress::hierarchical_parallax_sections(packed);
   const auto bytes = formats::serialize_asset(sections);
   reader::Asset small;
   double t0 = now();
@@ -190,10 +193,10 @@ int main(int argc, char** argv) {
   }
   const double t_fp = now() - t0;
   std::printf(
-      "form: %.2f MB (8-bit codes), quantise %.2f s; RMS offset error %.4f texel (max "
+      "form: %.2f MB (hierarchical), quantise %.2f s; RMS offset error %.4f texel (max "
       "%.3f, %.4f%% > 0.25); open+checksums %.1f ms, first footprint in a direction "
       "+%.2f ms (its SAT)\n",
-      packed.payload_bytes() / 1e6, packed.seconds, packed.rms_offset_error,
+      packed.payload_bytes() / 1e6, packed.seconds_quantise, packed.rms_offset_error,
       packed.max_offset_error, 100 * packed.share_above_quarter, 1e3 * t_open, 1e3 * t_sat);
   for (int c = 0; c < 5; ++c)
     std::printf("  footprint %2d^2: offset error against raw RMS %.5f, max %.4f texel\n", fsize[c],

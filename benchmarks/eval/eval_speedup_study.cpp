@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
     c.reference = mean3(e.value);
     if (c.reference > 1e-6) configs.push_back(c);  // relative errors need a non-black reference
   }
-  // relMSE as the renderer's reports define it (bake/cli/render_error.hpp): (x - r)^2 / (r^2 +
+  // relMSE as the renderer's reports define it (bake/reports/render_error.hpp): (x - r)^2 / (r^2 +
   // eps^2) with eps = 1 % of the mean reference, so that a few nearly black footprints do not
   // decide the mean.
   double mean_reference = 0;

@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "compress/map_entropy.hpp"
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -24,7 +25,7 @@ using namespace clothbake;
 std::vector<formats::Section> sections_for(int n, int extra_sections) {
   const Fabric fabric = test_support::make_test_fabric(n);
   auto sections = fabric_record_sections(fabric);
-  for (auto& s : feature_map_sections(fabric.maps))
+  for (auto& s : compress::feature_map_sections(fabric.maps))
     sections.push_back(std::move(s));
   sections.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   std::vector<float> block(1 << 18, 0.25f);

@@ -202,7 +202,8 @@ Status Asset::open_memory(const void* data, std::size_t size, const OpenOptions&
         "asset format %u.%u, this reader reads format %u.x: %s", unsigned(header.version_major),
         unsigned(header.version_minor), unsigned(kFormatMajor),
         newer ? "the asset is newer than this reader; rebuild the reader (update clothbake)"
-              : "the asset is older than this reader; re-bake it with this clothbake");
+              : "the asset is older than this reader; re-bake it from its fabric with this "
+                "clothbake (clothbake bake FABRIC.toml -o ASSET.cbk)");
   }
   if (header.section_entry_size < kMinSectionEntrySize || header.section_entry_size % 8 != 0)
     return Status::error(ErrorCode::Malformed, Check::HeaderField,

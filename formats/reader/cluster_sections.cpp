@@ -64,7 +64,7 @@ Status VisibilityBasisView::open(const Asset& asset) noexcept {
   if (!s.ok()) return s;
   if (!present)
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "this asset has no cluster_visibility_basis (bake format 1.6)");
+                         "this asset has no cluster_visibility_basis");
   if (components.rank != 4 || components.dims[0] == 0 ||
       components.dims[0] > kMaxVisibilityClusters || components.dims[1] == 0 ||
       components.dims[1] > kMaxVisibilityBasisRank + 1 ||

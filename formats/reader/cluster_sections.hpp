@@ -9,7 +9,7 @@
 // C (clusters) is the first dimension of the mean visibility; every cluster has at least one
 // texel.
 //
-// The clusters' visibility basis (format 1.6; cluster/visibility_basis.hpp, docs/format.md §6.8):
+// The clusters' visibility basis (cluster/visibility_basis.hpp, docs/format.md §6.8):
 //   ClusterVisibilityBasis instance 0: f32 {C, M + 1, n, n}: per cluster c, component 0 the mean
 //                          m_c and components 1..M the principal directions b_ck of the clamped
 //                          ASG visibility at the bin centres of DirectionGrid{n, 0}

@@ -1,8 +1,8 @@
-// Entropy-coded C-PCA coefficients of the compressed Integral-Radiance tables (format 1.5: part 6,
-// CodedCoefficients, of radiance_compressed, in place of part 5; layout in docs/format.md,
-// "Coded coefficients (format 1.5)"; why: docs/compression.md, "Coded coefficients").
+// Entropy-coded C-PCA coefficients of the compressed Integral-Radiance tables (part 5,
+// Coefficients, of radiance_compressed; layout in docs/format.md, "Coded coefficients"; why:
+// docs/compression.md, "Coded coefficients").
 //
-// The coefficients are those of part 5 (compressed_layout.hpp): for every texel in row-major
+// The coefficients (compressed_layout.hpp): for every texel in row-major
 // order, the r_g quantised coefficients q_0 .. q_{r-1} of its cell g (none for a texel without a
 // cell), each in [-32767, 32767]. They are coded losslessly in that order. Coefficient j of texel
 // t = (x, y) is predicted from the same coefficient of neighbouring texels of the same cell:
@@ -24,7 +24,7 @@
 // Stream (u8, little-endian): u32 count, u16 sx, u16 sy, u32 contexts (= 32), u32 final rANS
 // state x0 in [2^23, 2^31), u16 freq[32][32] (the bit-length symbols 0..31 of each context; each
 // row sums to 4096 or is all zero), then the renormalisation bytes in reading order. The rANS
-// coder is the one of the entropy-coded parallax (parallax_entropy.hpp): 12-bit frequencies,
+// coder is the block coder's (parallax_entropy.hpp): 12-bit frequencies,
 // 32-bit state, byte renormalisation, the coder ending in its initial state 2^23 with every byte
 // read.
 //

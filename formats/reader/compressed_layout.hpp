@@ -26,10 +26,12 @@
 //   part 2 CellMap: u8 {N, N}    cell of each texel (row-major), kNoCell for none
 //   part 3 Scales : f32 {I}      per image: finite, >= 0 (I = sum over cells of 1 + r_g)
 //   part 4 Basis  : f16 {I, B}   per image: the directional vector, max |value| = 1 (or all 0)
-//   part 5 Coeffs : i16 {M}      for every texel in row-major order, the r_{g(x)} quantised
-//                                coefficients of its cell (none for kNoCell); M = their total
-//   part 6 Coded  : u8 {bytes}   (format 1.5, instead of part 5) the same coefficients entropy-
-//                                coded (compressed_coefficients.hpp); same payload version
+//   part 5 Coeffs : u8 {bytes}   for every texel in row-major order, the r_{g(x)} quantised i16
+//                                coefficients of its cell (none for kNoCell), M in all,
+//                                entropy-coded (compressed_coefficients.hpp)
+// A scene-planned kind (info flags kCompressedPlannedFlag) stores only the half-vector bins of
+// bin_map instance 0: the basis values of the other bins are zero, and queries that need them
+// answer OutOfPlan.
 //
 // C++17, standard library only (part of the reader library).
 #pragma once
@@ -47,11 +49,11 @@ enum class CompressedPart : uint32_t {
   CellMap = 2,
   Scales = 3,
   Basis = 4,
-  Coefficients = 5,
-  CodedCoefficients = 6  // format 1.5: part 5 entropy-coded (compressed_coefficients.hpp)
+  Coefficients = 5  // entropy-coded (compressed_coefficients.hpp)
 };
-// Parts 0-5 (a kind holds part 5 or part 6, not both).
 inline constexpr uint32_t kCompressedPartCount = 6;
+// CompressedTableInfoRecord::flags bit of a scene-planned kind (bins of bin_map instance 0 only).
+inline constexpr uint32_t kCompressedPlannedFlag = 1;
 
 constexpr uint32_t compressed_instance(RadianceTableKind kind, CompressedPart part) {
   return uint32_t(kind) * 16u + uint32_t(part);
@@ -66,7 +68,7 @@ inline constexpr uint32_t kMaxCompressedImages = 4096;  // bounds the reader's S
 inline constexpr uint64_t kMaxCompressedDecodedBytes = uint64_t(2) << 30;
 inline constexpr uint32_t kCellFields = 4;
 
-// Info v1: one record, shape {1, 64}.
+// Info: one record, shape {1, 64}.
 struct CompressedTableInfoRecord {
   uint32_t kind;                  // RadianceTableKind
   uint32_t resolution;            // N (= the label map's)
@@ -74,10 +76,10 @@ struct CompressedTableInfoRecord {
   uint32_t cluster_count;         // clusters of the label map
   uint32_t cell_count;            // G, rows of Cells
   uint32_t image_count;           // I, sum over cells of 1 + r_g
-  uint32_t coefficient_count;     // M, elements of Coeffs
+  uint32_t coefficient_count;     // M, coefficients coded in Coeffs
   uint32_t samples_per_bin_side;  // s of the raw tables this was compressed from (0 for Gap)
   uint32_t lobes;                 // kLobeBit* of the lobes this table answers
-  uint32_t flags;                 // 0 in version 1
+  uint32_t flags;                 // 0, or kCompressedPlannedFlag
   double min_roughness;           // narrowest SGGX roughness in the map (0 for Gap)
   double bake_error;              // relative RMS texel error measured at bake time (information)
   unsigned char reserved[8];      // zero

@@ -33,10 +33,10 @@ Status find_part(const Asset& asset, RadianceTableKind kind, CompressedPart part
                          "compressed_tables: the %s tables are not in this asset (part %u missing)",
                          kind_name(kind), unsigned(part));
   if (!s.ok()) return s;
-  if (out->version != 1 && out->version != 2)
+  if (out->version != 1)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "compressed_tables part %u: payload version %u is not 1 or 2",
-                         unsigned(part), unsigned(out->version));
+                         "compressed_tables part %u: payload version %u is not 1", unsigned(part),
+                         unsigned(out->version));
   return {};
 }
 
@@ -88,41 +88,10 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   if (uint32_t(kind) >= kRadianceKindCount)
     return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown radiance table kind %u",
                          unsigned(kind));
-  // Parts 0-4, and the coefficients as part 5 (raw) or part 6 (entropy-coded, format 1.5).
   SectionInfo parts[kCompressedPartCount];
-  bool coded = false;
   for (uint32_t p = 0; p < kCompressedPartCount; ++p) {
-    Status s = find_part(asset, kind, CompressedPart(p), &parts[p]);
-    if (p == uint32_t(CompressedPart::Coefficients)) {
-      SectionInfo other;
-      const Status c = find_part(asset, kind, CompressedPart::CodedCoefficients, &other);
-      if (c.ok() && s.ok())
-        return layout_error(kind, "coefficients",
-                            "both part 5 (raw) and part 6 (coded) are present");
-      if (c.ok()) {
-        parts[p] = other;
-        coded = true;
-        s = c;
-      } else if (c.code() != ErrorCode::NotFound) {
-        return c;
-      }
-    }
+    const Status s = find_part(asset, kind, CompressedPart(p), &parts[p]);
     if (!s.ok()) return s;
-    if (parts[p].version != parts[0].version)
-      return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                           "compressed_tables %s: parts of payload versions %u and %u",
-                           kind_name(kind), unsigned(parts[0].version), unsigned(parts[p].version));
-  }
-  // Version 2 (format 1.2): the bins of bin_map instance 0 only.
-  BinMapView bin_map;
-  if (parts[0].version == 2) {
-    Status s = read_bin_map(asset, kHalfVectorBinMap, 0, &bin_map);
-    if (!s.ok()) return s;
-    if (!bin_map.present())
-      return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                           "compressed_tables %s: payload version 2 needs bin_map instance 0 (the "
-                           "half-vector bins it covers)",
-                           kind_name(kind));
   }
 
   // Info.
@@ -140,6 +109,21 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
       return Status::error(ErrorCode::Malformed, Check::Padding,
                            "compressed_tables %s (info): reserved bytes are not zero",
                            kind_name(kind));
+  if ((info.flags & ~kCompressedPlannedFlag) != 0)
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "compressed_tables %s (info): flags %u unknown to this reader (0 or 1)",
+                         kind_name(kind), unsigned(info.flags));
+  // A planned kind: the bins of bin_map instance 0 only.
+  BinMapView bin_map;
+  if ((info.flags & kCompressedPlannedFlag) != 0) {
+    s = read_bin_map(asset, kHalfVectorBinMap, 0, &bin_map);
+    if (!s.ok()) return s;
+    if (!bin_map.present())
+      return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                           "compressed_tables %s: a planned kind needs bin_map instance 0 (the "
+                           "half-vector bins it covers)",
+                           kind_name(kind));
+  }
   if (kind == RadianceTableKind::Gap && info.min_roughness != 0.0)
     return Status::error(ErrorCode::Malformed, Check::ValueRange,
                          "compressed_tables gap (info): min_roughness %g must be 0",
@@ -248,7 +232,18 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
                            kind_name(kind), t / bins, t % bins);
   }
 
-  // Coefficients: viewed in place (part 5) or decoded into the copy the tables keep (part 6).
+  // The decoded size is known from the shapes: refuse a huge one before decoding anything.
+  const bool wide = uint64_t(n) > 256;  // N^2 * 32767 must stay below 2^31 for int32 sums
+  const uint64_t sat_count = uint64_t(n + 1) * (n + 1) * (images ? images : 1);
+  const uint64_t decoded = sat_count * (wide ? 8 : 4) + uint64_t(n) * n * sizeof(uint32_t);
+  if (decoded > kMaxCompressedDecodedBytes)
+    return Status::error(ErrorCode::Malformed, Check::ResourceLimit,
+                         "compressed_tables %s: %u x %u texels with %u images decode to %" PRIu64
+                         " bytes, more than the reader's limit of %" PRIu64,
+                         kind_name(kind), unsigned(n), unsigned(n), unsigned(images), decoded,
+                         kMaxCompressedDecodedBytes);
+
+  // Coefficients: decoded into the copy the tables keep.
   const uint64_t texel_count = uint64_t(n) * n;
   auto coefficient_copy = allocate<int16_t>(info.coefficient_count ? info.coefficient_count : 1);
   auto first_coefficient = allocate<uint32_t>(texel_count);
@@ -265,11 +260,11 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     }
   }
   ArrayView<int16_t> coefficients;
-  if (coded) {
+  {
     ArrayView<uint8_t> stream;
     s = asset.view_of(parts[5], &stream);
     if (!s.ok()) return s;
-    if (stream.rank != 1) return layout_error(kind, "coded coefficients", "must be u8 {bytes}");
+    if (stream.rank != 1) return layout_error(kind, "coefficients", "must be u8 {bytes}");
     std::unique_ptr<uint32_t[]> ranks = allocate<uint32_t>(cells_n ? cells_n : 1);
     if (!ranks) return Status::error(ErrorCode::Unsupported, Check::None, "out of memory");
     for (uint32_t g = 0; g < cells_n; ++g)
@@ -284,32 +279,9 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     coefficients.size = info.coefficient_count;
     coefficients.rank = 1;
     coefficients.dims[0] = info.coefficient_count;
-  } else {
-    s = asset.view_of(parts[5], &coefficients);
-    if (!s.ok()) return s;
-    if (info.coefficient_count == 0
-            ? !(coefficients.rank == 1 && coefficients.dims[0] == 0)
-            : !(coefficients.rank == 1 && coefficients.dims[0] == info.coefficient_count))
-      return layout_error(kind, "coefficients", "must be i16 {coefficient_count}");
-    for (uint64_t t = 0; t < coefficients.size; ++t)
-      if (coefficients[t] == INT16_MIN)
-        return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                             "compressed_tables %s: coefficient %" PRIu64 " is -32768",
-                             kind_name(kind), t);
-    if (coefficients.size > 0)
-      std::memcpy(coefficient_copy.get(), coefficients.data, sizeof(int16_t) * coefficients.size);
   }
 
   // Decode.
-  const bool wide = uint64_t(n) > 256;  // N^2 * 32767 must stay below 2^31 for int32 sums
-  const uint64_t sat_count = uint64_t(n + 1) * (n + 1) * (images ? images : 1);
-  const uint64_t decoded = sat_count * (wide ? 8 : 4) + uint64_t(n) * n * sizeof(uint32_t);
-  if (decoded > kMaxCompressedDecodedBytes)
-    return Status::error(ErrorCode::Malformed, Check::ResourceLimit,
-                         "compressed_tables %s: %u x %u texels with %u images decode to %" PRIu64
-                         " bytes, more than the reader's limit of %" PRIu64,
-                         kind_name(kind), unsigned(n), unsigned(n), unsigned(images), decoded,
-                         kMaxCompressedDecodedBytes);
   std::unique_ptr<int32_t[]> sat32;
   std::unique_ptr<int64_t[]> sat64;
   if (wide)

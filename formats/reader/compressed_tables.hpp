@@ -36,10 +36,10 @@ class CompressedRadianceTables final : public RadianceTables {
   CompressedRadianceTables& operator=(CompressedRadianceTables&&) noexcept = default;
 
   // Opens kind's compressed tables. Errors: NotFound (CBK-E019: the kind has no compressed
-  // tables), WrongType / Unsupported / Malformed (CBK-E015: version, element type, shape or record
-  // field), Malformed (CBK-E021: a cluster id, rank, cell index, count, scale, basis value or
-  // coefficient out of range; CBK-E017: NaN/Inf), Unsupported (the decoded tables cannot be
-  // allocated).
+  // tables, or a planned kind without bin_map instance 0), WrongType / Unsupported / Malformed
+  // (CBK-E015: version, element type, shape, flags or record field), Malformed (CBK-E021: a
+  // cluster id, rank, cell index, count, scale, basis value, or the coded coefficients out of
+  // range; CBK-E017: NaN/Inf), Unsupported (the decoded tables cannot be allocated).
   Status open(const Asset& asset, RadianceTableKind kind) noexcept;
   bool is_open() const noexcept { return n_ != 0; }
 
@@ -50,8 +50,8 @@ class CompressedRadianceTables final : public RadianceTables {
   bool try_query(const Footprint& rect, const double h[3], uint32_t cluster,
                  double* out) const noexcept override;
   bool try_query_all(const Footprint& rect, const double h[3], double* out) const noexcept override;
-  // Payload version 2 (a scene-planned asset): false when a bin of h's bilinear lookup
-  // (weight > 0) is outside bin_map instance 0; its queries then fail (query(): OutOfPlan).
+  // A scene-planned kind (info flags kCompressedPlannedFlag): false when a bin of h's bilinear
+  // lookup (weight > 0) is outside bin_map instance 0; its queries then fail (query(): OutOfPlan).
   bool covers_bins(const double h[3]) const noexcept override;
   bool is_planned() const noexcept { return covered_ != nullptr; }
 
@@ -130,7 +130,7 @@ class CompressedRadianceTables final : public RadianceTables {
   std::unique_ptr<uint32_t[]> cell_images_;        // per cell: first_image, rank
   std::unique_ptr<int16_t[]> coefficients_;        // the stored coefficients (M)
   std::unique_ptr<uint32_t[]> first_coefficient_;  // N x N: index of the texel's first coefficient
-  std::unique_ptr<uint8_t[]> covered_;             // version 2: bins kept (1) or left out (0)
+  std::unique_ptr<uint8_t[]> covered_;             // planned: bins kept (1) or left out (0)
   // Images of cluster c: [image_begin_[c], image_begin_[c + 1]) (cells sorted by cluster).
   uint32_t image_begin_[kMaxRadianceClusters + 1] = {};
 };

@@ -46,16 +46,15 @@ Status map_view(const Asset& asset, const SectionInfo& info, uint32_t channels,
   return {};
 }
 
-// One float map: version 1 viewed in place; versions 2 and 3 checked here and decoded later into
-// the FeatureMaps' storage.
+// One coded map (height, tangent, normal, gap, albedo): its header checked here, decoded later
+// into the FeatureMaps' storage.
 struct FloatMap {
   SectionType type{};
   uint32_t channels = 1;  // floats per texel
   ArrayView<float>* out = nullptr;
   SectionInfo info;
-  uint32_t codes_per_texel = 0;     // 16-bit codes per texel of versions 2 and 3
-  const uint16_t* codes = nullptr;  // version 2: the stored codes (f16 bits, i16 or u16)
-  ArrayView<uint8_t> coded;         // version 3: the entropy-coded payload
+  uint32_t codes_per_texel = 0;  // 16-bit codes per texel
+  ArrayView<uint8_t> coded;      // the entropy-coded payload
   MapEntropyHeader header;
 };
 
@@ -74,47 +73,26 @@ uint32_t codes_per_texel(SectionType type) noexcept {
 Status check_float_map(const Asset& asset, FloatMap& m, uint32_t* resolution) noexcept {
   Status status = find_known(asset, m.type, &m.info);
   if (!status.ok()) return status;
-  if (m.info.version == 1) return map_view(asset, m.info, m.channels, resolution, m.out);
   m.codes_per_texel = codes_per_texel(m.type);
-  if (m.info.version == kFeatureMapEntropyVersion) {
-    status = asset.view_of(m.info, &m.coded);
-    if (status.ok() && m.coded.rank != 1)
-      status =
-          Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                        "%s map (payload version 3) must be u8 {bytes}", section_type_name(m.type));
-    if (status.ok())
-      status = check_map_entropy(section_type_name(m.type), m.coded.data, m.coded.size,
-                                 m.codes_per_texel, &m.header);
-    if (!status.ok()) return status;
-    if (*resolution == 0) *resolution = m.header.resolution;
-    if (m.header.resolution != *resolution)
-      return Status::error(ErrorCode::Malformed, Check::MapResolution,
-                           "%s map is %u x %u, the other maps are %u x %u",
-                           section_type_name(m.type), unsigned(m.header.resolution),
-                           unsigned(m.header.resolution), unsigned(*resolution),
-                           unsigned(*resolution));
-    return {};
-  }
-  // Version 2: f16, octahedral i16 or unorm16 codes, all 16-bit.
-  const uint32_t k = m.codes_per_texel;
-  if (m.type == SectionType::HeightMap) {
-    ArrayView<Half> v;
-    status = map_view(asset, m.info, k, resolution, &v);
-    m.codes = reinterpret_cast<const uint16_t*>(v.data);
-  } else if (k == 2) {
-    ArrayView<int16_t> v;
-    status = map_view(asset, m.info, k, resolution, &v);
-    m.codes = reinterpret_cast<const uint16_t*>(v.data);
-  } else {
-    ArrayView<uint16_t> v;
-    status = map_view(asset, m.info, k, resolution, &v);
-    m.codes = v.data;
-  }
-  return status;
+  status = asset.view_of(m.info, &m.coded);
+  if (status.ok() && m.coded.rank != 1)
+    status = Status::error(ErrorCode::WrongType, Check::SectionLayout, "%s map must be u8 {bytes}",
+                           section_type_name(m.type));
+  if (status.ok())
+    status = check_map_entropy(section_type_name(m.type), m.coded.data, m.coded.size,
+                               m.codes_per_texel, &m.header);
+  if (!status.ok()) return status;
+  if (*resolution == 0) *resolution = m.header.resolution;
+  if (m.header.resolution != *resolution)
+    return Status::error(ErrorCode::Malformed, Check::MapResolution,
+                         "%s map is %u x %u, the other maps are %u x %u", section_type_name(m.type),
+                         unsigned(m.header.resolution), unsigned(m.header.resolution),
+                         unsigned(*resolution), unsigned(*resolution));
+  return {};
 }
 
-// Turns the 16-bit codes of a version-2 (or decoded version-3) map into floats at `dst`
-// (texels * channels) and points m.out at them.
+// Turns the decoded 16-bit codes of a map into floats at `dst` (texels * channels) and points
+// m.out at them.
 void decode_codes(FloatMap& m, const uint16_t* codes, uint32_t n, float* dst) noexcept {
   const uint64_t texels = uint64_t(n) * n, count = texels * m.channels;
   switch (m.type) {
@@ -173,13 +151,12 @@ uint16_t known_section_version(SectionType type) noexcept {
     case SectionType::FabricInfo:
     case SectionType::YarnMaterials:
     case SectionType::YarnIdMap:
-      return 1;
-    case SectionType::HeightMap:  // format 1.4: 2 reduced precision, 3 its codes entropy-coded
+    case SectionType::HeightMap:
     case SectionType::TangentMap:
     case SectionType::NormalMap:
     case SectionType::GapMap:
     case SectionType::AlbedoMap:
-      return kFeatureMapEntropyVersion;
+      return 1;
     default:
       return 0;
   }
@@ -209,45 +186,27 @@ Status read_feature_maps(const Asset& asset, FeatureMaps* out) noexcept {
   const uint32_t n = maps.resolution;
   const uint64_t texels = uint64_t(n) * n;
   uint64_t decoded = 0;
-  bool entropy = false;
-  for (const FloatMap& m : floats) {
-    if (m.info.version != 1) decoded += texels * m.channels;
-    entropy = entropy || m.info.version == kFeatureMapEntropyVersion;
+  for (const FloatMap& m : floats)
+    decoded += texels * m.channels;
+  // open() bounded every section by the file size, and a header's N is <= 16384 and equal to the
+  // others': these sizes cannot overflow. The codes of one map (at most 3 per texel), one byte
+  // plane and the rANS tables are scratch.
+  maps.storage.reset(new (std::nothrow) float[decoded]);
+  std::unique_ptr<uint16_t[]> codes(new (std::nothrow) uint16_t[texels * 3]);
+  std::unique_ptr<uint8_t[]> plane(new (std::nothrow) uint8_t[texels]);
+  std::unique_ptr<ParallaxEntropyScratch> scratch(new (std::nothrow) ParallaxEntropyScratch);
+  if (!maps.storage || !codes || !plane || !scratch)
+    return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
+                         "feature maps: cannot allocate %llu bytes for the decoded maps",
+                         static_cast<unsigned long long>(decoded * sizeof(float)));
+  float* dst = maps.storage.get();
+  for (FloatMap& m : floats) {
+    status = decode_map_entropy(section_type_name(m.type), m.coded.data, m.coded.size, m.header,
+                                codes.get(), plane.get(), scratch.get());
+    if (!status.ok()) return status;
+    decode_codes(m, codes.get(), n, dst);
+    dst += texels * m.channels;
   }
-  if (decoded > 0) {
-    // open() bounded every section by the file size, and a version-3 header's N is <= 16384 and
-    // equal to the others': these sizes cannot overflow.
-    maps.storage.reset(new (std::nothrow) float[decoded]);
-    // Version 3: the codes of one map (at most 3 per texel), one byte plane and the rANS tables.
-    std::unique_ptr<uint16_t[]> codes;
-    std::unique_ptr<uint8_t[]> plane;
-    std::unique_ptr<ParallaxEntropyScratch> scratch;
-    if (entropy) {
-      codes.reset(new (std::nothrow) uint16_t[texels * 3]);
-      plane.reset(new (std::nothrow) uint8_t[texels]);
-      scratch.reset(new (std::nothrow) ParallaxEntropyScratch);
-    }
-    if (!maps.storage || (entropy && (!codes || !plane || !scratch)))
-      return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
-                           "feature maps: cannot allocate %llu bytes for the decoded maps",
-                           static_cast<unsigned long long>(decoded * sizeof(float)));
-    float* dst = maps.storage.get();
-    for (FloatMap& m : floats) {
-      if (m.info.version == 1) continue;
-      const uint16_t* source = m.codes;
-      if (m.info.version == kFeatureMapEntropyVersion) {
-        status = decode_map_entropy(section_type_name(m.type), m.coded.data, m.coded.size, m.header,
-                                    codes.get(), plane.get(), scratch.get());
-        if (!status.ok()) return status;
-        source = codes.get();
-      }
-      decode_codes(m, source, n, dst);
-      dst += texels * m.channels;
-    }
-  }
-  const FloatMap* order[6] = {&floats[0], &floats[1], &floats[2], &floats[3], nullptr, &floats[4]};
-  for (int i = 0; i < 6; ++i)
-    maps.versions[i] = order[i] ? order[i]->info.version : yarn_info.version;
   *out = std::move(maps);
   return {};
 }

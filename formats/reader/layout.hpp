@@ -1,4 +1,4 @@
-// On-disk layout of the clothbake asset container, format version 1 (docs/format.md is the
+// On-disk layout of the clothbake asset container, format version 2 (docs/format.md is the
 // specification; this header is its machine-checked summary).
 //
 // Everything is little-endian. A file is: a 64-byte FileHeader at offset 0, the section table
@@ -15,46 +15,13 @@
 namespace clothbake::reader {
 
 // ---------------------------------------------------------------------------------------------
-// Format version. The major number is the on-disk layout: a reader refuses any other major. The
-// minor number grows when section types, codecs or element types are added in a way that an
-// older reader can skip; an older reader reads a newer minor and ignores what it does not know.
-inline constexpr uint16_t kFormatMajor = 1;
-// 1.1: ParallaxCompressed; 1.2: ParallaxEntropy, scene plans; 1.3: planned ParallaxEntropy;
-// 1.4: feature maps at reduced precision (payload versions 2 and 3 of 0x0100-0x0103 and 0x0105);
-// 1.5: hierarchical parallax (payload version 2 of ParallaxEntropy, parallax_hierarchy.hpp) and
-// entropy-coded C-PCA coefficients (part 6 of radiance_compressed, compressed_coefficients.hpp);
-// 1.6: the clusters' visibility basis (cluster_visibility_basis, cluster_sections.hpp).
-inline constexpr uint16_t kFormatMinor = 6;
-
-// The minor version that introduced a section type: writers stamp an asset with the largest minor
-// its sections need (so that an asset without 1.1 sections stays a byte-identical 1.0 file).
-constexpr uint16_t format_minor_of(uint32_t section_type) {
-  if (section_type >= 0x0600 && section_type <= 0x0602) return 2;  // scene plans: 1.2
-  if (section_type == 0x0402) return 6;  // SectionType::ClusterVisibilityBasis: 1.6
-  return section_type == 0x0203   ? 2    // SectionType::ParallaxEntropy: 1.2
-         : section_type == 0x0202 ? 1    // SectionType::ParallaxCompressed: 1.1
-                                  : 0;
-}
-
-// The same for one section, by its payload version and payload: a feature map (0x0100-0x0103,
-// 0x0105) of payload version 2 (f16, octahedral snorm16, unorm16; map_encoding.hpp) or 3 (those
-// codes entropy-coded; map_entropy.hpp) needs 1.4; a
-// ParallaxEntropy info record (instance 0) with the planned flag (bit 0 of its u32 flags at byte
-// 12; parallax_entropy.hpp, kEntropyPlannedFlag) needs 1.3, since a 1.2 reader would not know that
-// its empty blocks are left-out directions; a ParallaxEntropy section of payload version 2 (the
-// hierarchical form) and part 6 of radiance_compressed (coded coefficients) need 1.5.
-inline uint16_t format_minor_of_section(uint32_t section_type, uint16_t version, uint32_t instance,
-                                        const void* payload, uint64_t size) {
-  if (section_type == 0x0203 && version >= 2) return 5;
-  if (section_type == 0x0501 && instance % 16 == 6) return 5;  // coded C-PCA coefficients
-  if (section_type >= 0x0100 && section_type <= 0x0105 && section_type != 0x0104 && version >= 2)
-    return 4;
-  if (section_type == 0x0203 && instance == 0 && size >= 16) {
-    const unsigned char* p = static_cast<const unsigned char*>(payload);
-    if (p[12] & 1u) return 3;
-  }
-  return format_minor_of(section_type);
-}
+// Format version. The major number is the on-disk layout: a reader refuses any other major (a
+// format-1 asset is re-baked, docs/format.md "Versioning"). The minor number grows when section
+// types, codecs or element types are added in a way that an older reader can skip; an older
+// reader reads a newer minor and ignores what it does not know. Format 2.0 has one form per
+// section, every payload at version 1.
+inline constexpr uint16_t kFormatMajor = 2;
+inline constexpr uint16_t kFormatMinor = 0;
 
 // "\x89CBK\r\n\x1a\n": the high byte catches 7-bit transfers, CR LF / LF catch newline conversion,
 // ^Z stops `type` on DOS (the PNG signature idea).
@@ -69,41 +36,42 @@ inline constexpr uint32_t kMaxRank = 4;
 // Section types. Ids are grouped by producer, 256 ids per group; an id is never reused for a
 // different payload. Unknown ids are skipped by readers.
 enum class SectionType : uint32_t {
-  // Container (this issue).
+  // Container.
   Metadata = 0x0001,       // UTF-8 JSON object: tool, bake parameters, input hashes, stages
   FabricInfo = 0x0002,     // one FabricInfoRecord
   YarnMaterials = 0x0003,  // YarnMaterialRecord[yarn_count]
-  // Per-texel feature maps of one N x N tile (this issue). Row-major, row 0 is v = 0.
-  HeightMap = 0x0100,   // f32 {N, N}, tile-side units
-  TangentMap = 0x0101,  // f32 {N, N, 3}, unit fibre tangent, local frame
-  NormalMap = 0x0102,   // f32 {N, N, 3}, unit shading normal, local frame, z > 0
-  GapMap = 0x0103,      // f32 {N, N}, I(x) in [0, 1]
+  // Per-texel feature maps of one N x N tile, row-major, row 0 is v = 0: 16-bit codes,
+  // entropy-coded (map_entropy.hpp), except yarn_id.
+  HeightMap = 0x0100,   // f16 codes, tile-side units
+  TangentMap = 0x0101,  // octahedral snorm16 codes of the unit fibre tangent, local frame
+  NormalMap = 0x0102,   // octahedral snorm16 codes of the unit shading normal, z > 0
+  GapMap = 0x0103,      // unorm16 codes of I(x) in [0, 1]
   YarnIdMap = 0x0104,   // u16 {N, N}, index into YarnMaterials
-  AlbedoMap = 0x0105,   // f32 {N, N, 3}, linear RGB in [0, 1]
-  // Reserved for later stages; their payload layout is defined where they are written.
-  ParallaxTable = 0x0200,             // parallax offsets per view direction and texel
-  ParallaxSat = 0x0201,               // summed-area tables of the parallax offsets
-  ParallaxCompressed = 0x0202,        // 8/16-bit per-direction parallax codes (format 1.1)
-  ParallaxEntropy = 0x0203,           // entropy-coded 8-bit parallax codes (format 1.2)
-  VisibilityAsg = 0x0300,             // per-texel ASG visibility parameters
-  AsgFitError = 0x0301,               // per-texel ASG fit error
-  ClusterLabels = 0x0400,             // visibility cluster label map
-  ClusterMeanVisibility = 0x0401,     // per-cluster mean visibility
-  ClusterVisibilityBasis = 0x0402,    // per-cluster principal components of the visibility (1.6)
-  RadianceRawTables = 0x0500,         // Integral-Radiance SATs (lobe, cluster, half-vector bin)
+  AlbedoMap = 0x0105,   // unorm16 codes of linear RGB in [0, 1]
+  // Baked tables; their payload layout is defined where they are read.
+  ParallaxTable = 0x0200,  // raw parallax depth codes per view direction and texel
+  ParallaxSat = 0x0201,    // summed-area tables of the raw codes
+  // 0x0202: retired (parallax_compressed of formats 1.1-1.4), never reused.
+  ParallaxEntropy = 0x0203,         // hierarchical entropy-coded parallax (parallax_hierarchy.hpp)
+  VisibilityAsg = 0x0300,           // per-texel ASG visibility parameters
+  AsgFitError = 0x0301,             // per-texel ASG fit error
+  ClusterLabels = 0x0400,           // visibility cluster label map
+  ClusterMeanVisibility = 0x0401,   // per-cluster mean visibility
+  ClusterVisibilityBasis = 0x0402,  // per-cluster principal components of the visibility
+  RadianceRawTables = 0x0500,       // Integral-Radiance SATs (lobe, cluster, half-vector bin)
   RadianceCompressedTables = 0x0501,  // C-PCA compressed Integral-Radiance tables
   // 0x0502..0x05FF: reserved for parts of the compressed tables (basis, means, quantisation).
-  // Scene-planned assets (format 1.2; scene_plan_sections.hpp).
-  BinMap = 0x0600,           // u8 {n, n} per direction grid: 1 = bin covered by the asset
-  ScenePlan = 0x0601,        // one ScenePlanRecord: what a scene-driven bake left out
-  ParallaxPlanned = 0x0602,  // the compressed parallax table of the bin map's directions only
+  // Scene-planned assets (scene_plan_sections.hpp).
+  BinMap = 0x0600,     // u8 {n, n} per direction grid: 1 = bin covered by the asset
+  ScenePlan = 0x0601,  // one ScenePlanRecord: what a scene-driven bake left out
+  // 0x0602: retired (parallax_planned of format 1.2), never reused.
   // 0x8000..0xFFFF: never assigned by clothbake; free for experiments and private extensions.
 };
 
-// How the stored bytes encode the payload. Only Raw is written by format 1.0.
+// How the stored bytes encode the payload. Only Raw is written.
 enum class Codec : uint16_t {
   Raw = 0,
-  Zstd = 1,  // reserved; not written by 1.0, not decodable by this reader
+  Zstd = 1,  // reserved; never written, not decodable by this reader
 };
 
 // Element type of a typed-array payload. Opaque means the payload has its own layout (rank 0).

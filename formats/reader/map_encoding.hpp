@@ -1,14 +1,14 @@
-// Decoders of the reduced-precision feature-map encodings of format 1.4 (payload version 2 of
-// height, tangent, normal, gap and albedo; docs/format.md §6.4, "Feature maps, payload version 2";
-// docs/performance.md "Asset sizes" says why these encodings). The encoders are the writer's
-// (formats/writer/map_encoding.hpp); both sides share the constants below.
+// Decoders of the 16-bit codes of the feature maps height, tangent, normal, gap and albedo (which
+// map_entropy.hpp codes losslessly; docs/format.md, "Feature maps"; docs/performance.md "Asset
+// sizes" says why these encodings). The encoders are the writer's (formats/writer/
+// map_encoding.hpp); both sides share the constants below.
 //
-//   height  f16 {N, N}       IEEE 754 binary16, round to nearest even: |error| <= 2^-11 |h|
-//                            (2^-25 below 2^-14)
-//   tangent i16 {N, N, 2}    octahedral unit vector, snorm16: a = max(q / 32767, -1)
-//   normal  i16 {N, N, 2}    the same
-//   gap     u16 {N, N}       unorm16: I = q / 65535 (0 and 1 exact)
-//   albedo  u16 {N, N, 3}    unorm16 per channel
+//   height  1 code per texel    IEEE 754 binary16, round to nearest even: |error| <= 2^-11 |h|
+//                               (2^-25 below 2^-14)
+//   tangent 2 codes per texel   octahedral unit vector, snorm16: a = max(q / 32767, -1)
+//   normal  2 codes per texel   the same
+//   gap     1 code per texel    unorm16: I = q / 65535 (0 and 1 exact)
+//   albedo  3 codes per texel   unorm16 per channel
 //
 // Octahedral map (Meyer et al. 2010, "On floating-point normal vectors"; Cigolle et al. 2014):
 // (a, b) in [-1, 1]^2 (a = max(q / 32767, -1) in double) decodes to v = (a, b, 1 - |a| - |b|);
@@ -26,8 +26,6 @@
 
 namespace clothbake::reader {
 
-// Payload version of the five reduced-precision maps (yarn_id stays version 1, u16).
-inline constexpr uint16_t kFeatureMapPackedVersion = 2;
 inline constexpr float kSnorm16Scale = 32767.0f;
 inline constexpr float kUnorm16Scale = 65535.0f;
 

@@ -26,8 +26,8 @@ uint64_t tables_offset(uint32_t planes) noexcept {
 Status check_map_entropy(const char* what, const uint8_t* payload, uint64_t size, uint32_t channels,
                          MapEntropyHeader* out) noexcept {
   auto bad = [what](const char* fault) {
-    return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                         "%s map (entropy-coded, payload version 3): %s", what, fault);
+    return Status::error(ErrorCode::Malformed, Check::ValueRange, "%s map (entropy-coded): %s",
+                         what, fault);
   };
   if (payload == nullptr || size < kMapEntropyHeaderBytes) return bad("shorter than its header");
   MapEntropyHeader h;
@@ -37,7 +37,7 @@ Status check_map_entropy(const char* what, const uint8_t* payload, uint64_t size
   if (load32(payload + 12) != 0) return bad("reserved header bytes are not 0");
   if (h.planes != 2 * channels)
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "%s map (entropy-coded, payload version 3) has %u byte planes, expected "
+                         "%s map (entropy-coded) has %u byte planes, expected "
                          "%u",
                          what, unsigned(h.planes), unsigned(2 * channels));
   if (h.resolution == 0 || h.resolution > kMaxMapEntropyResolution)

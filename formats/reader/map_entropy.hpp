@@ -1,8 +1,9 @@
-// Entropy-coded feature maps (format 1.4, payload version 3 of height, tangent, normal, gap and
-// albedo; docs/format.md §6.4, "Payload version 3"): the 16-bit codes of payload version 2, split
-// into byte planes, each plane coded like one block of parallax_entropy (parallax_entropy.hpp:
-// LOCO-I prediction or the tile's repeat shift, static rANS, 5 contexts). Lossless: decoding
-// gives exactly the version-2 codes, which map_encoding.hpp then turns into floats.
+// Entropy-coded feature maps (the one form of height, tangent, normal, gap and albedo; docs/
+// format.md, "Feature maps"): the 16-bit codes of map_encoding.hpp (the raw bit patterns: f16
+// bits, two's-complement snorm16, unorm16), split into byte planes, each plane coded as one block
+// of the block coder (parallax_entropy.hpp: LOCO-I prediction or the tile's repeat shift, static
+// rANS, 5 contexts). Lossless: decoding gives exactly the codes, which map_encoding.hpp then turns
+// into floats.
 //
 // Payload: u8 {bytes}, little-endian:
 //   0   u32 resolution N (1..16384)
@@ -28,7 +29,7 @@
 
 namespace clothbake::reader {
 
-inline constexpr uint16_t kFeatureMapEntropyVersion = 3;
+inline constexpr uint16_t kFeatureMapVersion = 1;  // payload version of the five coded maps
 inline constexpr uint32_t kMapEntropyHeaderBytes = 16;
 inline constexpr uint32_t kMapEntropyTableBytes = kEntropyContexts * 256 * 2;  // per group
 inline constexpr uint32_t kMaxMapEntropyResolution = 16384;

@@ -23,7 +23,6 @@ constexpr SectionName kSectionNames[] = {
     {SectionType::AlbedoMap, "albedo"},
     {SectionType::ParallaxTable, "parallax"},
     {SectionType::ParallaxSat, "parallax_sat"},
-    {SectionType::ParallaxCompressed, "parallax_compressed"},
     {SectionType::ParallaxEntropy, "parallax_entropy"},
     {SectionType::VisibilityAsg, "visibility_asg"},
     {SectionType::AsgFitError, "asg_fit_error"},
@@ -34,7 +33,6 @@ constexpr SectionName kSectionNames[] = {
     {SectionType::RadianceCompressedTables, "radiance_compressed"},
     {SectionType::BinMap, "bin_map"},
     {SectionType::ScenePlan, "scene_plan"},
-    {SectionType::ParallaxPlanned, "parallax_planned"},
 };
 
 }  // namespace

@@ -1,12 +1,10 @@
-// Entropy-coded 8-bit parallax codes (format 1.2, section parallax_entropy 0x0203; layout in
-// docs/format.md, "Entropy-coded parallax section (format 1.2)"; docs/compression.md says why).
-//
-// One block per view direction d: the N x N plane of 8-bit codes code[d][y][x] (the same codes
-// and steps as parallax_compressed with bits = 8), coded in raster order (y, then x) as residuals
-// modulo 256 against a causal prediction, with a static rANS coder (12-bit frequencies, 32-bit
-// state, byte renormalisation) and one frequency table per context, shared by a group of blocks
-// (the bake groups the directions by grid row j; the tables are stored once per group in their own
-// section, since tables inside every block cost about 5 % of the coded residuals):
+// The block coder (docs/format.md, "The block coder"; docs/compression.md says why): one N x N
+// plane of byte symbols, coded in raster order (y, then x) as residuals modulo 256 against a
+// causal prediction, with a static rANS coder (12-bit frequencies, 32-bit state, byte
+// renormalisation) and one frequency table per context, shared by a group of blocks (the tables
+// are stored once per group, outside the blocks). The feature maps (map_entropy.hpp) code each
+// byte plane of their 16-bit codes as one block; the compressed parallax (parallax_hierarchy.hpp)
+// uses the same block header, prediction rules, coder and renormalisation with its own contexts.
 //   - a texel in the block's "shift region" (shift (sx, sy) != (0, 0): y >= sy when sy > 0, else
 //     x >= sx) is predicted by the texel (x - sx mod N, y - sy), already decoded: context 4. Woven
 //     tiles repeat (the twill's 256^2 tile is the same after a (64, 64) shift), so these
@@ -23,15 +21,12 @@
 // state with every byte consumed is reported (CBK-E021). C++17, standard library only, no
 // allocation (the caller gives the output plane and a ParallaxEntropyScratch).
 //
-// A planned table (info flags kEntropyPlannedFlag, format 1.3) stores the left-out directions as
-// empty blocks: not decoded, their queries answer OutOfPlan (parallax_sections.hpp).
-//
 // Block (little-endian): u16 sx, u16 sy (the shift; both < N), u16 group (< G), u16 flags (0),
 // u32 the coder's final state x (in [2^23, 2^31)), then the renormalisation bytes in reading order.
 // Decoding texel i: slot = x mod 4096, the symbol s whose cumulative range [start_s, start_s + f_s)
 // holds slot (context of the texel, the block's group), x = f_s (x >> 12) + slot - start_s, then
-// while x < 2^23: x = (x << 8) | next byte; code = (prediction + s) mod 256. After the last texel x
-// must be 2^23 and every byte consumed.
+// while x < 2^23: x = (x << 8) | next byte; value = (prediction + s) mod 256. After the last texel
+// x must be 2^23 and every byte consumed.
 #pragma once
 
 #include <cstddef>
@@ -45,7 +40,7 @@ inline constexpr uint32_t kEntropyParallaxInfoInstance = 0;     // CompressedPar
 inline constexpr uint32_t kEntropyParallaxStepsInstance = 1;    // f64 {D}
 inline constexpr uint32_t kEntropyParallaxOffsetsInstance = 2;  // u64 {D + 1}
 inline constexpr uint32_t kEntropyParallaxStreamInstance = 3;   // u8 {bytes}
-inline constexpr uint32_t kEntropyParallaxTablesInstance = 4;   // u16 {G, 5, 256}
+inline constexpr uint32_t kEntropyParallaxTablesInstance = 4;   // u16 {G, 23, 256}
 
 inline constexpr int kEntropyContexts = 5;  // 4 MED gradient contexts + the shift context
 inline constexpr int kEntropyShiftContext = 4;
@@ -54,9 +49,9 @@ inline constexpr uint32_t kRansScale = 1u << kRansScaleBits;
 inline constexpr uint32_t kRansLow = 1u << 23;      // state interval [2^23, 2^31)
 inline constexpr uint32_t kEntropyBlockHeader = 8;  // u16 sx, u16 sy, u16 group, u16 flags (0)
 inline constexpr uint32_t kMaxEntropyGroups = 65536;
-// CompressedParallaxInfoRecord::flags bit of a scene-planned table (format 1.3): the view
-// directions that bin_map instance 1 leaves out have empty blocks (offsets[d] == offsets[d + 1])
-// and answer OutOfPlan; readers of 1.2 refuse the flag (Unsupported), never give numbers.
+// CompressedParallaxInfoRecord::flags bit of a scene-planned table: the view directions that
+// bin_map instance 1 leaves out have empty blocks (offsets[d] == offsets[d + 1]) and answer
+// OutOfPlan.
 inline constexpr uint32_t kEntropyPlannedFlag = 1;
 
 // The causal prediction of texel (x, y) of a plane (row-major, n wide) from already decoded

@@ -1,6 +1,6 @@
-// Hierarchically predicted parallax codes (format 1.5: payload version 2 of the parallax_entropy
-// sections 0x0203; layout in docs/format.md, "Hierarchical parallax section (format 1.5)";
-// docs/compression.md, "Hierarchical parallax", says why and what it measured).
+// Hierarchically predicted parallax codes (the compressed parallax, sections parallax_entropy
+// 0x0203, payload version 1; layout in docs/format.md, "Compressed parallax"; docs/compression.md,
+// "Hierarchical parallax", says why and what it measured).
 //
 // Codes. Direction d has its own step (tile-side units per code), chosen by the bake from the
 // error target, and codes c_d(x, y) in [0, 65535]: r = -c_d * step[d]. Besides the f64 steps the
@@ -27,16 +27,17 @@
 //   spread bucket: the number of thresholds T in {1, 2, 4, 8} with
 //            max_e c_e(t) m[e] - min_e c_e(t) m[e] >= T m[d]   (0 for k < 2)
 //   D(t)   = c_d(t) - ref(t)                                (the difference plane, int32)
-// D is predicted from its causal neighbours exactly as predict_parallax_code predicts 8-bit codes
+// D is predicted from its causal neighbours exactly as predict_parallax_code predicts byte codes
 // (the shift copy, or the median edge detector on left a, upper b, upper-left c with the same
 // border rules), giving a prediction P and a gradient bucket by g = |a - c| + |b - c|:
 // 0 (g = 0), 1 (g < 3), 2 (g < 10), 3 (otherwise). The context is 4 * spread + gradient (0-19),
 // or kHierShiftContext for a texel in the block's shift region. The residual R = D - P, taken
 // modulo 65536 into [-32768, 32767], is coded as the symbol R + 127 when |R| <= 127, else as
 // kHierEscape followed by two symbols, the high and the low byte of (R mod 65536), in the contexts
-// kHierEscapeHighContext and kHierEscapeLowContext. Decoding: c_d(t) = (ref + P + R) mod 65536.
+// kHierEscapeHighContext and kHierEscapeLowContext; each of the three is a full rANS decoding
+// step. Decoding: c_d(t) = (ref + P + R) mod 65536.
 //
-// Blocks, groups, frequency tables and the rANS coder are those of version 1
+// Blocks, groups, frequency tables and the rANS coder are those of the block coder
 // (parallax_entropy.hpp: the same block header and renormalisation), with kHierContexts contexts
 // per table. C++17, standard library only, no allocation, safe on hostile bytes: every read is
 // bounded, all arithmetic is integer and cannot overflow for any stored values, a block that does
@@ -51,8 +52,8 @@
 
 namespace clothbake::reader {
 
-// Payload version of the hierarchical form's sections (every instance of parallax_entropy).
-inline constexpr uint16_t kHierParallaxVersion = 2;
+// Payload version of the compressed parallax (every instance of parallax_entropy).
+inline constexpr uint16_t kHierParallaxVersion = 1;
 // Instance 5: u32 {D} prediction weights m[d].
 inline constexpr uint32_t kHierParallaxWeightsInstance = 5;
 inline constexpr uint32_t kMaxHierWeight = 1u << 24;

@@ -22,21 +22,19 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 
 }  // namespace
 
-// The compressed form's on-demand SATs: one u32 inclusive SAT per direction (the ParallaxSat
-// layout), built once under its flag and published through the atomic pointer; for the
-// entropy-coded form also the decoded planes, likewise.
+// The compressed form's decoded planes and on-demand SATs: per direction one u16 plane and one
+// u32 inclusive SAT (the ParallaxSat layout), each built once under its flag and published
+// through its atomic pointer.
 struct ParallaxView::Packed {
   explicit Packed(uint64_t dirs)
       : flags(new (std::nothrow) std::once_flag[dirs]),
         sats(new (std::nothrow) std::atomic<uint32_t*>[dirs]),
         plane_flags(new (std::nothrow) std::once_flag[dirs]),
-        planes(new (std::nothrow) std::atomic<uint8_t*>[dirs]),
         planes16(new (std::nothrow) std::atomic<uint16_t*>[dirs]),
         plane(new (std::nothrow) int32_t[dirs]) {
-    if (!flags || !sats || !plane_flags || !planes || !planes16 || !plane) return;
+    if (!flags || !sats || !plane_flags || !planes16 || !plane) return;
     for (uint64_t d = 0; d < dirs; ++d) {
       sats[d].store(nullptr, std::memory_order_relaxed);
-      planes[d].store(nullptr, std::memory_order_relaxed);
       planes16[d].store(nullptr, std::memory_order_relaxed);
     }
     count = dirs;
@@ -44,7 +42,6 @@ struct ParallaxView::Packed {
   ~Packed() {
     for (uint64_t d = 0; d < count; ++d) {
       delete[] sats[d].load(std::memory_order_relaxed);
-      delete[] planes[d].load(std::memory_order_relaxed);
       delete[] planes16[d].load(std::memory_order_relaxed);
     }
   }
@@ -54,9 +51,8 @@ struct ParallaxView::Packed {
   std::unique_ptr<std::once_flag[]> flags;
   std::unique_ptr<std::atomic<uint32_t*>[]> sats;
   std::unique_ptr<std::once_flag[]> plane_flags;
-  std::unique_ptr<std::atomic<uint8_t*>[]> planes;
-  std::unique_ptr<std::atomic<uint16_t*>[]> planes16;  // hierarchical form
-  std::unique_ptr<int32_t[]> plane;  // planned form: bin -> stored plane, -1 = left out
+  std::unique_ptr<std::atomic<uint16_t*>[]> planes16;
+  std::unique_ptr<int32_t[]> plane;  // planned table: bin -> bin, -1 = left out
   std::atomic<uint64_t> bytes{0};
 };
 
@@ -74,24 +70,13 @@ bool any_instance(const Asset& asset, SectionType type, uint32_t instances) noex
 Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
   *this = ParallaxView();
   Status s;
-  const bool entropy = any_instance(asset, SectionType::ParallaxEntropy, 5);
-  // The compressed form: entropy-coded (1.2), else 8/16-bit codes (1.1), else the scene-planned
-  // directions (1.2).
-  const bool compressed = any_instance(asset, SectionType::ParallaxCompressed, 3);
-  const bool planned =
-      !entropy && !compressed && any_instance(asset, SectionType::ParallaxPlanned, 3);
-  auto open_packed = [&] {
-    return entropy ? open_entropy(asset)
-                   : open_compressed(asset, planned ? SectionType::ParallaxPlanned
-                                                    : SectionType::ParallaxCompressed);
-  };
+  const bool coded = any_instance(asset, SectionType::ParallaxEntropy, 6);
   if (source == ParallaxSource::Compressed) {
-    s = open_packed();
+    s = open_coded(asset);
   } else {
     s = open_raw(asset);
-    if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound &&
-        (entropy || compressed || planned))
-      s = open_packed();
+    if (source == ParallaxSource::Auto && s.code() == ErrorCode::NotFound && coded)
+      s = open_coded(asset);
   }
   if (!s.ok()) *this = ParallaxView();
   exact_sums_ = s.ok() && 65535u * uint64_t(info_.resolution) * info_.resolution < kTwo32;
@@ -104,11 +89,11 @@ uint64_t ParallaxView::decoded_bytes() const noexcept {
 
 double ParallaxView::depth_step(uint32_t bin) const noexcept {
   if (!covers(bin)) return 0.0;
-  return steps_ ? steps_[plane(bin)] : info_.depth_scale;
+  return steps_ ? steps_[bin] : info_.depth_scale;
 }
 
 namespace {
-// The range checks of a CompressedParallaxInfoRecord (both compressed forms).
+// The range checks of a CompressedParallaxInfoRecord.
 Status check_compressed_record(const CompressedParallaxInfoRecord& info,
                                const char* name) noexcept {
   if (info.resolution < 1 || info.resolution > kMaxParallaxResolution || info.dirs < 1 ||
@@ -158,27 +143,16 @@ Status check_steps(const ArrayView<double>& steps, uint64_t d, const char* name)
 // Largest total of decoded planes the entropy form may describe (D * N^2 bytes): 4 GiB.
 constexpr uint64_t kMaxEntropyDecodedBytes = uint64_t(1) << 32;
 
-Status ParallaxView::open_entropy(const Asset& asset) noexcept {
-  // Payload version 1 (format 1.2: 8-bit codes, 5 contexts) or 2 (1.5: the hierarchical form,
-  // 16-bit codes, 23 contexts, prediction weights); every instance has the same version.
-  uint16_t version = 1;
-  {
-    SectionInfo first;
-    if (asset.find(SectionType::ParallaxEntropy, kEntropyParallaxInfoInstance, &first).ok() &&
-        first.version == kHierParallaxVersion)
-      version = kHierParallaxVersion;
-  }
-  const bool hierarchical = version == kHierParallaxVersion;
-  const char* name = hierarchical ? "parallax_entropy (hierarchical)" : "parallax_entropy";
-  const char* missing = hierarchical ? "this asset has no hierarchical parallax table "
-                                       "(parallax_entropy instances 0 to 5)"
-                                     : "this asset has no entropy-coded parallax table "
-                                       "(parallax_entropy instances 0 to 4)";
+Status ParallaxView::open_coded(const Asset& asset) noexcept {
+  const char* name = "parallax_entropy";
+  const char* missing =
+      "this asset has no compressed parallax table (parallax_entropy instances 0 to 5)";
   const char* version_message =
-      "parallax_entropy: payload version must be 1 or 2 (this reader knows versions 1 and 2, "
-      "the same for every instance)";
-  const uint32_t bits = hierarchical ? 16 : 8;
-  const uint32_t contexts = hierarchical ? uint32_t(kHierContexts) : uint32_t(kEntropyContexts);
+      "parallax_entropy: payload version must be 1 (this reader knows version 1, the same for "
+      "every instance)";
+  const uint32_t bits = 16;
+  const uint32_t contexts = uint32_t(kHierContexts);
+  const uint16_t version = kHierParallaxVersion;
   ArrayView<uint8_t> info_bytes;
   ArrayView<double> steps;
   Status s = detail::view_required_pair(
@@ -193,8 +167,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
                          "CompressedParallaxInfoRecord)");
   CompressedParallaxInfoRecord info;
   std::memcpy(&info, info_bytes.data, sizeof info);
-  // flags: 0, or kEntropyPlannedFlag (a scene-planned asset, coverage in bin map 1: format 1.3
-  // for version 1).
+  // flags: 0, or kEntropyPlannedFlag (a scene-planned asset, coverage in bin map 1).
   if ((info.flags & ~kEntropyPlannedFlag) != 0 || info.bits != bits)
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
                          "%s: bits %u / flags %u unknown to this reader (version %u has %u / 0 "
@@ -243,14 +216,13 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
                          unsigned(contexts), unsigned(version));
   for (uint32_t g = 0; g < tables.dims[0]; ++g) {
     const uint16_t* group_tables = tables.data + uint64_t(g) * contexts * 256;
-    const Status t = hierarchical ? check_hierarchical_tables(group_tables)
-                                  : check_parallax_tables(group_tables);
+    const Status t = check_hierarchical_tables(group_tables);
     if (!t.ok())
       return Status::error(ErrorCode::Malformed, Check::ValueRange, "group %u: %s", unsigned(g),
                            t.message());
   }
   ArrayView<uint32_t> weights;
-  if (hierarchical) {
+  {
     bool have_weights = false;
     s = detail::view_optional(asset, {SectionType::ParallaxEntropy, kHierParallaxWeightsInstance},
                               version_message, &weights, &have_weights, version);
@@ -269,8 +241,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
                              "[1, 2^24]",
                              static_cast<unsigned long long>(i));
   }
-  const uint64_t code_bytes = hierarchical ? 2 : 1;
-  if (d * n * n * code_bytes > kMaxEntropyDecodedBytes)
+  if (d * n * n * 2 > kMaxEntropyDecodedBytes)
     return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
                          "parallax_entropy: %llu directions of %llu^2 codes would decode to more "
                          "than 4 GiB",
@@ -291,7 +262,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
                            static_cast<unsigned long long>(i),
                            stored ? "stored" : "left out of bin_map instance 1",
                            empty ? "empty" : "not empty");
-    if (!hierarchical || !planned || !stored) continue;
+    if (!planned || !stored) continue;
     const ParallaxReferences refs =
         parallax_references(uint32_t(i % info.dirs), uint32_t(i / info.dirs), info.dirs);
     for (int e = 0; e < refs.count; ++e)
@@ -322,7 +293,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
   offsets_ = offsets.data;
   tables_ = tables.data;
   groups_ = tables.dims[0];
-  weights_ = hierarchical ? weights.data : nullptr;
+  weights_ = weights.data;
   stream_ = stream.data != nullptr ? stream.data : reinterpret_cast<const uint8_t*>("");
   packed_ = std::move(packed);
   return {};
@@ -331,29 +302,7 @@ Status ParallaxView::open_entropy(const Asset& asset) noexcept {
 bool ParallaxView::ensure_plane(uint32_t bin) const noexcept {
   if (stream_ == nullptr) return true;
   if (!covers(bin)) return false;  // planned: the direction was left out
-  return weights_ ? plane16(bin) != nullptr : plane8(bin) != nullptr;
-}
-
-const uint8_t* ParallaxView::plane8(uint32_t bin) const noexcept {
-  Packed& p = *packed_;
-  const uint8_t* ready = p.planes[bin].load(std::memory_order_acquire);
-  if (ready) return ready;
-  std::call_once(p.plane_flags[bin], [&] {
-    const uint64_t n = info_.resolution;
-    uint8_t* plane = new (std::nothrow) uint8_t[n * n];
-    ParallaxEntropyScratch* scratch = new (std::nothrow) ParallaxEntropyScratch;
-    if (plane && scratch) {
-      // A block that does not decode exactly is zero-filled by the decoder (decode_all says so).
-      (void)decode_parallax_block(stream_ + offsets_[bin], offsets_[bin + 1] - offsets_[bin],
-                                  tables_, groups_, uint32_t(n), plane, scratch);
-      p.bytes.fetch_add(n * n, std::memory_order_relaxed);
-      p.planes[bin].store(plane, std::memory_order_release);
-    } else {
-      delete[] plane;
-    }
-    delete scratch;
-  });
-  return p.planes[bin].load(std::memory_order_acquire);
+  return plane16(bin) != nullptr;
 }
 
 namespace {
@@ -401,7 +350,8 @@ const uint16_t* ParallaxView::plane16(uint32_t bin) const noexcept {
   return p.planes16[bin].load(std::memory_order_acquire);
 }
 
-Status ParallaxView::decode_all_hierarchical() const noexcept {
+Status ParallaxView::decode_all() const noexcept {
+  if (stream_ == nullptr) return {};
   const uint64_t n = info_.resolution, d = uint64_t(info_.dirs) * info_.dirs;
   std::unique_ptr<uint16_t[]> plane(new (std::nothrow) uint16_t[n * n]);
   std::unique_ptr<int32_t[]> diff(new (std::nothrow) int32_t[n * n]);
@@ -430,27 +380,6 @@ Status ParallaxView::decode_all_hierarchical() const noexcept {
   return {};
 }
 
-Status ParallaxView::decode_all() const noexcept {
-  if (stream_ == nullptr) return {};
-  if (weights_) return decode_all_hierarchical();
-  const uint64_t n = info_.resolution, d = uint64_t(info_.dirs) * info_.dirs;
-  std::unique_ptr<uint8_t[]> plane(new (std::nothrow) uint8_t[n * n]);
-  std::unique_ptr<ParallaxEntropyScratch> scratch(new (std::nothrow) ParallaxEntropyScratch);
-  if (!plane || !scratch)
-    return Status::error(ErrorCode::Unsupported, Check::None,
-                         "parallax_entropy: cannot allocate a plane to decode");
-  for (uint64_t i = 0; i < d; ++i) {
-    if (!covers(uint32_t(i))) continue;  // planned: an empty block (open checked it)
-    const Status s =
-        decode_parallax_block(stream_ + offsets_[i], offsets_[i + 1] - offsets_[i], tables_,
-                              groups_, uint32_t(n), plane.get(), scratch.get());
-    if (!s.ok())
-      return Status::error(ErrorCode::Malformed, Check::ValueRange, "direction %llu: %s",
-                           static_cast<unsigned long long>(i), s.message());
-  }
-  return {};
-}
-
 uint32_t ParallaxView::stored_dirs() const noexcept {
   if (!plane_) return info_.dirs * info_.dirs;
   uint32_t k = 0;
@@ -466,114 +395,12 @@ Status ParallaxView::out_of_plan(int bin) const noexcept {
                        bin);
 }
 
-Status ParallaxView::open_compressed(const Asset& asset, SectionType type) noexcept {
-  const bool planned = type == SectionType::ParallaxPlanned;
-  ArrayView<uint8_t> info_bytes;
-  ArrayView<double> steps;
-  Status s = detail::view_required_pair(
-      asset, {type, kCompressedParallaxInfoInstance}, {type, kCompressedParallaxStepsInstance},
-      planned ? "this asset has no planned parallax table (parallax_planned instances 0, 1 and 2)"
-              : "this asset has no compressed parallax table (parallax_compressed instances 0, 1 "
-                "and 2)",
-      "parallax_compressed: payload version must be 1 (this reader knows version 1)", &info_bytes,
-      &steps);
-  if (!s.ok()) return s;
-  if (info_bytes.rank != 2 || info_bytes.dims[0] != 1 ||
-      info_bytes.dims[1] != sizeof(CompressedParallaxInfoRecord))
-    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_compressed instance 0 must be u8 {1, 64} (one "
-                         "CompressedParallaxInfoRecord)");
-  CompressedParallaxInfoRecord info;
-  std::memcpy(&info, info_bytes.data, sizeof info);
-  if (info.flags != 0 || (info.bits != 8 && info.bits != 16))
-    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
-                         "parallax_compressed: bits %u / flags %u unknown to this reader (version "
-                         "1 has 8 or 16 / 0)",
-                         unsigned(info.bits), unsigned(info.flags));
-  // The codes, as u8 or u16 by `bits`.
-  ArrayView<uint8_t> codes;
-  ArrayView<uint16_t> codes16;
-  bool have_codes = false;
-  const detail::SectionKey codes_key{type, kCompressedParallaxCodesInstance};
-  s = info.bits == 8 ? detail::view_optional(asset, codes_key,
-                                             "parallax_compressed: payload version must be 1",
-                                             &codes, &have_codes)
-                     : detail::view_optional(asset, codes_key,
-                                             "parallax_compressed: payload version must be 1",
-                                             &codes16, &have_codes);
-  if (!s.ok()) return s;
-  if (!have_codes)
-    return Status::error(ErrorCode::NotFound, Check::MissingSection,
-                         "this asset has no compressed parallax table (parallax_compressed "
-                         "instance 2, the codes, is missing)");
-  if (info.bits == 16) {
-    codes.rank = codes16.rank;
-    for (int i = 0; i < 4; ++i)
-      codes.dims[i] = codes16.dims[i];
-  }
-  s = check_compressed_record(info, "parallax_compressed");
-  if (!s.ok()) return s;
-  const uint64_t n = info.resolution, bins = uint64_t(info.dirs) * info.dirs;
-  uint64_t d = bins;  // stored planes
-  BinMapView map;
-  if (planned) {
-    s = read_view_bin_map(asset, info.dirs, "parallax_planned", &map);
-    if (!s.ok()) return s;
-    d = map.kept;
-  }
-  if (steps.rank != 1 || steps.dims[0] != d)
-    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_compressed instance 1 must be f64 {%llu} (one step per "
-                         "direction)",
-                         static_cast<unsigned long long>(d));
-  if (codes.rank != 3 || codes.dims[0] != d || codes.dims[1] != n || codes.dims[2] != n)
-    return Status::error(ErrorCode::WrongType, Check::SectionLayout,
-                         "parallax_compressed instance 2 must be u%u {%llu, %llu, %llu} "
-                         "(directions, N, N)",
-                         unsigned(info.bits), static_cast<unsigned long long>(d),
-                         static_cast<unsigned long long>(n), static_cast<unsigned long long>(n));
-  for (uint64_t i = 0; i < d; ++i)
-    if (!(steps.data[i] >= 0.0 && steps.data[i] <= 1.0))  // also NaN
-      return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "parallax_compressed: step of direction %llu is not in [0, 1] "
-                           "tile-side units",
-                           static_cast<unsigned long long>(i));
-  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(bins));
-  if (!packed || packed->count != bins)
-    return Status::error(ErrorCode::Unsupported, Check::None,
-                         "parallax_compressed: cannot allocate the SAT directory");
-  info_ = ParallaxInfoRecord{};
-  info_.resolution = info.resolution;
-  info_.dirs = info.dirs;
-  info_.min_cos = info.min_cos;
-  info_.reference_height = info.reference_height;
-  info_.depth_scale = 0.0;  // per direction: depth_step()
-  info_.max_quantization_error = info.max_depth_error;
-  info_.max_offset = info.max_offset;
-  packed_info_ = info;
-  if (info.bits == 8)
-    codes8_ = codes.data;
-  else
-    codes_ = codes16.data;
-  steps_ = steps.data;
-  if (planned) {
-    int32_t next = 0;
-    for (uint64_t b = 0; b < bins; ++b)
-      packed->plane[b] = map.covers(uint32_t(b)) ? next++ : -1;
-    plane_ = packed->plane.get();
-  }
-  packed_ = std::move(packed);
-  return {};
-}
-
 bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
   if (!packed_) return true;
-  if (!covers(bin)) return false;  // planned form: the direction was left out
+  if (!covers(bin)) return false;  // planned: the direction was left out
   if (packed_->sats[bin].load(std::memory_order_acquire) != nullptr) return true;  // built
-  const uint8_t* decoded = nullptr;
-  const uint16_t* decoded16 = nullptr;
-  if (stream_ && weights_ && (decoded16 = plane16(bin)) == nullptr) return false;
-  if (stream_ && !weights_ && (decoded = plane8(bin)) == nullptr) return false;
+  const uint16_t* decoded = plane16(bin);
+  if (decoded == nullptr) return false;
   Packed& p = *packed_;
   std::call_once(p.flags[bin], [&] {
     const uint64_t n = info_.resolution;
@@ -582,9 +409,7 @@ bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
     for (uint64_t y = 0; y < n; ++y) {
       uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
       for (uint64_t x = 0; x < n; ++x) {
-        row += decoded     ? uint32_t(decoded[y * n + x])
-               : decoded16 ? uint32_t(decoded16[y * n + x])
-                           : code(bin, y * n + x);
+        row += uint32_t(decoded[y * n + x]);
         sat[y * n + x] = row + (y > 0 ? sat[(y - 1) * n + x] : 0u);
       }
     }
@@ -698,7 +523,7 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
   const uint64_t n = info_.resolution;
   const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
   double r = 0.0;
-  if (weights_) {
+  if (stream_) {
     for (int k = 0; k < 4; ++k)
       if (weight[k] > 0.0 && covers(uint32_t(bin[k]))) {  // uncovered bins count 0
         const uint16_t* p = plane16(uint32_t(bin[k]));
@@ -706,32 +531,9 @@ double ParallaxView::weighted_depth(const int bin[4], const double weight[4], in
       }
     return r;
   }
-  if (stream_) {
-    for (int k = 0; k < 4; ++k)
-      if (weight[k] > 0.0 && covers(uint32_t(bin[k]))) {  // uncovered bins count 0
-        const uint8_t* p = plane8(uint32_t(bin[k]));
-        if (p) r += weight[k] * (-double(p[texel]) * steps_[bin[k]]);
-      }
-    return r;
-  }
-  if (plane_) {  // planned: through the plane map (uncovered bins count 0; callers check)
-    for (int k = 0; k < 4; ++k)
-      if (weight[k] > 0.0 && plane_[bin[k]] >= 0) {
-        const uint64_t p = uint64_t(plane_[bin[k]]);
-        r += weight[k] * (-double(code(uint32_t(bin[k]), texel)) * steps_[p]);
-      }
-    return r;
-  }
-  if (codes8_) {
-    for (int k = 0; k < 4; ++k)
-      if (weight[k] > 0.0)
-        r += weight[k] * (-double(codes8_[uint64_t(bin[k]) * n * n + texel]) * steps_[bin[k]]);
-    return r;
-  }
   for (int k = 0; k < 4; ++k)
     if (weight[k] > 0.0)
-      r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) *
-                        (steps_ ? steps_[bin[k]] : info_.depth_scale));
+      r += weight[k] * (-double(codes_[uint64_t(bin[k]) * n * n + texel]) * info_.depth_scale);
   return r;
 }
 
@@ -942,7 +744,7 @@ Status ParallaxView::footprint_depth(const Footprint& rect, const double view[3]
         if (!ensure_sat(uint32_t(w.index[k])))
           return Status::error(ErrorCode::Unsupported, Check::None,
                                "parallax: cannot allocate the SAT of direction %d", w.index[k]);
-        sum += w.weight[k] * code_sum(uint32_t(w.index[k])) * steps_[plane(uint32_t(w.index[k]))];
+        sum += w.weight[k] * code_sum(uint32_t(w.index[k])) * steps_[w.index[k]];
       }
   }
   const double r = -sum / area;

@@ -8,7 +8,9 @@
 //   u_new = u + (r / o.z) (o.x, o.y)      (u in tile units, [0, 1) over one tile)
 // is the first visible point (model/parallax.hpp applies it).
 //
-// Sections (all version 1), raw form (format 1.0):
+// Two forms, each payload version 1:
+//
+// Raw (written by uncompressed bakes and with --keep-raw):
 //   ParallaxTable instance 0: u8 {1, 64}   one ParallaxInfoRecord
 //   ParallaxTable instance 1: u16 {D, N, N} depth codes: r = -code * depth_scale, D = n^2 view
 //                                          directions (bin (i, j) of DirectionGrid{n, min_cos} at
@@ -18,39 +20,23 @@
 // With 16-bit codes a sum over any rectangle of at most 65537 texels is below 2^32, so modular
 // differences of four SAT values are exact; larger rectangles are summed in bands (exact too).
 //
-// Compressed form (format 1.1; compress/parallax_codes.hpp writes it, docs/compression.md says
-// why this form and not a directional PCA):
-//   ParallaxCompressed instance 0: u8 {1, 64}   one CompressedParallaxInfoRecord
-//   ParallaxCompressed instance 1: f64 {D}      step[d]: tile-side units per code of direction d
-//   ParallaxCompressed instance 2: u8 or u16 {D, N, N} codes (bits 8 or 16): r = -code * step[d]
-// (bits = 16: u16 codes, the bake's fallback when 8 bits miss parallax_max_error.)
-// No SAT is stored: the view builds a direction's u32 SAT (the ParallaxSat layout) the first time
-// a footprint query needs that direction (thread-safe, once per direction), so that opening costs
-// nothing and a renderer that looks from a few directions builds only those. 8-bit codes sum to
-// at most 255 * 2^24 < 2^32 over any rectangle for N <= 4096: the SAT is exact there (larger N
-// is summed in bands like the raw form).
-//
-// Entropy-coded form (format 1.2; formats/reader/parallax_entropy.hpp has the block format,
-// compress/parallax_entropy.hpp writes it): the same 8-bit codes and steps, coded per direction:
-//   ParallaxEntropy instance 0: u8 {1, 64}   one CompressedParallaxInfoRecord (bits = 8)
-//   ParallaxEntropy instance 1: f64 {D}      step[d]
-//   ParallaxEntropy instance 2: u64 {D + 1}  block offsets into instance 3 (0, ..., its size)
-//   ParallaxEntropy instance 3: u8 {bytes}   the D blocks
-//   ParallaxEntropy instance 4: u16 {G, 5, 256} frequency tables of G block groups
-// The view decodes a direction's block the first time a query needs that direction (thread-safe,
-// once per direction, N^2 bytes owned), so that opening costs a check of the offsets only.
-// Hierarchical form (format 1.5: the same instances at payload version 2, plus instance 5;
-// parallax_hierarchy.hpp): 16-bit codes with per-direction steps from the bake's error target,
-// each block predicted from up to four other directions:
-//   ParallaxEntropy instances 0-3 as above (info bits = 16, flags = 0; steps f64 {D})
-//   ParallaxEntropy instance 4: u16 {G, 23, 256} frequency tables
-//   ParallaxEntropy instance 5: u32 {D}          prediction weights m[d] in [1, 2^24]
-// A direction's plane (N^2 u16 owned) is decoded after the planes it references (at most two
-// levels; those stay decoded too).
-// Planned form (format 1.2, scene_plan_sections.hpp): ParallaxPlanned, the compressed layout for
-// the K view directions that bin map 1 covers (steps f64 {K}, codes {K, N, N}, in bin order). A
-// query whose bilinear bins (weight > 0) include a direction that was left out answers OutOfPlan,
-// never a number; covers() tells beforehand.
+// Compressed (what a bake writes; parallax_hierarchy.hpp, compress/parallax_hierarchy.hpp writes
+// it, docs/compression.md "Hierarchical parallax" says why): 16-bit codes with per-direction
+// steps from the bake's error target, each direction's block predicted from up to four others
+// and entropy-coded with the block coder (parallax_entropy.hpp):
+//   ParallaxEntropy instance 0: u8 {1, 64}        one CompressedParallaxInfoRecord (bits 16)
+//   ParallaxEntropy instance 1: f64 {D}           step[d]: r = -code * step[d]
+//   ParallaxEntropy instance 2: u64 {D + 1}       block offsets into instance 3 (0, ..., its size)
+//   ParallaxEntropy instance 3: u8 {bytes}        the D blocks
+//   ParallaxEntropy instance 4: u16 {G, 23, 256}  frequency tables of G block groups
+//   ParallaxEntropy instance 5: u32 {D}           prediction weights m[d] in [1, 2^24]
+// No SAT is stored: the view decodes a direction's plane (N^2 u16, after the planes it
+// references, at most two levels, which stay decoded too) and builds its u32 SAT the first time
+// a query needs that direction (thread-safe, once per direction), so that opening costs a check
+// of the offsets only. A scene-planned table (info flags kEntropyPlannedFlag) stores only the
+// directions of bin map 1 (the others are empty blocks); a query whose bilinear bins (weight > 0)
+// include a direction that was left out answers OutOfPlan, never a number; covers() tells
+// beforehand.
 //
 // Queries take the view direction as any finite non-zero vector; it is normalised and, below the
 // cap, moved onto the cap's rim at the same azimuth (straight down: +x azimuth), and that
@@ -59,8 +45,12 @@
 // n * 1e-8 in the weights; the evaluator and the scene plans use the same lookup) and in Eq. 2,
 // so offsets stay bounded by range * tan(theta_cut).
 //
-// C++17, standard library only, noexcept, no allocation; safe on untrusted assets that
-// Asset::open accepted (shapes and parameter ranges are checked by ParallaxView::open).
+// C++17, standard library only, noexcept; safe on untrusted assets that Asset::open accepted
+// (shapes, parameter ranges and block offsets are checked by ParallaxView::open; a block that does
+// not decode reads as zero codes, and decode_all reports it). Allocation: the raw form none (it
+// views the asset); the compressed form, with new (std::nothrow), its block directory at open and
+// each direction's decoded plane and SAT on first use (decoded_bytes() counts them); a failed
+// allocation is reported (Unsupported), never thrown.
 #pragma once
 
 #include <atomic>
@@ -78,10 +68,6 @@ inline constexpr uint32_t kParallaxInfoInstance = 0;
 inline constexpr uint32_t kParallaxCodesInstance = 1;
 inline constexpr uint32_t kMaxParallaxDirs = 256;
 inline constexpr uint32_t kMaxParallaxResolution = 16384;
-inline constexpr uint32_t kCompressedParallaxInfoInstance = 0;
-inline constexpr uint32_t kCompressedParallaxStepsInstance = 1;
-inline constexpr uint32_t kCompressedParallaxCodesInstance = 2;
-inline constexpr uint32_t kCompressedParallaxBits = 8;  // the small form; 16 is the fallback
 
 // Info v1: one record, shape {1, 64}.
 struct ParallaxInfoRecord {
@@ -105,12 +91,12 @@ static_assert(offsetof(ParallaxInfoRecord, max_quantization_error) == 32);
 static_assert(offsetof(ParallaxInfoRecord, max_offset) == 40);
 static_assert(offsetof(ParallaxInfoRecord, reserved) == 48);
 
-// Compressed info v1: one record, shape {1, 64}.
+// Compressed info (ParallaxEntropy instance 0): one record, shape {1, 64}.
 struct CompressedParallaxInfoRecord {
   uint32_t resolution;      // N, 1..16384
   uint32_t dirs;            // n: n x n view directions, 1..256
-  uint32_t bits;            // bits per code: 8 (codes u8) or 16 (codes u16)
-  uint32_t flags;           // 0 in version 1
+  uint32_t bits;            // bits per code: 16
+  uint32_t flags;           // 0, or kEntropyPlannedFlag (parallax_entropy.hpp)
   double min_cos;           // the cap, [0, 1)
   double reference_height;  // z_ref, tile-side units (finite)
   double max_offset;        // max |Eq. 2 offset| of the raw table's bin centres, tile units
@@ -135,7 +121,7 @@ static_assert(offsetof(CompressedParallaxInfoRecord, max_depth_error) == 56);
 enum class ParallaxSource {
   Auto,        // the raw table when the asset has one (exact), the compressed one otherwise
   Raw,         // the raw table only
-  Compressed,  // the compressed table only (entropy-coded, 8/16-bit codes, or the planned form)
+  Compressed,  // the compressed table only
 };
 
 // The answer of a query.
@@ -146,38 +132,37 @@ struct ParallaxSample {
 };
 
 // The same queries on the raw and on the compressed form. The view points into the Asset's bytes
-// (it must outlive the view); the compressed form's prefix sums are owned (shared between copies).
+// (it must outlive the view); the compressed form's decoded planes and prefix sums are owned
+// (shared between copies). Every const member is thread-safe.
 class ParallaxView {
  public:
-  // Errors: NotFound (CBK-E019: no parallax table of the form asked for), WrongType/Unsupported
-  // (CBK-E015: version, element type, shape, SAT shape differing from the table's, bits, flags),
-  // Malformed (CBK-E021: a parameter or step out of range, NaN/Inf included). The raw SAT is
-  // optional (has_sat()); the compressed form always answers footprints (SATs built on demand;
-  // footprint_depth returns Unsupported if one cannot be allocated).
+  // Errors: NotFound (CBK-E019: no parallax table of the form asked for, or a planned table
+  // without bin_map instance 1), WrongType/Unsupported (CBK-E015: version, element type, shape,
+  // SAT shape differing from the table's, bits, flags; CBK-E024 beyond 4 GiB of decoded planes),
+  // Malformed (CBK-E021: a parameter, step, weight, table or block offset out of range, NaN/Inf
+  // included). The raw SAT is optional (has_sat()); the compressed form always answers
+  // footprints (SATs built on demand; footprint_depth returns Unsupported if one cannot be
+  // allocated).
   Status open(const Asset& asset, ParallaxSource source = ParallaxSource::Auto) noexcept;
   bool is_open() const noexcept { return codes_ != nullptr || packed_ != nullptr; }
   bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
   bool is_compressed() const noexcept { return packed_ != nullptr; }
-  // True for the entropy-coded forms (format 1.2, and the hierarchical one of 1.5).
-  bool is_entropy_coded() const noexcept { return stream_ != nullptr; }
-  // True for the hierarchical form (format 1.5).
-  bool is_hierarchical() const noexcept { return weights_ != nullptr; }
-  // The planned form (ParallaxPlanned): only the directions of its bin map are stored.
+  // A scene-planned table: only the directions of its bin map are stored.
   bool is_planned() const noexcept { return plane_ != nullptr; }
-  // Whether direction bin `bin` (< dirs^2) is stored (always, except in the planned form).
+  // Whether direction bin `bin` (< dirs^2) is stored (always, except in a planned table).
   bool covers(uint32_t bin) const noexcept { return plane_ == nullptr || plane_[bin] >= 0; }
-  // Stored view directions (dirs^2, or the bin map's count in the planned form).
+  // Stored view directions (dirs^2, or the bin map's count in a planned table).
   uint32_t stored_dirs() const noexcept;
   // Compressed form: its record (zero for the raw form).
   const CompressedParallaxInfoRecord& compressed_info() const noexcept { return packed_info_; }
   // Bytes of the SATs and decoded planes the compressed form has built so far (0 for raw).
   uint64_t decoded_bytes() const noexcept;
-  // Entropy-coded form: decodes the block of `bin` now (no-op for the other forms); false if it
-  // cannot be allocated. A block that does not decode exactly reads as zero codes (validate
-  // reports it: decode_all). Thread-safe. Precondition: bin < dirs^2.
+  // Compressed form: decodes the block of `bin` now (no-op for raw); false if it cannot be
+  // allocated or the direction is not stored. A block that does not decode exactly reads as zero
+  // codes (validate reports it: decode_all). Thread-safe. Precondition: bin < dirs^2.
   bool ensure_plane(uint32_t bin) const noexcept;
-  // Entropy-coded form: decodes every block and reports the first that does not decode exactly
-  // (CBK-E021) or cannot be allocated (Unsupported). OK for the other forms.
+  // Compressed form: decodes every stored block and reports the first that does not decode
+  // exactly (CBK-E021) or cannot be allocated (Unsupported). OK for raw.
   Status decode_all() const noexcept;
   // The depth step of `bin` (tile-side units per code; the raw form's depth_scale for every bin).
   double depth_step(uint32_t bin) const noexcept;
@@ -186,8 +171,8 @@ class ParallaxView {
   uint32_t resolution() const noexcept { return info_.resolution; }
   uint32_t dirs() const noexcept { return info_.dirs; }
 
-  // The stored code of one bin at texel (x, y) (any integers: the tile wraps); the entropy form
-  // decodes the bin's block first. Precondition: bin < dirs^2 and covers(bin).
+  // The stored code of one bin at texel (x, y) (any integers: the tile wraps); the compressed
+  // form decodes the bin's block first. Precondition: bin < dirs^2 and covers(bin).
   uint32_t bin_code(uint32_t bin, int64_t x, int64_t y) const noexcept;
   // r of one bin at texel (x, y) (any integers: the tile wraps). Precondition: bin < dirs^2 and
   // covers(bin) (an uncovered bin gives 0).
@@ -208,7 +193,7 @@ class ParallaxView {
 
   // r at texel (x, y) for view direction `view` (bilinear between bins), with its Eq. 2 offset.
   // InvalidArgument for a zero or non-finite view; OutOfPlan when a bin of the lookup (weight > 0)
-  // is not covered (planned form).
+  // is not covered (a planned table).
   Status depth(int64_t x, int64_t y, const double view[3], ParallaxSample* out) const noexcept;
 
   // The mean of r over a footprint rectangle (texel units, any size and position; the tile wraps;
@@ -223,8 +208,8 @@ class ParallaxView {
   // SAT; exact for any N). Precondition: has_sat(), bin < dirs^2; compressed form: the bin's SAT
   // built (footprint_depth or ensure_sat did), else 0.
   uint64_t code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
-  // Builds the compressed form's SAT of `bin` now (no-op for raw); false if it cannot be allocated.
-  // Thread-safe. Precondition: bin < dirs^2.
+  // Builds the compressed form's SAT of `bin` now (no-op for raw); false if it cannot be allocated
+  // or the direction is not stored. Thread-safe. Precondition: bin < dirs^2.
   bool ensure_sat(uint32_t bin) const noexcept;
 
  private:
@@ -232,44 +217,33 @@ class ParallaxView {
   double prefix_integral(uint32_t bin, const uint32_t* table, double x, double y) const noexcept;
   uint64_t prefix_sum_of(const uint32_t* table, uint32_t x, uint32_t y) const noexcept;
   const uint32_t* bin_sat(uint32_t bin) const noexcept;
-  // Stored plane of a covered bin (the bin itself unless planned).
-  uint64_t plane(uint32_t bin) const noexcept { return plane_ ? uint64_t(plane_[bin]) : bin; }
   Status out_of_plan(int bin) const noexcept;
-  // Code of texel index t (y * N + x) in direction bin (covered); 0 when an entropy block is
+  // Code of texel index t (y * N + x) in direction bin (covered); 0 when a compressed block is
   // unavailable.
   uint32_t code(uint32_t bin, uint64_t t) const noexcept {
     const uint64_t plane_size = uint64_t(info_.resolution) * info_.resolution;
-    if (codes_) return uint32_t(codes_[plane(bin) * plane_size + t]);
-    if (codes8_) return uint32_t(codes8_[plane(bin) * plane_size + t]);
-    if (weights_) {
-      const uint16_t* p = plane16(bin);
-      return p ? uint32_t(p[t]) : 0u;
-    }
-    const uint8_t* p = plane8(bin);
+    if (codes_) return uint32_t(codes_[uint64_t(bin) * plane_size + t]);
+    const uint16_t* p = plane16(bin);
     return p ? uint32_t(p[t]) : 0u;
   }
-  const uint8_t* plane8(uint32_t bin) const noexcept;    // entropy form: the decoded plane
-  const uint16_t* plane16(uint32_t bin) const noexcept;  // hierarchical form: the decoded plane
+  const uint16_t* plane16(uint32_t bin) const noexcept;  // compressed form: the decoded plane
 
-  struct Packed;  // the compressed form's steps and on-demand SATs
+  struct Packed;  // the compressed form's decoded planes and on-demand SATs
   Status open_raw(const Asset& asset) noexcept;
-  Status open_compressed(const Asset& asset, SectionType type) noexcept;
-  Status open_entropy(const Asset& asset) noexcept;
-  Status decode_all_hierarchical() const noexcept;
+  Status open_coded(const Asset& asset) noexcept;
 
   ParallaxInfoRecord info_{};
-  const uint16_t* codes_ = nullptr;
-  const uint32_t* sat_ = nullptr;
-  const uint8_t* codes8_ = nullptr;  // compressed form
-  const double* steps_ = nullptr;    // compressed form, D values in the asset
-  const uint8_t* stream_ = nullptr;  // entropy form: the blocks
+  const uint16_t* codes_ = nullptr;  // raw form
+  const uint32_t* sat_ = nullptr;    // raw form (optional)
+  const double* steps_ = nullptr;    // compressed form: D values in the asset
+  const uint8_t* stream_ = nullptr;  // compressed form: the blocks
   const uint64_t* offsets_ = nullptr;
-  const uint16_t* tables_ = nullptr;   // entropy form: groups_ x 5 (or 23) x 256
-  const uint32_t* weights_ = nullptr;  // hierarchical form: m[d]
+  const uint16_t* tables_ = nullptr;   // compressed form: groups_ x 23 x 256
+  const uint32_t* weights_ = nullptr;  // compressed form: m[d]
   uint32_t groups_ = 0;
   CompressedParallaxInfoRecord packed_info_{};
   std::shared_ptr<Packed> packed_;
-  const int32_t* plane_ = nullptr;  // planned form: stored plane of each bin, -1 = left out
+  const int32_t* plane_ = nullptr;  // planned table: bin, or -1 = left out
   bool exact_sums_ = false;  // 65535 N^2 < 2^32: every prefix sum is one exact u32 (N <= 256)
 };
 

@@ -90,7 +90,7 @@ class RadianceTables {
   virtual bool try_query_all(const Footprint& rect, const double h[3],
                              double* out) const noexcept = 0;
   // Whether every bin of h's bilinear lookup is stored: false only for the tables of a
-  // scene-planned asset (format 1.2) at a bin that was left out; query() then says OutOfPlan.
+  // scene-planned asset at a bin that was left out; query() then says OutOfPlan.
   virtual bool covers_bins(const double h[3]) const noexcept {
     (void)h;
     return true;

@@ -1,6 +1,6 @@
-// Scene-planned assets (format 1.2; docs/format.md, "Scene-planned assets"): a bake driven by a
-// scene (`clothbake bake F.toml --scene S.toml`) keeps only what the scene can query. Three
-// section types say what was kept:
+// Scene-planned assets (docs/format.md, "Scene-planned assets"): a bake driven by a scene
+// (`clothbake bake F.toml --scene S.toml`) keeps only what the scene can query. Two section types
+// say what was kept:
 //
 //   BinMap instance g: u8 {n, n}     entry [j][i] = 1 when bin (i, j) (index j * n + i) of
 //                                    direction grid g is covered by the asset, 0 when it was
@@ -9,14 +9,12 @@
 //                                    parallax view directions (DirectionGrid{parallax_dirs,
 //                                    min_cos}). An absent instance means every bin is covered.
 //   ScenePlan instance 0: u8 {1, 64} one ScenePlanRecord: what else was left out, the scene's hash
-//   ParallaxPlanned instances 0-2    the compressed parallax table (parallax_compressed's layout)
-//                                    for the K covered view directions of bin map 1 only, in bin
-//                                    order (parallax_sections.hpp reads it)
 //
-// The compressed Integral-Radiance tables of a planned asset are radiance_compressed payload
-// version 2: the layout of version 1, with the values of bins outside bin map 0 not stored (zero
-// basis columns) and not answered. Readers of format 1.1 skip all of these (unknown types, an
-// unknown payload version), so an old reader never answers a left-out bin with a number.
+// The planned tables are flagged in their own info records: the compressed parallax
+// (kEntropyPlannedFlag, parallax_sections.hpp: the directions of bin map 1 only) and the compressed
+// Integral-Radiance tables (kCompressedPlannedFlag, compressed_layout.hpp: the bins of bin map 0
+// only, zero basis columns elsewhere). Queries of what was left out answer OutOfPlan, never a
+// number.
 //
 // C++17, standard library only, noexcept, no allocation; safe on untrusted assets.
 #pragma once

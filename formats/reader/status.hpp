@@ -22,7 +22,7 @@ enum class ErrorCode : uint8_t {
   NotFound,            // a requested section is absent
   WrongType,           // a section's element type or shape does not match the request
   InvalidArgument,     // a caller's argument is unusable (null pointer, misaligned buffer)
-  OutOfPlan,           // a scene-planned asset (format 1.2) left out what the query needs: a
+  OutOfPlan,           // a scene-planned asset left out what the query needs: a
                        // half-vector or view bin outside its bin map, or transmission
 };
 

@@ -310,19 +310,16 @@ void check_feature_maps(const Asset& asset, Reporter& r, uint32_t yarn_count, bo
   };
   // Ranges of the scalar maps and the yarn ids.
   uint64_t bad = 0, first = 0;
-  // An entropy-coded height (payload version 3) hides its f16 codes from check_finite.
-  if (maps.versions[0] == kFeatureMapEntropyVersion) {
-    for (uint64_t t = 0; t < texels; ++t)
-      if (!std::isfinite(maps.height[t]) && bad++ == 0) first = t;
-    if (bad) {
-      unsigned x, y;
-      texel_xy(first, &x, &y);
-      r.report(Check::NonFinite, kNoSection,
-               "height map (entropy-coded): %" PRIu64 " NaN or Inf texels (first at x=%u, y=%u)",
-               bad, x, y);
-    }
-    bad = 0;
+  // The coded height hides its f16 codes from check_finite: check the decoded values.
+  for (uint64_t t = 0; t < texels; ++t)
+    if (!std::isfinite(maps.height[t]) && bad++ == 0) first = t;
+  if (bad) {
+    unsigned x, y;
+    texel_xy(first, &x, &y);
+    r.report(Check::NonFinite, kNoSection,
+             "height map: %" PRIu64 " NaN or Inf texels (first at x=%u, y=%u)", bad, x, y);
   }
+  bad = 0;
   for (uint64_t t = 0; t < texels; ++t)
     if (!(maps.gap[t] >= 0.f && maps.gap[t] <= 1.f) && bad++ == 0) first = t;
   if (bad) {
@@ -426,20 +423,15 @@ void check_parallax_sat(const Asset& asset, const ParallaxView& view, Reporter& 
       }
 }
 
-// A compressed parallax table beside the raw one must decode to it within its recorded depth
-// error (CBK-E022); codes of an all-zero direction (step 0) must be 0. O(D N^2).
-// The same for the entropy-coded form, after every block has decoded exactly (CBK-E021).
+// The compressed parallax: every stored block must decode exactly (CBK-E021); codes of an
+// all-zero direction (step 0) must be 0; beside a raw table it must decode to it within its
+// recorded depth error (CBK-E022). O(D N^2).
 void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, Reporter& r) {
   SectionInfo codes_info;
-  const bool entropy = packed.is_entropy_coded();
-  const char* name = entropy ? "parallax_entropy" : "parallax_compressed";
-  if (!asset
-           .find(entropy ? SectionType::ParallaxEntropy : SectionType::ParallaxCompressed,
-                 entropy ? kEntropyParallaxStreamInstance : kCompressedParallaxCodesInstance,
-                 &codes_info)
-           .ok())
+  const char* name = "parallax_entropy";
+  if (!asset.find(SectionType::ParallaxEntropy, kEntropyParallaxStreamInstance, &codes_info).ok())
     return;
-  if (entropy) {
+  {
     const Status s = packed.decode_all();
     if (!s.ok()) {
       r.report_status(s, codes_info.index);
@@ -504,17 +496,13 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
       if (parallax.has_sat()) check_parallax_sat(asset, parallax, r);
     }
   }
-  if (has_type(asset, SectionType::ParallaxCompressed) ||
-      has_type(asset, SectionType::ParallaxEntropy)) {
-    // Compressed opens the entropy-coded form when present, else parallax_compressed (a writer
-    // stores one of them; a second one beside an entropy-coded table is not checked).
+  if (has_type(asset, SectionType::ParallaxEntropy)) {
     ParallaxView packed;
     const Status s = packed.open(asset, ParallaxSource::Compressed);
     if (!s.ok()) {
       r.report_status(s, kNoSection);
     } else {
-      check_resolution(packed.is_entropy_coded() ? "parallax_entropy" : "parallax_compressed",
-                       packed.resolution());
+      check_resolution("parallax_entropy", packed.resolution());
       check_compressed_parallax(asset, packed, r);
     }
   }

@@ -234,12 +234,7 @@ uint64_t write_asset(SectionRefs sections, Sink& sink) {
   std::memset(&header, 0, sizeof header);
   std::memcpy(header.magic, reader::kMagic, sizeof header.magic);
   header.version_major = reader::kFormatMajor;
-  header.version_minor = 0;
-  for (const Section* s : order)
-    header.version_minor =
-        std::max(header.version_minor,
-                 reader::format_minor_of_section(uint32_t(s->type), s->version, s->instance,
-                                                 s->bytes().data(), s->bytes().size()));
+  header.version_minor = reader::kFormatMinor;
   header.section_count = uint32_t(order.size());
   header.section_entry_size = sizeof(reader::SectionEntry);
   header.flags = 0;

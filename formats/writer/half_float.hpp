@@ -1,5 +1,5 @@
 // IEEE 754 binary16 encoding (reader::Half; the reader decodes with half_to_float): the compressed
-// tables' basis (compress/) and the f16 height map of format 1.4 (map_encoding.hpp). Round to
+// tables' basis (compress/) and the f16 codes of the height map (map_encoding.hpp). Round to
 // nearest, ties to even; values beyond the largest half (65504) become +-Inf, which callers avoid
 // by normalising to [-1, 1] first.
 //

@@ -1,5 +1,6 @@
-// Encoders of the reduced-precision feature-map encodings of format 1.4 (payload version 2; the
-// decoders and the exact definitions: formats/reader/map_encoding.hpp, docs/format.md §6.4).
+// Encoders of the 16-bit codes of the feature maps (which compress/map_entropy.hpp then codes; the
+// decoders and the exact definitions: formats/reader/map_encoding.hpp, docs/format.md, "Feature
+// maps").
 //
 // Error bounds against the f32 value (tested in tests/formats/test_map_encoding.cpp):
 //   height (f16)           |h' - h| <= 2^-11 |h| (<= 2^-25 where |h| < 2^-14)

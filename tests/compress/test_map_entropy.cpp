@@ -1,6 +1,7 @@
-// Entropy-coded feature maps (format 1.4, payload version 3; compress/map_entropy.hpp and
-// formats/reader/map_entropy.hpp): lossless against the version-2 codes, smaller on woven tiles,
-// never larger, and hostile payloads (damaged blocks, offsets, tables, counts) reported with
+// Entropy-coded feature maps, the one stored form of height, tangent, normal, gap and albedo
+// (compress/map_entropy.hpp and formats/reader/map_entropy.hpp): lossless against the 16-bit codes
+// of fabric/fabric_sections.hpp, a fraction of their size on woven tiles, at most the tables more
+// on noise, and hostile payloads (damaged blocks, offsets, tables, counts) reported with
 // CBK-E021 / CBK-E015 / CBK-E016 without reading out of bounds.
 #include <gtest/gtest.h>
 
@@ -28,14 +29,50 @@ using namespace clothbake;
 using formats::Section;
 using reader::SectionType;
 
-std::vector<Section> sections_of(const Fabric& fabric, bool entropy) {
+std::vector<Section> sections_of(const Fabric& fabric) {
   auto s = fabric_record_sections(fabric);
-  for (auto& m : feature_map_sections(fabric.maps, MapEncoding::Packed))
-    s.push_back(entropy && m.version == reader::kFeatureMapPackedVersion
-                    ? compress::entropy_code_map(m)
-                    : std::move(m));
+  for (auto& m : compress::feature_map_sections(fabric.maps))
+    s.push_back(std::move(m));
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;
+}
+
+// The floats a code array of feature_map_codes stands for (map_encoding.hpp's decoders).
+std::vector<float> decode_code_array(const Section& codes) {
+  const auto bytes = codes.bytes();
+  const std::size_t count = bytes.size() / 2;
+  std::vector<uint16_t> q(count);
+  std::memcpy(q.data(), bytes.data(), bytes.size());
+  std::vector<float> out;
+  if (codes.type == SectionType::TangentMap || codes.type == SectionType::NormalMap) {
+    out.resize(count / 2 * 3);
+    for (std::size_t t = 0; t < count / 2; ++t) {
+      int16_t pair[2];
+      std::memcpy(pair, q.data() + 2 * t, 4);
+      reader::decode_octahedral(pair, out.data() + 3 * t);
+    }
+  } else {
+    for (uint16_t c : q)
+      out.push_back(codes.type == SectionType::HeightMap ? reader::half_to_float(reader::Half{c})
+                                                         : reader::unorm16_to_float(c));
+  }
+  return out;
+}
+
+// The decoded maps equal the code arrays' values bit for bit, map by map.
+void expect_lossless(const Fabric& fabric, const reader::FeatureMaps& maps) {
+  for (const Section& codes : feature_map_codes(fabric.maps)) {
+    if (codes.type == SectionType::YarnIdMap) continue;
+    const std::vector<float> expected = decode_code_array(codes);
+    const reader::ArrayView<float>& v = codes.type == SectionType::HeightMap    ? maps.height
+                                        : codes.type == SectionType::TangentMap ? maps.tangent
+                                        : codes.type == SectionType::NormalMap  ? maps.normal
+                                        : codes.type == SectionType::GapMap     ? maps.gap
+                                                                                : maps.albedo;
+    ASSERT_EQ(v.size, expected.size()) << reader::section_type_name(codes.type);
+    EXPECT_EQ(std::memcmp(v.data, expected.data(), expected.size() * 4), 0)
+        << reader::section_type_name(codes.type);
+  }
 }
 
 struct Opened {
@@ -65,46 +102,34 @@ bool has(const std::vector<std::string>& ids, const char* id) {
   return std::find(ids.begin(), ids.end(), id) != ids.end();
 }
 
-void expect_same_maps(const reader::FeatureMaps& a, const reader::FeatureMaps& b) {
-  ASSERT_EQ(a.resolution, b.resolution);
-  const uint64_t t = uint64_t(a.resolution) * a.resolution;
-  ASSERT_EQ(std::memcmp(a.height.data, b.height.data, t * 4), 0);
-  ASSERT_EQ(std::memcmp(a.tangent.data, b.tangent.data, t * 12), 0);
-  ASSERT_EQ(std::memcmp(a.normal.data, b.normal.data, t * 12), 0);
-  ASSERT_EQ(std::memcmp(a.gap.data, b.gap.data, t * 4), 0);
-  ASSERT_EQ(std::memcmp(a.albedo.data, b.albedo.data, t * 12), 0);
-}
-
 TEST(MapEntropy, LosslessAndSmallerOnAWovenTile) {
   // 128^2: large enough that the 2.5 KB frequency tables of each byte plane are paid back.
   const Fabric fabric = test_support::make_test_fabric(128);
-  Opened packed(sections_of(fabric, false)), coded(sections_of(fabric, true));
-  ASSERT_TRUE(packed.status.ok());
+  Opened coded(sections_of(fabric));
   ASSERT_TRUE(coded.status.ok()) << coded.status.message();
-  EXPECT_EQ(coded.asset.version_minor(), 4);
-  uint64_t packed_bytes = 0, coded_bytes = 0;
-  for (SectionType t : {SectionType::HeightMap, SectionType::TangentMap, SectionType::NormalMap,
-                        SectionType::GapMap, SectionType::AlbedoMap}) {
-    reader::SectionInfo a, b;
-    ASSERT_TRUE(packed.asset.find(t, 0, &a).ok());
-    ASSERT_TRUE(coded.asset.find(t, 0, &b).ok());
-    EXPECT_EQ(b.version, reader::kFeatureMapEntropyVersion) << reader::section_type_name(t);
-    packed_bytes += a.stored_size;
+  EXPECT_EQ(coded.asset.version_major(), 2);
+  EXPECT_EQ(coded.asset.version_minor(), 0);
+  uint64_t code_bytes = 0, coded_bytes = 0;
+  for (const Section& m : feature_map_codes(fabric.maps)) {
+    if (m.type == SectionType::YarnIdMap) continue;
+    reader::SectionInfo b;
+    ASSERT_TRUE(coded.asset.find(m.type, 0, &b).ok());
+    EXPECT_EQ(b.version, reader::kFeatureMapVersion) << reader::section_type_name(m.type);
+    EXPECT_EQ(b.element_type, reader::ElementType::U8);
+    code_bytes += m.payload.size();
     coded_bytes += b.stored_size;
   }
   // A periodic weave codes to a fraction; at 128^2 most of it is the 2.5 KB tables of each of the
   // 18 byte planes (46 KB), so the ratio is about 4 here and about 12 at 256^2 (the twill).
-  EXPECT_LT(coded_bytes * 3, packed_bytes);
-  reader::FeatureMaps a, b;
-  ASSERT_TRUE(reader::read_feature_maps(packed.asset, &a).ok());
+  EXPECT_LT(coded_bytes * 3, code_bytes);
+  reader::FeatureMaps b;
   const reader::Status s = reader::read_feature_maps(coded.asset, &b);
   ASSERT_TRUE(s.ok()) << s.message();
-  EXPECT_EQ(b.versions[3], reader::kFeatureMapEntropyVersion);
-  expect_same_maps(a, b);
+  expect_lossless(fabric, b);
   EXPECT_TRUE(finding_ids(coded.asset).empty());
 }
 
-TEST(MapEntropy, NoisyMapsStayLosslessAndNeverGrow) {
+TEST(MapEntropy, NoisyMapsStayLosslessAndCostAtMostTheirTables) {
   Fabric fabric = test_support::make_test_fabric(48);
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> u(0.f, 1.f);
@@ -112,25 +137,29 @@ TEST(MapEntropy, NoisyMapsStayLosslessAndNeverGrow) {
     fabric.maps.height[t] = u(rng) * 0.1f;
     fabric.maps.albedo[t] = {u(rng), u(rng), u(rng)};
   }
-  for (const auto& m : feature_map_sections(fabric.maps)) {
-    if (m.version != reader::kFeatureMapPackedVersion) continue;
+  for (const auto& m : feature_map_codes(fabric.maps)) {
+    if (m.type == SectionType::YarnIdMap) continue;
     const Section c = compress::entropy_code_map(m);
-    EXPECT_LE(c.payload.size(), m.payload.size());
-    EXPECT_EQ(c.version == reader::kFeatureMapEntropyVersion, c.payload.size() < m.payload.size());
+    EXPECT_EQ(c.version, reader::kFeatureMapVersion);
+    // Noise does not compress: the coded form costs at most its header, offsets and tables (and a
+    // few bytes of coder state per plane) more than the code array.
+    const std::size_t planes = m.payload.size() / (48 * 48);
+    EXPECT_LE(c.payload.size(), m.payload.size() + reader::kMapEntropyHeaderBytes +
+                                    8 * (planes + 1) +
+                                    planes * (reader::kMapEntropyTableBytes + 16))
+        << reader::section_type_name(m.type);
   }
-  Opened packed(sections_of(fabric, false)), coded(sections_of(fabric, true));
+  Opened coded(sections_of(fabric));
   ASSERT_TRUE(coded.status.ok());
-  reader::FeatureMaps a, b;
-  ASSERT_TRUE(reader::read_feature_maps(packed.asset, &a).ok());
+  reader::FeatureMaps b;
   ASSERT_TRUE(reader::read_feature_maps(coded.asset, &b).ok());
-  expect_same_maps(a, b);
+  expect_lossless(fabric, b);
 }
 
-// The coded gap section of the 64^2 test fabric, for the damage tests (smaller tiles stay version
-// 2: the tables would cost more than the coding saves).
+// The coded gap section of the 64^2 test fabric, for the damage tests.
 Section coded_gap(const Fabric& fabric) {
-  for (auto& m : feature_map_sections(fabric.maps))
-    if (m.type == SectionType::GapMap) return compress::entropy_code_map(m);
+  for (auto& m : compress::feature_map_sections(fabric.maps))
+    if (m.type == SectionType::GapMap) return m;
   return {};
 }
 
@@ -148,7 +177,7 @@ void poke(Section& s, std::size_t at, T v) {
 // with `code` and validate to report `id`.
 void expect_refused(const Fabric& fabric, const Section& gap, reader::ErrorCode code,
                     const char* id) {
-  auto sections = sections_of(fabric, true);
+  auto sections = sections_of(fabric);
   replace(sections, gap);
   Opened opened(sections);
   ASSERT_TRUE(opened.status.ok()) << opened.status.message();
@@ -164,15 +193,18 @@ TEST(MapEntropy, DamagedPayloadsAreReported) {
   const Fabric fabric = test_support::make_test_fabric(64);
   const Section good = coded_gap(fabric);
   if (const char* dir = std::getenv("CLOTHBAKE_SAVE_CRAFTED")) {
-    // How tests/fuzz/corpus/map_entropy.cbk was made: the 64^2 fabric with entropy-coded maps.
-    const auto bytes = formats::serialize_asset(sections_of(fabric, true));
+    // How tests/fuzz/corpus/map_entropy.cbk was made: the 64^2 fabric's coded maps.
+    const auto bytes = formats::serialize_asset(sections_of(fabric));
     std::ofstream(std::string(dir) + "/map_entropy.cbk", std::ios::binary)
         .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
   }
-  ASSERT_EQ(good.version, reader::kFeatureMapEntropyVersion);
+  ASSERT_EQ(good.version, reader::kFeatureMapVersion);
   const std::size_t offsets = reader::kMapEntropyHeaderBytes;
   const std::size_t tables = offsets + 8 * 3;  // P = 2
-  const std::size_t blocks = tables + 2 * reader::kMapEntropyTableBytes;
+  uint32_t groups = 0;  // one table set per plane or one shared: the encoder's choice
+  std::memcpy(&groups, good.payload.data() + 8, 4);
+  ASSERT_TRUE(groups == 1 || groups == 2) << groups;
+  const std::size_t blocks = tables + groups * reader::kMapEntropyTableBytes;
   using reader::ErrorCode;
   {
     Section s = good;
@@ -235,7 +267,7 @@ TEST(MapEntropy, RandomDamageNeverCrashes) {
     const int edits = 1 + trial % 4;
     for (int e = 0; e < edits; ++e)
       s.payload[rng() % s.payload.size()] = std::byte(rng() & 0xff);
-    auto sections = sections_of(fabric, true);
+    auto sections = sections_of(fabric);
     replace(sections, s);
     Opened opened(sections);
     ASSERT_TRUE(opened.status.ok());

@@ -1,8 +1,9 @@
-// The hierarchical parallax form (format 1.5: compress/parallax_hierarchy.hpp writes it,
+// The compressed parallax (the hierarchical form: compress/parallax_hierarchy.hpp writes it,
 // formats/reader/parallax_hierarchy.hpp decodes it) through the writer and the reader: every
 // direction decodes to exactly the encoder's codes on woven, tall, spiky and flat fields and on
 // grids of every size class (references at the grid's edges), the measured error meets the
-// target and the queries agree with the raw table within it, the reference structure has at most
+// target and the queries agree with the raw table within it, footprint means are exact means of
+// the decoded texels (the on-demand SATs), the reference structure has at most
 // two levels, the output is byte-identical for any thread count, and hostile blocks and sections
 // fail with stable IDs without reading out of bounds.
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <random>
 #include <string>
 
 #include "common/error.hpp"
@@ -56,12 +58,12 @@ void expect_round_trip(const ParallaxTable& table, const char* what, double max_
   EXPECT_LE(p.rms_offset_error, max_error) << what;
   MemoryAsset m(with_metadata(compress::hierarchical_parallax_sections(p)));
   ASSERT_TRUE(m.status.ok()) << m.status.message();
-  EXPECT_EQ(m.asset.version_minor(), 5) << what;
+  EXPECT_EQ(m.asset.version_major(), 2) << what;
+  EXPECT_EQ(m.asset.version_minor(), 0) << what;
   reader::ParallaxView view;
   const reader::Status opened = view.open(m.asset);
   ASSERT_TRUE(opened.ok()) << what << ": " << opened.message();
-  EXPECT_TRUE(view.is_hierarchical());
-  EXPECT_TRUE(view.is_entropy_coded());
+  EXPECT_TRUE(view.is_compressed());
   EXPECT_EQ(view.decoded_bytes(), 0u) << "nothing decoded at open";
   EXPECT_TRUE(view.decode_all().ok()) << what;
   const uint32_t n = view.resolution(), d = view.dirs() * view.dirs();
@@ -138,6 +140,62 @@ TEST(HierarchicalParallax, DecodesToTheEncodersCodesOnWovenTallSpikyAndFlatField
   EXPECT_EQ(s.r, 0.0);
   ASSERT_TRUE(view.depth(3, -2, v, &s).ok());
   EXPECT_EQ(s.r, 0.0);
+}
+
+TEST(HierarchicalParallax, FootprintMeansAreExactMeansOfTheDecodedTexels) {
+  const ParallaxTable table = baked(rctest::plain_weave_maps(16), 6);
+  const compress::HierarchicalParallax p = compress::hierarchical_parallax(raw_of(table), 0.05);
+  std::vector<formats::Section> sections = compress::hierarchical_parallax_sections(p);
+  for (auto& s : parallax_sections(ParallaxTable(table)))
+    sections.push_back(std::move(s));
+  MemoryAsset m(with_metadata(std::move(sections)));
+  ASSERT_TRUE(m.status.ok()) << m.status.message();
+  reader::ParallaxView view, raw;
+  ASSERT_TRUE(view.open(m.asset, reader::ParallaxSource::Compressed).ok());
+  ASSERT_TRUE(raw.open(m.asset, reader::ParallaxSource::Raw).ok());
+  EXPECT_TRUE(view.has_sat());
+  const int n = 16;
+  const model::DirectionGrid<double> grid{6, table.min_cos};
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> pos(-40, 40), ext(0, 40), u(-1, 1);
+  for (int i = 0; i < 300; ++i) {
+    const double x0 = pos(rng), y0 = pos(rng);
+    const double x1 = x0 + (i % 3 == 0 ? std::floor(ext(rng)) : ext(rng)), y1 = y0 + ext(rng);
+    if (!((x1 - x0) * (y1 - y0) > 0)) continue;
+    double view_dir[3] = {u(rng), u(rng), 0.6 + std::fabs(u(rng))};
+    reader::ParallaxSample s, r;
+    ASSERT_TRUE(view.footprint_depth({x0, y0, x1, y1}, view_dir, &s).ok());
+    ASSERT_TRUE(raw.footprint_depth({x0, y0, x1, y1}, view_dir, &r).ok());
+    // Direct: the area-weighted mean of the decoded per-texel values over the covered texels.
+    const model::BinBilinear<double> w =
+        grid.bilinear_fast(model::Vec3d(s.direction[0], s.direction[1], s.direction[2]));
+    double sum = 0;
+    for (long ty = long(std::floor(y0)); ty < long(std::ceil(y1)); ++ty) {
+      const double hy = std::min(y1, double(ty + 1)) - std::max(y0, double(ty));
+      for (long tx = long(std::floor(x0)); tx < long(std::ceil(x1)); ++tx) {
+        const double hx = std::min(x1, double(tx + 1)) - std::max(x0, double(tx));
+        double texel = 0;
+        for (int k = 0; k < 4; ++k)
+          if (w.weight[k] > 0) texel += w.weight[k] * view.bin_depth(uint32_t(w.index[k]), tx, ty);
+        sum += hx * hy * texel;
+      }
+    }
+    const double direct = sum / ((x1 - x0) * (y1 - y0));
+    ASSERT_NEAR(s.r, direct, 1e-12 * (std::fabs(direct) + 1e-6)) << i;
+    // And within the per-texel bound of the raw footprint mean.
+    EXPECT_LE(std::fabs(s.r - r.r), view.compressed_info().max_depth_error * (1 + 1e-9) + 1e-15);
+  }
+  EXPECT_GT(view.decoded_bytes(), 0u);
+  // Only the directions touched, each at most a u16 plane and a u32 SAT.
+  EXPECT_LE(view.decoded_bytes(), uint64_t(36) * n * n * 6);
+  // weighted_depth (the evaluator's hot path) is depth() with the bins computed once.
+  const double v[3] = {0.2, -0.4, 0.8};
+  double o[3];
+  ASSERT_TRUE(view.view_direction(v, o).ok());
+  const model::BinBilinear<double> w = grid.bilinear_fast(model::Vec3d(o[0], o[1], o[2]));
+  reader::ParallaxSample s;
+  ASSERT_TRUE(view.depth(-3, 21, v, &s).ok());
+  EXPECT_NEAR(view.weighted_depth(w.index, w.weight, -3, 21), s.r, 1e-15);
 }
 
 TEST(HierarchicalParallax, UsesTheTilesRepeatAndIsByteIdenticalForAnyThreadCount) {
@@ -294,9 +352,9 @@ TEST(HierarchicalParallax, HostileSectionsFailWithStableIds) {
     reinterpret_cast<reader::CompressedParallaxInfoRecord*>(find(s, 0).payload.data())->bits = 8;
     check(s, "CBK-E015", "CBK-E015");
   }
-  {  // one instance at payload version 1 among version 2
+  {  // one instance at payload version 2 among version 1 (format 1.5's numbering)
     auto s = base;
-    find(s, 5).version = 1;
+    find(s, 5).version = 2;
     check(s, "CBK-E015", "CBK-E015");
   }
   {  // a prediction weight of 0, and one beyond 2^24

@@ -1,5 +1,6 @@
-// Golden bytes: the writer must reproduce tests/formats/data/golden_v1.cbk exactly, and the reader
-// must read the checked-in file (independently of today's writer) to the known values.
+// Golden bytes: the writer must reproduce tests/formats/data/golden_v2.cbk exactly, the reader
+// must read the checked-in file (independently of today's writer) to the known values, and it must
+// refuse the format-1.0 file of the same fabric with a message that says to re-bake it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,7 +17,6 @@
 namespace {
 
 using namespace clothbake;
-using clothbake::MapEncoding;
 
 std::vector<std::byte> read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -26,10 +26,9 @@ std::vector<std::byte> read_file(const std::string& path) {
   return bytes;
 }
 
-void expect_writer_reproduces(MapEncoding encoding) {
-  const std::vector<std::byte> bytes =
-      formats::serialize_asset(test_support::golden_sections(encoding));
-  const std::string path = test_support::golden_path(encoding);
+TEST(Golden, WriterReproducesTheCheckedInBytes) {
+  const std::vector<std::byte> bytes = formats::serialize_asset(test_support::golden_sections());
+  const std::string path = test_support::golden_path();
   if (std::getenv("CLOTHBAKE_REGENERATE_GOLDEN")) {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
@@ -43,69 +42,32 @@ void expect_writer_reproduces(MapEncoding encoding) {
     ASSERT_EQ(bytes[i], golden[i]) << "first difference at byte " << i;
 }
 
-TEST(Golden, WriterReproducesTheCheckedInBytes) {
-  expect_writer_reproduces(MapEncoding::Float32);
-}
-
-TEST(Golden, WriterReproducesTheCheckedIn14Bytes) {
-  expect_writer_reproduces(MapEncoding::Packed);
-}
-
-// The format 1.4 file: the same fabric with payload-version-2 maps, read to the f32 file's values
-// within the encodings' bounds (exact where the value is a code: 6/64 in f16, the axes, 0 and 1).
-TEST(Golden, ReaderReadsTheCheckedIn14File) {
-  reader::Asset asset, old;
-  reader::Status status = asset.open_file(test_support::golden_path(MapEncoding::Packed).c_str());
-  ASSERT_TRUE(status.ok()) << status.message();
-  ASSERT_TRUE(old.open_file(test_support::golden_path().c_str()).ok());
-  EXPECT_EQ(asset.version_major(), 1);
-  EXPECT_EQ(asset.version_minor(), 4);
-  EXPECT_EQ(asset.section_count(), 9u);
-  reader::SectionInfo s;
-  ASSERT_TRUE(asset.find(reader::SectionType::TangentMap, 0, &s).ok());
-  EXPECT_EQ(s.version, 2);
-  EXPECT_EQ(s.element_type, reader::ElementType::I16);
-  ASSERT_TRUE(asset.find(reader::SectionType::YarnIdMap, 0, &s).ok());
-  EXPECT_EQ(s.version, 1);
-
-  reader::FeatureMaps maps, f32;
-  status = reader::read_feature_maps(asset, &maps);
-  ASSERT_TRUE(status.ok()) << status.message();
-  ASSERT_TRUE(reader::read_feature_maps(old, &f32).ok());
-  ASSERT_EQ(maps.resolution, 4u);
-  EXPECT_TRUE(maps.storage != nullptr);
-  EXPECT_TRUE(f32.storage == nullptr);  // f32 maps are viewed in place
-  const std::size_t t = 2 * 4 + 1;
-  EXPECT_EQ(maps.height[t], 6.f / 64.f);
-  EXPECT_EQ(maps.yarn_id[t], 1);
-  EXPECT_EQ(maps.tangent[3 * t + 0], 1.f);
-  EXPECT_NEAR(maps.normal[3 * t + 1], -0.6f, 5e-5);
-  EXPECT_NEAR(maps.albedo[3 * t + 2], 0.5f, 1.0 / 131070 + 1e-7);
-  EXPECT_EQ(maps.gap[3 * 4 + 3], 0.f);
-  EXPECT_EQ(maps.gap[0], 1.f);
-  for (std::size_t i = 0; i < 16; ++i) {
-    EXPECT_EQ(maps.yarn_id[i], f32.yarn_id[i]);
-    EXPECT_LE(std::fabs(maps.height[i] - f32.height[i]), std::ldexp(std::fabs(f32.height[i]), -11));
-    EXPECT_LE(std::fabs(maps.gap[i] - f32.gap[i]), 1.0 / 131070 + 1e-7);
-    for (int c = 0; c < 3; ++c) {
-      EXPECT_LE(std::fabs(maps.albedo[3 * i + c] - f32.albedo[3 * i + c]), 1.0 / 131070 + 1e-7);
-      EXPECT_NEAR(maps.tangent[3 * i + c], f32.tangent[3 * i + c], 5e-5);
-      EXPECT_NEAR(maps.normal[3 * i + c], f32.normal[3 * i + c], 5e-5);
-    }
-  }
-  const auto summary = reader::validate_asset(asset, nullptr, nullptr);
-  EXPECT_EQ(summary.errors, 0u);
-  EXPECT_EQ(summary.warnings, 0u);
+TEST(Golden, AFormat1AssetIsRefusedWithARebakeMessage) {
+  reader::Asset asset;
+  const reader::Status status = asset.open_file(test_support::golden_v1_path().c_str());
+  EXPECT_EQ(status.code(), reader::ErrorCode::UnsupportedVersion);
+  EXPECT_STREQ(status.check_id(), "CBK-E003");
+  const std::string message = status.message();
+  EXPECT_NE(message.find("asset format 1.0, this reader reads format 2.x"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("re-bake it"), std::string::npos) << message;
+  EXPECT_NE(message.find("clothbake bake"), std::string::npos) << message;
 }
 
 TEST(Golden, ReaderReadsTheCheckedInFile) {
   reader::Asset asset;
   reader::Status status = asset.open_file(test_support::golden_path().c_str());
   ASSERT_TRUE(status.ok()) << status.message();
-  EXPECT_EQ(asset.version_major(), 1);
+  EXPECT_EQ(asset.version_major(), 2);
   EXPECT_EQ(asset.version_minor(), 0);
   EXPECT_EQ(asset.file_size() % 64, 0u);
   EXPECT_EQ(asset.section_count(), 9u);
+  reader::SectionInfo s;
+  ASSERT_TRUE(asset.find(reader::SectionType::TangentMap, 0, &s).ok());
+  EXPECT_EQ(s.version, 1);
+  EXPECT_EQ(s.element_type, reader::ElementType::U8);
+  ASSERT_TRUE(asset.find(reader::SectionType::YarnIdMap, 0, &s).ok());
+  EXPECT_EQ(s.element_type, reader::ElementType::U16);
 
   const reader::FabricInfoRecord* info = nullptr;
   ASSERT_TRUE(reader::read_fabric_info(asset, &info).ok());
@@ -126,15 +88,29 @@ TEST(Golden, ReaderReadsTheCheckedInFile) {
   status = reader::read_feature_maps(asset, &maps);
   ASSERT_TRUE(status.ok()) << status.message();
   ASSERT_EQ(maps.resolution, 4u);
-  // Texel (x=1, y=2): (1/2 + 2/2) = 1 is odd -> weft; height (3 + 10) % 7 / 64.
+  // The test fabric's values within the codes' bounds (exact where the value is a code: 6/64 in
+  // f16, the axes, 0 and 1). Texel (x=1, y=2): (1/2 + 2/2) = 1 is odd -> weft; height
+  // (3 + 10) % 7 / 64.
+  const Fabric fabric = test_support::make_test_fabric(4, "golden");
   const std::size_t t = 2 * 4 + 1;
   EXPECT_EQ(maps.height[t], 6.f / 64.f);
   EXPECT_EQ(maps.yarn_id[t], 1);
   EXPECT_EQ(maps.tangent[3 * t + 0], 1.f);
-  EXPECT_EQ(maps.normal[3 * t + 1], -0.6f);
-  EXPECT_EQ(maps.albedo[3 * t + 2], 0.5f);
+  EXPECT_NEAR(maps.normal[3 * t + 1], -0.6f, 5e-5);
+  EXPECT_NEAR(maps.albedo[3 * t + 2], 0.5f, 1.0 / 131070 + 1e-7);
   EXPECT_EQ(maps.gap[3 * 4 + 3], 0.f);
   EXPECT_EQ(maps.gap[0], 1.f);
+  for (std::size_t i = 0; i < 16; ++i) {
+    const auto& m = fabric.maps;
+    EXPECT_EQ(maps.yarn_id[i], m.yarn_id[i]);
+    EXPECT_LE(std::fabs(maps.height[i] - m.height[i]), std::ldexp(std::fabs(m.height[i]), -11));
+    EXPECT_LE(std::fabs(maps.gap[i] - m.gap[i]), 1.0 / 131070 + 1e-7);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_LE(std::fabs(maps.albedo[3 * i + c] - m.albedo[i][c]), 1.0 / 131070 + 1e-7);
+      EXPECT_NEAR(maps.tangent[3 * i + c], m.tangent[i][c], 5e-5);
+      EXPECT_NEAR(maps.normal[3 * i + c], m.normal[i][c], 5e-5);
+    }
+  }
 
   std::string_view json;
   ASSERT_TRUE(asset.metadata_json(&json).ok());

@@ -1,8 +1,8 @@
-// The reduced-precision feature maps of format 1.4 (payload version 2; formats/reader/
-// map_encoding.hpp, formats/writer/map_encoding.hpp): the error bound of every encoding against
-// the f32 value, the reader's decoding of packed and f32 maps side by side, the format minor they
-// stamp, and hostile payloads (wrong element types and shapes, NaN f16 heights, codes that decode
-// to a normal below the horizon) reported with their stable check IDs.
+// The 16-bit codes of the feature maps (formats/reader/map_encoding.hpp, formats/writer/
+// map_encoding.hpp), stored entropy-coded (compress/map_entropy.hpp): the error bound of every
+// encoding against the f32 value, the reader's decoding of the stored maps against the fabric's,
+// and hostile payloads (the retired plain forms, wrong shapes and versions, NaN f16 heights, codes
+// that decode to a normal below the horizon) reported with their stable check IDs.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +11,7 @@
 #include <random>
 
 #include "common/error.hpp"
+#include "compress/map_entropy.hpp"
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -146,9 +147,9 @@ Fabric noisy_fabric(int n) {
   return f;
 }
 
-std::vector<Section> asset_sections(const Fabric& fabric, MapEncoding encoding) {
+std::vector<Section> asset_sections(const Fabric& fabric) {
   auto s = fabric_record_sections(fabric);
-  for (auto& m : feature_map_sections(fabric.maps, encoding))
+  for (auto& m : compress::feature_map_sections(fabric.maps))
     s.push_back(std::move(m));
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;
@@ -184,27 +185,20 @@ Findings validate(const reader::Asset& asset) {
   return f;
 }
 
-TEST(MapEncoding, PackedMapsReadBackWithinTheBoundsOfTheF32Maps) {
+TEST(MapEncoding, StoredMapsReadBackWithinTheBoundsOfTheF32Maps) {
   const Fabric fabric = noisy_fabric(32);
-  Opened packed(formats::serialize_asset(asset_sections(fabric, MapEncoding::Packed)));
-  Opened f32(formats::serialize_asset(asset_sections(fabric, MapEncoding::Float32)));
+  Opened packed(formats::serialize_asset(asset_sections(fabric)));
   ASSERT_TRUE(packed.status.ok()) << packed.status.message();
-  ASSERT_TRUE(f32.status.ok());
-  EXPECT_EQ(packed.asset.version_minor(), 4);  // payload version 2 maps need 1.4
-  EXPECT_EQ(f32.asset.version_minor(), 0);     // f32 maps stay a byte-identical 1.0 file
-  reader::FeatureMaps maps, old;
+  EXPECT_EQ(packed.asset.version_major(), 2);
+  EXPECT_EQ(packed.asset.version_minor(), 0);
+  reader::FeatureMaps maps;
   ASSERT_TRUE(reader::read_feature_maps(packed.asset, &maps).ok());
-  ASSERT_TRUE(reader::read_feature_maps(f32.asset, &old).ok());
-  EXPECT_EQ(maps.versions[0], 2);
-  EXPECT_EQ(maps.versions[4], 1);  // yarn_id
-  EXPECT_EQ(old.versions[1], 1);
   ASSERT_EQ(maps.resolution, 32u);
   ASSERT_EQ(maps.tangent.size, 32u * 32u * 3u);
   ASSERT_EQ(maps.tangent.rank, 3);
   ASSERT_EQ(maps.tangent.dims[2], 3u);
   double worst_tangent = 0, worst_normal = 0, worst_unorm = 0, worst_height_rel = 0;
   for (std::size_t t = 0; t < fabric.maps.texel_count(); ++t) {
-    ASSERT_EQ(old.height[t], fabric.maps.height[t]);  // f32: exact
     worst_height_rel =
         std::max(worst_height_rel, std::fabs(double(maps.height[t]) - fabric.maps.height[t]) /
                                        std::fabs(fabric.maps.height[t]));
@@ -236,36 +230,13 @@ TEST(MapEncoding, PackedMapsReadBackWithinTheBoundsOfTheF32Maps) {
   EXPECT_EQ(moved.tangent.data, tangent);
 }
 
-TEST(MapEncoding, PackedMapsAreAboutHalfTheSize) {
+TEST(MapEncoding, CodesAreAboutHalfTheSizeOfFloats) {
+  // The code arrays before entropy coding: 20 bytes a texel against the 46 of f32 maps.
   const Fabric fabric = test_support::make_test_fabric(64);
-  uint64_t packed = 0, f32 = 0;
-  for (const auto& s : feature_map_sections(fabric.maps, MapEncoding::Packed))
+  uint64_t packed = 0;
+  for (const auto& s : feature_map_codes(fabric.maps))
     packed += s.payload.size();
-  for (const auto& s : feature_map_sections(fabric.maps, MapEncoding::Float32))
-    f32 += s.payload.size();
-  EXPECT_EQ(f32, 64u * 64u * 46u);     // 4 + 12 + 12 + 4 + 2 + 12 bytes per texel
   EXPECT_EQ(packed, 64u * 64u * 20u);  // 2 + 4 + 4 + 2 + 2 + 6
-}
-
-TEST(MapEncoding, MixedVersionsRead) {
-  // A foreign writer may pack some maps only: each map's own payload version decides.
-  const Fabric fabric = test_support::make_test_fabric(8);
-  auto sections = asset_sections(fabric, MapEncoding::Packed);
-  for (auto& s : feature_map_sections(fabric.maps, MapEncoding::Float32))
-    if (s.type == SectionType::NormalMap)
-      for (auto& t : sections)
-        if (t.type == SectionType::NormalMap) t = s;
-  Opened opened(formats::serialize_asset(sections));
-  ASSERT_TRUE(opened.status.ok());
-  reader::FeatureMaps maps;
-  ASSERT_TRUE(reader::read_feature_maps(opened.asset, &maps).ok());
-  EXPECT_EQ(maps.versions[2], 1);
-  EXPECT_EQ(maps.versions[1], 2);
-  for (std::size_t t = 0; t < 64; ++t)
-    for (int c = 0; c < 3; ++c) {
-      ASSERT_EQ(maps.normal[3 * t + c], fabric.maps.normal[t][c]);    // viewed in place
-      ASSERT_EQ(maps.tangent[3 * t + c], fabric.maps.tangent[t][c]);  // axes: exact codes
-    }
 }
 
 // Replaces the section of `type` in `sections` by `replacement`.
@@ -274,56 +245,66 @@ void replace(std::vector<Section>& sections, SectionType type, Section replaceme
     if (s.type == type) s = std::move(replacement);
 }
 
-TEST(MapEncoding, WrongElementTypeOrShapeOfAPackedMap_E015) {
+// The coded section of a code array (as feature_map_codes makes them) of 8 x 8 texels.
+template <class T>
+Section coded(SectionType type, const std::vector<T>& codes, std::vector<uint32_t> dims) {
+  return compress::entropy_code_map(formats::make_array_section<T>(type, 0, codes, dims));
+}
+
+// read_feature_maps refuses `sections` with `id` and validate reports it.
+void expect_refused(const std::vector<Section>& sections, const char* id, const char* map) {
+  Opened opened(formats::serialize_asset(sections));
+  ASSERT_TRUE(opened.status.ok());
+  reader::FeatureMaps maps;
+  const reader::Status s = reader::read_feature_maps(opened.asset, &maps);
+  EXPECT_STREQ(s.check_id(), id) << s.message();
+  EXPECT_NE(std::string(s.message()).find(map), std::string::npos) << s.message();
+  EXPECT_EQ(maps.resolution, 0u);  // *out unchanged on error
+  EXPECT_TRUE(validate(opened.asset).has(id));
+}
+
+TEST(MapEncoding, RetiredFormsWrongShapesAndVersionsAreRefused_E015_E016) {
   const Fabric fabric = test_support::make_test_fabric(8);
-  // Version 2 with the f32 payload of version 1.
+  // The f32 map of format 1 and the plain 16-bit codes of format 1.4: not a 2.0 form.
   {
-    auto sections = asset_sections(fabric, MapEncoding::Packed);
-    replace(sections, SectionType::HeightMap,
-            formats::make_array_section<float>(SectionType::HeightMap, 0, fabric.maps.height,
-                                               {8, 8}, 2));
-    Opened opened(formats::serialize_asset(sections));
-    ASSERT_TRUE(opened.status.ok());
-    reader::FeatureMaps maps;
-    const reader::Status s = reader::read_feature_maps(opened.asset, &maps);
-    EXPECT_EQ(s.code(), reader::ErrorCode::WrongType) << s.message();
-    EXPECT_STREQ(s.check_id(), "CBK-E015");
-    EXPECT_TRUE(validate(opened.asset).has("CBK-E015"));
+    auto sections = asset_sections(fabric);
+    replace(
+        sections, SectionType::HeightMap,
+        formats::make_array_section<float>(SectionType::HeightMap, 0, fabric.maps.height, {8, 8}));
+    expect_refused(sections, "CBK-E015", "height");
   }
-  // Octahedral tangents with three codes per texel.
   {
-    auto sections = asset_sections(fabric, MapEncoding::Packed);
-    std::vector<int16_t> codes(8 * 8 * 3, 0);
+    auto sections = asset_sections(fabric);
+    std::vector<uint16_t> gap(64, 65535);
+    replace(sections, SectionType::GapMap,
+            formats::make_array_section<uint16_t>(SectionType::GapMap, 0, gap, {8, 8}));
+    expect_refused(sections, "CBK-E015", "gap");
+  }
+  // Octahedral tangents with three codes per texel: six byte planes where four belong.
+  {
+    auto sections = asset_sections(fabric);
     replace(sections, SectionType::TangentMap,
-            formats::make_array_section<int16_t>(SectionType::TangentMap, 0, codes, {8, 8, 3}, 2));
-    Opened opened(formats::serialize_asset(sections));
-    ASSERT_TRUE(opened.status.ok());
-    reader::FeatureMaps maps;
-    const reader::Status s = reader::read_feature_maps(opened.asset, &maps);
-    EXPECT_STREQ(s.check_id(), "CBK-E015") << s.message();
-    EXPECT_NE(std::string(s.message()).find("tangent"), std::string::npos) << s.message();
+            coded(SectionType::TangentMap, std::vector<int16_t>(8 * 8 * 3, 0), {8, 8, 3}));
+    expect_refused(sections, "CBK-E015", "tangent");
   }
   // A payload version this reader does not know.
   {
-    auto sections = asset_sections(fabric, MapEncoding::Packed);
+    auto sections = asset_sections(fabric);
     for (auto& s : sections)
-      if (s.type == SectionType::GapMap) s.version = 4;
+      if (s.type == SectionType::GapMap) s.version = 2;
     Opened opened(formats::serialize_asset(sections));
     ASSERT_TRUE(opened.status.ok());
     reader::FeatureMaps maps;
     const reader::Status s = reader::read_feature_maps(opened.asset, &maps);
     EXPECT_EQ(s.code(), reader::ErrorCode::Unsupported) << s.message();
-    EXPECT_EQ(maps.resolution, 0u);  // *out unchanged on error
+    EXPECT_EQ(maps.resolution, 0u);
   }
-  // Packed maps of another size than the rest.
+  // A coded map of another size than the rest.
   {
-    auto sections = asset_sections(fabric, MapEncoding::Packed);
-    std::vector<uint16_t> gap(4 * 4, 65535);
+    auto sections = asset_sections(fabric);
     replace(sections, SectionType::GapMap,
-            formats::make_array_section<uint16_t>(SectionType::GapMap, 0, gap, {4, 4}, 2));
-    Opened opened(formats::serialize_asset(sections));
-    ASSERT_TRUE(opened.status.ok());
-    EXPECT_TRUE(validate(opened.asset).has("CBK-E016"));
+            coded(SectionType::GapMap, std::vector<uint16_t>(4 * 4, 65535), {4, 4}));
+    expect_refused(sections, "CBK-E016", "gap");
   }
 }
 
@@ -331,33 +312,37 @@ TEST(MapEncoding, HostileCodesAreReported_E017_E021) {
   const Fabric fabric = test_support::make_test_fabric(8);
   {
     // A NaN and an Inf f16 height (a foreign writer's: clothbake's refuses them).
-    auto sections = asset_sections(fabric, MapEncoding::Packed);
+    auto sections = asset_sections(fabric);
     std::vector<reader::Half> height(64, formats::float_to_half(0.25f));
     height[9].bits = 0x7e00;   // NaN
     height[10].bits = 0xfc00;  // -Inf
-    Section h;
+    Section h;                 // by hand: make_array_section refuses NaN and Inf
     h.type = SectionType::HeightMap;
-    h.version = 2;
     h.element = reader::ElementType::F16;
     h.dims = {8, 8};
     h.payload.resize(128);
     std::memcpy(h.payload.data(), height.data(), 128);
-    replace(sections, SectionType::HeightMap, h);
+    replace(sections, SectionType::HeightMap, compress::entropy_code_map(h));
     Opened opened(formats::serialize_asset(sections));
     ASSERT_TRUE(opened.status.ok());
     reader::FeatureMaps maps;
-    ASSERT_TRUE(reader::read_feature_maps(opened.asset, &maps).ok());  // shapes only
+    ASSERT_TRUE(reader::read_feature_maps(opened.asset, &maps).ok());  // coding and shapes only
     EXPECT_TRUE(std::isnan(maps.height[9]));
-    EXPECT_TRUE(validate(opened.asset).has("CBK-E017"));
+    const Findings f = validate(opened.asset);
+    ASSERT_TRUE(f.has("CBK-E017"));
+    bool named = false;
+    for (const auto& m : f.messages)
+      named = named ||
+              m.find("height map: 2 NaN or Inf texels (first at x=1, y=1)") != std::string::npos;
+    EXPECT_TRUE(named);
   }
   {
     // Normal codes that decode below the horizon: (1, 1) is the folded corner, (0, 0, -1).
-    auto sections = asset_sections(fabric, MapEncoding::Packed);
+    auto sections = asset_sections(fabric);
     std::vector<int16_t> normal(64 * 2, 0);
     normal[2 * 5] = 32767;
     normal[2 * 5 + 1] = 32767;
-    replace(sections, SectionType::NormalMap,
-            formats::make_array_section<int16_t>(SectionType::NormalMap, 0, normal, {8, 8, 2}, 2));
+    replace(sections, SectionType::NormalMap, coded(SectionType::NormalMap, normal, {8, 8, 2}));
     Opened opened(formats::serialize_asset(sections));
     ASSERT_TRUE(opened.status.ok());
     reader::FeatureMaps maps;
@@ -374,11 +359,11 @@ TEST(MapEncoding, HostileCodesAreReported_E017_E021) {
   }
 }
 
-TEST(MapEncoding, WriterRefusesWhatThePackedMapsCannotHold) {
+TEST(MapEncoding, WriterRefusesWhatTheCodesCannotHold) {
   Fabric fabric = test_support::make_test_fabric(8);
   fabric.maps.tangent[8 * 2 + 3][1] = NAN;
   try {
-    (void)feature_map_sections(fabric.maps);
+    (void)feature_map_codes(fabric.maps);
     FAIL() << "NaN tangent accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("tangent element 58 [2, 3, 1] is NaN"), std::string::npos)
@@ -387,12 +372,11 @@ TEST(MapEncoding, WriterRefusesWhatThePackedMapsCannotHold) {
   fabric = test_support::make_test_fabric(8);
   fabric.maps.height[4] = 1e6f;
   try {
-    (void)feature_map_sections(fabric.maps);
+    (void)feature_map_codes(fabric.maps);
     FAIL() << "height beyond f16 accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("f16 range"), std::string::npos) << e.what();
   }
-  EXPECT_NO_THROW((void)feature_map_sections(fabric.maps, MapEncoding::Float32));
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 
 #include "common/error.hpp"
 #include "common/temp_registry.hpp"
+#include "compress/map_entropy.hpp"
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -47,7 +48,7 @@ class Output : public ::testing::Test {
   static std::vector<formats::Section> sections(int n, const std::string& name) {
     const Fabric fabric = test_support::make_test_fabric(n, name);
     auto s = fabric_record_sections(fabric);
-    for (auto& m : feature_map_sections(fabric.maps))
+    for (auto& m : compress::feature_map_sections(fabric.maps))
       s.push_back(std::move(m));
     s.push_back(formats::make_metadata_section({{"fabric", name}}));
     return s;

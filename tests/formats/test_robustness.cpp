@@ -22,7 +22,7 @@ namespace {
 
 using namespace clothbake::reader;
 
-const char* kGolden = CLOTHBAKE_SOURCE_DIR "/tests/formats/data/golden_v1.cbk";
+const char* kGolden = CLOTHBAKE_SOURCE_DIR "/tests/formats/data/golden_v2.cbk";
 
 // Exact-size copy of a byte string (AddressSanitizer then sees any read past its end); operator
 // new[] returns memory aligned for any fundamental type, as the reader requires.
@@ -158,7 +158,7 @@ TEST(Robustness, RandomMutationsAreOpenedOrRefusedNeverCrash) {
     const int flips = 1 + int(rng() % 4);
     for (int k = 0; k < flips; ++k)
       damaged[8 + rng() % (table_end - 8)] = uint8_t(rng());
-    damaged[8] = 1, damaged[9] = 0;  // keep major 1
+    damaged[8] = 2, damaged[9] = 0;  // keep major 2
     Xxh64Stream hash;
     hash.update(damaged.data(), 56);
     hash.update(damaged.data() + 64,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "compress/map_entropy.hpp"
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/validate.hpp"
@@ -17,11 +18,10 @@ using namespace clothbake;
 using formats::Section;
 using reader::SectionType;
 
-// f32 maps (payload version 1, formats 1.0-1.3): these tests plant out-of-range floats, which the
-// packed encodings of 1.4 could not hold; test_map_encoding.cpp validates the packed maps.
+// The fabric's records and coded maps (test_map_encoding.cpp plants hostile codes in the maps).
 std::vector<Section> fabric_sections(const Fabric& fabric) {
   auto s = fabric_record_sections(fabric);
-  for (auto& m : feature_map_sections(fabric.maps, MapEncoding::Float32))
+  for (auto& m : compress::feature_map_sections(fabric.maps))
     s.push_back(std::move(m));
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;
@@ -88,10 +88,15 @@ TEST(Validate, EveryCorruptSectionIsNamed_E012) {
 }
 
 TEST(Validate, NonZeroPadding_E013) {
-  const auto sections = fabric_sections(test_support::make_test_fabric(5));  // 100-byte height map
+  const auto sections = fabric_sections(test_support::make_test_fabric(5));
   auto bytes = formats::serialize_asset(sections);
-  const uint32_t height = index_of(sections, SectionType::HeightMap);
-  bytes[payload_offset(bytes, height) + 100 + 3] = std::byte{7};
+  // The first section whose payload is not a multiple of 64 bytes: a byte of its padding.
+  const auto order = formats::table_order(sections);
+  uint32_t padded = ~0u;
+  for (uint32_t i = 0; i < order.size() && padded == ~0u; ++i)
+    if (order[i]->payload.size() % 64 != 0) padded = i;
+  ASSERT_NE(padded, ~0u);
+  bytes[payload_offset(bytes, padded) + order[padded]->payload.size()] = std::byte{7};
   EXPECT_TRUE(validate(bytes).has("CBK-E013"));
 }
 
@@ -103,14 +108,21 @@ TEST(Validate, YarnIdWithoutMaterial_E018) {
   EXPECT_NE(f.messages[0].find("x=5, y=3"), std::string::npos) << f.messages[0];
 }
 
-TEST(Validate, ValueRanges_E021_And_UnitVectors_W004) {
+TEST(Validate, ValueRanges_E021) {
+  // (The maps' 16-bit codes cannot hold a gap beyond [0, 1] or a non-unit vector, so CBK-W004
+  // has nothing to find in a 2.0 map; test_map_encoding.cpp plants the codes that remain wrong.)
   Fabric fabric = test_support::make_test_fabric(8);
-  fabric.maps.gap[3] = 1.5f;
-  fabric.maps.normal[4] = {0.f, 0.f, 2.f};
   fabric.yarns[0].roughness = 0.0;
-  const auto f = validate(formats::serialize_asset(fabric_sections(fabric)));
-  EXPECT_TRUE(f.has("CBK-E021"));
-  EXPECT_TRUE(f.has("CBK-W004"));
+  auto f = validate(formats::serialize_asset(fabric_sections(fabric)));
+  ASSERT_TRUE(f.has("CBK-E021"));
+  EXPECT_NE(f.messages[0].find("roughness"), std::string::npos) << f.messages[0];
+  fabric = test_support::make_test_fabric(8);
+  fabric.maps.normal[4] = {0.f, 0.6f, -0.8f};  // below the horizon
+  f = validate(formats::serialize_asset(fabric_sections(fabric)));
+  ASSERT_TRUE(f.has("CBK-E021"));
+  EXPECT_NE(f.messages[0].find("normal map: 1 texels have z <= 0 (first at x=4, y=0)"),
+            std::string::npos)
+      << f.messages[0];
 }
 
 TEST(Validate, MissingSections_E019) {
@@ -130,7 +142,8 @@ TEST(Validate, MapsOfDifferentSizes_E016) {
   const Fabric small = test_support::make_test_fabric(4);
   for (auto& s : sections)
     if (s.type == SectionType::GapMap)
-      s = formats::make_array_section<float>(SectionType::GapMap, 0, small.maps.gap, {4, 4});
+      for (auto& t : compress::feature_map_sections(small.maps))
+        if (t.type == SectionType::GapMap) s = t;
   EXPECT_TRUE(validate(formats::serialize_asset(sections)).has("CBK-E016"));
 }
 
@@ -162,10 +175,12 @@ TEST(Validate, MetadataMustBeUtf8Json_E020) {
 
 TEST(Validate, NanFromAForeignWriter_E017) {
   auto sections = fabric_sections(test_support::make_test_fabric(4));
+  sections.push_back(formats::make_array_section<float>(SectionType::AsgFitError, 0,
+                                                        std::vector<float>(16, 0.25f), {4, 4}));
   auto bytes = formats::serialize_asset(sections);
-  // Write a NaN into the height map and fix its checksum and the header checksum, as a foreign
-  // writer without the NaN check would.
-  const uint32_t height = index_of(sections, SectionType::HeightMap);
+  // Write a NaN into the f32 fit-error map and fix its checksum and the header checksum, as a
+  // foreign writer without the NaN check would.
+  const uint32_t height = index_of(sections, SectionType::AsgFitError);
   const uint64_t offset = payload_offset(bytes, height);
   const uint32_t nan_bits = 0x7fc00000u;
   std::memcpy(bytes.data() + offset + 4 * 6, &nan_bits, 4);

@@ -12,6 +12,8 @@
 #include <regex>
 #include <sstream>
 
+#include "formats/reader/compressed_tables.hpp"
+#include "formats/reader/parallax_sections.hpp"
 #include "tests/eval/eval_fixtures.hpp"
 
 namespace clothbake::render {
@@ -147,15 +149,15 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   const nlohmann::json report = nlohmann::json::parse(run.out);
   EXPECT_EQ(report["scene_plan"]["half_vector_bins_kept"], used);
   const nlohmann::json info = info_of(out);
-  // The planned hierarchical parallax (format 1.5) and the clusters' visibility basis (1.6).
-  EXPECT_EQ(info["format"]["minor"], 6);
+  EXPECT_EQ(info["format"]["major"], 2);
+  EXPECT_EQ(info["format"]["minor"], 0);
   EXPECT_TRUE(info["scene_plan"]["transmission_left_out"].get<bool>());
   EXPECT_EQ(info["scene_plan"]["half_vector_bins_kept"], used);
   std::map<std::string, int> count;
   for (const auto& s : info["sections"]) {
     count[s["name"]]++;
     if (s["name"] == "radiance_compressed") {
-      EXPECT_EQ(s["version"], 2);
+      EXPECT_EQ(s["version"], 1);
       EXPECT_LT(s["instance"].get<int>(), 16) << "no gap kind without transmission";
     }
     if (s["name"] == "parallax_entropy" && s["instance"] == 2) {  // block offsets: D + 1
@@ -164,9 +166,18 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   }
   EXPECT_EQ(count["bin_map"], 2);
   EXPECT_EQ(count["scene_plan"], 1);
-  EXPECT_EQ(count["parallax_compressed"], 0);
-  EXPECT_EQ(count["parallax_planned"], 0);
   EXPECT_EQ(count["parallax_entropy"], 6);
+  // Both tables say they are planned in their info records.
+  {
+    reader::Asset asset;
+    ASSERT_TRUE(asset.open_file(out.c_str()).ok());
+    reader::CompressedRadianceTables tables;
+    ASSERT_TRUE(tables.open(asset, reader::RadianceTableKind::Specular).ok());
+    EXPECT_TRUE(tables.is_planned());
+    reader::ParallaxView parallax;
+    ASSERT_TRUE(parallax.open(asset).ok());
+    EXPECT_TRUE(parallax.is_planned());
+  }
   // `info` in words says what was left out.
   const auto text = run_clothbake({"info", out});
   EXPECT_NE(text.out.find("left out: transmission and gap tables"), std::string::npos) << text.out;

@@ -8,6 +8,7 @@
 #include "bake/inputs/fabric_load.hpp"
 #include "common/error.hpp"
 #include "compress/parallax_codes.hpp"
+#include "compress/parallax_hierarchy.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "raycast/parallax.hpp"
@@ -33,7 +34,7 @@ std::unique_ptr<Opened> open(const std::vector<formats::Section>& sections) {
 struct Baked {
   Fabric fabric;
   raycast::ParallaxTable table;
-  compress::QuantisedParallax packed;
+  compress::HierarchicalParallax packed;
 };
 
 Baked bake(int n, int dirs) {
@@ -46,14 +47,16 @@ Baked bake(int n, int dirs) {
       b.table.depth.data(),      b.table.resolution,  b.table.dirs,
       b.table.min_cos,           b.table.depth_scale, b.table.reference_height,
       b.table.stats.max_sideways};
-  b.packed = compress::quantise_parallax(raw, 1.0);
+  b.packed = compress::hierarchical_parallax(raw, compress::kDefaultParallaxMaxError);
   return b;
 }
 
-std::vector<formats::Section> sections(const Baked& b, bool keep_raw) {
-  std::vector<formats::Section> out = compress::compressed_parallax_sections(b.packed);
+// The compressed sections, and with keep_raw the raw table `raw` (b.table by default).
+std::vector<formats::Section> sections(const Baked& b, bool keep_raw,
+                                       const raycast::ParallaxTable* raw = nullptr) {
+  std::vector<formats::Section> out = compress::hierarchical_parallax_sections(b.packed);
   if (keep_raw)
-    for (auto& s : raycast::parallax_sections(raycast::ParallaxTable(b.table)))
+    for (auto& s : raycast::parallax_sections(raycast::ParallaxTable(raw ? *raw : b.table)))
       out.push_back(std::move(s));
   return out;
 }
@@ -62,7 +65,6 @@ std::vector<formats::Section> sections(const Baked& b, bool keep_raw) {
 
 TEST(ParallaxVerify, MeasuresTheBakesErrorAgainstKeptOrRecomputedRaw) {
   const Baked b = bake(24, 4);
-  ASSERT_EQ(b.packed.bits, 8);
   ASSERT_GT(b.packed.rms_offset_error, 0.0);
   verify::ParallaxVerifyOptions options;
   options.samples = 70;
@@ -90,16 +92,19 @@ TEST(ParallaxVerify, MeasuresTheBakesErrorAgainstKeptOrRecomputedRaw) {
 
 TEST(ParallaxVerify, FindsAPlantedCodeErrorAtItsSize) {
   Baked b = bake(16, 4);
-  // The direction with the largest offset per code; its texel (3, 5) moved by 40 codes.
+  // The direction with the largest offset per code; its texel (3, 5) of the kept raw table moved
+  // by a quarter of the table's depth range (the compressed table then misses it by that much).
   const std::vector<double> k = compress::parallax_offset_per_depth(16, 4, b.packed.min_cos);
   std::size_t d = 0;
   for (std::size_t e = 0; e < k.size(); ++e)
     if (k[e] * b.packed.steps[e] > k[d] * b.packed.steps[d]) d = e;
   ASSERT_GT(b.packed.steps[d], 0.0);
-  uint8_t& code = b.packed.codes[d * 256 + 5 * 16 + 3];
-  code = uint8_t(code >= 128 ? code - 40 : code + 40);
-  const double planted = 40 * b.packed.steps[d] * k[d];
-  auto o = open(sections(b, true));
+  raycast::ParallaxTable planted_raw = b.table;
+  const int raw_codes = 16384;
+  uint16_t& code = planted_raw.depth[d * 256 + 5 * 16 + 3];
+  code = uint16_t(code >= 32768 ? code - raw_codes : code + raw_codes);
+  const double planted = raw_codes * b.table.depth_scale * k[d];
+  auto o = open(sections(b, true, &planted_raw));
   verify::ParallaxVerifyOptions options;
   options.samples = 35;
   options.max_rms_error = 1.0;

@@ -7,6 +7,7 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "cluster/cluster_sections.hpp"
+#include "compress/map_entropy.hpp"
 #include "fabric/fabric_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tables/radiance_fill.hpp"
@@ -36,7 +37,7 @@ inline std::vector<formats::Section> asset_sections(
   vc.labels = block_labels(n, clusters);
   vc.mean_visibility.assign(std::size_t(clusters) * 16, 1.0f);
   std::vector<formats::Section> sections = fabric_record_sections(fabric);
-  for (auto& s : feature_map_sections(fabric.maps))
+  for (auto& s : compress::feature_map_sections(fabric.maps))
     sections.push_back(std::move(s));
   for (auto& s : cluster::cluster_sections(vc))
     sections.push_back(std::move(s));

@@ -1,6 +1,6 @@
-// The block header and decoder tables shared by the entropy-coded parallax blocks of format 1.2
-// (parallax_entropy.hpp, 5 contexts) and 1.5 (parallax_hierarchy.hpp, 23 contexts): internal to
-// the reader library (not installed).
+// The block header and decoder tables shared by the block coder's blocks (parallax_entropy.hpp,
+// 5 contexts: the feature maps) and the compressed parallax (parallax_hierarchy.hpp, 23
+// contexts): internal to the reader library (not installed).
 //
 // C++17, standard library only, noexcept, no allocation; safe on any bytes (every read is checked
 // against `size`).

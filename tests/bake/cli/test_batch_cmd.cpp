@@ -230,7 +230,7 @@ TEST_F(Batch, HostileListsStampsAndNames) {
 // the big one does not: the big one fails with the writer's message, the rest are baked, nothing
 // partial at any output.
 TEST_F(Batch, FullDiskFailsOneFabricAndLeavesNothingPartial) {
-  std::ofstream(dir_ / "lib" / "big.toml") << fabric("twill2/1", 64);
+  std::ofstream(dir_ / "lib" / "big.toml") << fabric("twill2/1", 128);
   const std::string small = single_bake("plain");
   const uint64_t limit_blocks = (small.size() * 4) / 512;  // dash: ulimit -f counts 512 B blocks
   const std::string command = "ulimit -f " + std::to_string(limit_blocks) +

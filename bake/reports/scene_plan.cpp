@@ -1,5 +1,5 @@
 // Bake plans from a scene (scene_plan.hpp).
-#include "bake/cli/scene_plan.hpp"
+#include "bake/reports/scene_plan.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -16,7 +16,7 @@
 #include "formats/writer/asset_writer.hpp"
 #include "tables/half_vector_bins.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -30,13 +30,13 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
 }
 
 // Estimates. Sizes: the sections' shapes (docs/format.md), upper bounds where the bake
-// entropy-codes (the feature maps at their format 1.4 codes, 20 bytes per texel, and the parallax
+// entropy-codes (the feature maps at their 16-bit codes, 20 bytes per texel, and the parallax
 // at one byte per texel and direction, before coding: the coded forms depend on the pattern); the
 // compressed Integral-Radiance tables from a mean C-PCA rank of kMeanRank per texel (the 256^2
 // twill measured 15.1: 991149 coefficients over 65536 texels) capped at the kept bins, plus one
-// basis image per rank and cluster. Times: per-stage rates of the 256^2 twill, format 1.5, fitted
-// to its full bake and its far-swatch plan (2 threads, idle machine; docs/scene-plans.md,
-// "Estimates"): a fixed part per texel plus a part per texel and direction.
+// basis image per rank and cluster. Times: per-stage rates of the 256^2 twill (format 1.5, whose
+// forms 2.0 kept), fitted to its full bake and its far-swatch plan (2 threads, idle machine;
+// docs/scene-plans.md, "Estimates"): a fixed part per texel plus a part per texel and direction.
 constexpr double kMeanRank = 15.1;
 constexpr double kParallaxPerTexel = 4.2e-6, kParallaxPerRay = 5.8e-8;
 constexpr double kVisibilityPerSample = 4.8e-8;  // per texel and visibility direction
@@ -304,9 +304,9 @@ nlohmann::json plan_json(const ScenePlan& plan) {
   return {{"scene", plan.scene}, {"max_error", plan.max_error}, {"fabrics", fabrics}};
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 namespace {
 
 bool same_file(const std::string& a, const std::string& b) {
@@ -451,4 +451,4 @@ ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::str
   return out;
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

@@ -1,11 +1,11 @@
 // Terminal-safe text (terminal_text.hpp).
-#include "bake/cli/terminal_text.hpp"
+#include "bake/inputs/terminal_text.hpp"
 
 #include <cstdio>
 
 #include "formats/reader/metadata_limits.hpp"
 
-namespace clothbake::cli {
+namespace clothbake {
 
 namespace {
 
@@ -58,4 +58,4 @@ std::string terminal_safe_lines(std::string_view text) {
   return escaped(text, true);
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake

@@ -2,7 +2,7 @@
 // (render/usage_analysis.hpp) turned, per fabric, into what an asset needs: per-texel parallax,
 // the transmission and gap tables, the half-vector bins, the sheen, the directional resolution
 // (2-sigma rule) and the compression target from the scene's error budget, each with the reason
-// in words. `clothbake plan` prints it; `clothbake bake --scene` bakes it (bin maps, format 1.2:
+// in words. `clothbake plan` prints it; `clothbake bake --scene` bakes it (bin maps:
 // docs/scene-plans.md).
 #pragma once
 
@@ -14,7 +14,7 @@
 #include "fabric/fabric.hpp"
 #include "render/usage_analysis.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 struct PlanDecision {
   std::string item;      // "per-texel parallax", "transmission and gap tables", ...
@@ -60,11 +60,11 @@ ScenePlan plan_scene(const inputs::LoadedScene& scene);
 
 nlohmann::json plan_json(const ScenePlan& plan);
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports
 
 #include "bake/pipeline/bake.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 // What `bake --scene` needs to bake one fabric's plan: the stages' seed, the sections that record
 // the plan (bin maps, ScenePlanRecord) and the metadata (the plan's decisions, the scene's path
@@ -89,4 +89,4 @@ ScenePlanSeeds seed_scene_plan(const std::string& scene_path, const std::string&
 ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& scene, const std::string& scene_path,
                                const std::string& fabric_path, pipeline::BakeRequest* request);
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

@@ -1,5 +1,5 @@
 // Principal components of the parallax table (parallax_pca.hpp).
-#include "compress/parallax_pca.hpp"
+#include "benchmarks/compress/parallax_pca.hpp"
 
 #include "compress/parallax_codes.hpp"
 

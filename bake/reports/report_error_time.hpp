@@ -2,15 +2,17 @@
 // content), then every method over an spp sweep, timing each render's wall time on this machine in
 // this run; writes DIR/error-time.csv, error-time.json (rows, and per method pair the equal-error
 // speedup and the equal-time error ratio), error-time.png/.svg and grid.png (via
-// scripts/plot_error_time.py), and a summary on stdout (docs/rendering.md, "Error against run
-// time").
+// scripts/plot_error_time.py); returns the JSON document and a summary for the command to print
+// (docs/rendering.md, "Error against run time").
 #pragma once
+
+#include "bake/reports/report_output.hpp"
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 struct ErrorTimeOptions {
   std::string scene, output, cache;
@@ -21,7 +23,8 @@ struct ErrorTimeOptions {
   uint32_t reference_spp = 256;  // light samples of the reference with environment lights
   int width = 0, height = 0;     // > 0: render at this size instead of the scene camera's
   uint64_t seed = 1;
-  bool no_plots = false, json = false;
+  bool no_plots = false;
+  bool quiet = false;  // no progress bar and no baking messages on stderr (`--json`)
   // Also ray-trace the first cloth plane's real relief and report the error of the parallax-offset
   // model and of the model without offsets against it (paper Fig. 6).
   bool near_field = false;
@@ -32,7 +35,7 @@ struct ErrorTimeOptions {
   bool raw_tables = false;
 };
 
-// Throws CLI::ValidationError for bad options, clothbake::Error for a bad scene or output.
-int run_error_time_report(const ErrorTimeOptions& options);
+// Throws Error(Usage) for bad options (naming the option), Error(Input) for a bad scene or output.
+ReportOutput error_time_report(const ErrorTimeOptions& options);
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

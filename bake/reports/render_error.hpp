@@ -9,7 +9,7 @@
 
 #include "render/renderer.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 // eps^2 of the definition above over the pixels of `mask` (all when empty); 1e-12 for a black
 // reference.
@@ -43,4 +43,4 @@ double relmse_of_means_term(const render::RenderResult& a1, const render::Render
 double relmse_between(const render::RenderResult& a, const render::RenderResult& b,
                       const render::RenderResult& ref, const std::vector<uint8_t>& mask);
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

@@ -5,16 +5,19 @@
 // Reference method on the full assets, and writes the relMSE between the expected planned and full
 // renders (unbiased, from the two pairs), of both against the reference over that fabric's
 // pixels, the sizes and bake times, DIR/plan.json, DIR/side-by-side.png (full | planned |
-// difference map) and a summary on stdout. Exit 5 when a fabric's planned render is over the
-// scene's budget: relMSE planned vs full > [render] max_error (the relative RMS is reported beside
-// it, docs/scene-plans.md says why it is not the criterion). With --image-size the plan is made
-// for that size (footprints and view directions change with it).
+// difference map); returns the JSON document and a summary for the command to print, with a
+// failure (exit 5) when a fabric's planned render is over the scene's budget: relMSE planned vs
+// full > [render] max_error (the relative RMS is reported beside it, docs/scene-plans.md says why
+// it is not the criterion). With --image-size the plan is made for that size (footprints and view
+// directions change with it).
 #pragma once
+
+#include "bake/reports/report_output.hpp"
 
 #include <cstdint>
 #include <string>
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 struct PlanReportOptions {
   std::string scene, output;
@@ -22,11 +25,10 @@ struct PlanReportOptions {
   uint64_t seed = 1;
   int width = 0, height = 0;    // > 0: render at this size instead of the scene camera's
   uint32_t reference_spp = 64;  // light samples of the reference with environment lights
-  bool json = false;
 };
 
-// Throws clothbake::Error: Input for a bad scene, fabric or output, VerificationFailed (exit 5)
-// after writing everything when a planned render is over the budget.
-int run_plan_report(const PlanReportOptions& options);
+// Throws Error: Usage for bad options (naming the option), Input for a bad scene, fabric or
+// output. A planned render over the budget is ReportOutput::failure, after writing everything.
+ReportOutput plan_report(const PlanReportOptions& options);
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

@@ -14,22 +14,23 @@
 //    against direct sums (verify/radiance_verify.hpp), validation of the asset, and every warning
 //    the bake issued.
 // Writes DIR/stability.csv and DIR/stability.json (through a temporary directory next to DIR,
-// moved into place at the end). Exit 0 when every row passes, 5 (VerificationFailed) after
-// writing everything when a row has a non-finite or negative output or an error above its
-// tolerance, 2 for an unwritable output.
+// moved into place at the end). The command exits 0 when every row passes, 5 (VerificationFailed)
+// after writing everything when a row has a non-finite or negative output or an error above its
+// tolerance (ReportOutput::failure), 2 for an unwritable output (Error(Input)).
 #pragma once
+
+#include "bake/reports/report_output.hpp"
 
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 struct StabilityOptions {
   std::string output;
-  bool large = false;  // the table case at 2048^2 (else 256^2)
-  bool json = false;
+  bool large = false;               // the table case at 2048^2 (else 256^2)
   bool model = true, baked = true;  // which halves to run (tests)
   bool table_case = true;           // the baked table case (256^2 / 2048^2) (tests)
   // Self-check hook (tests): every direct computation d becomes d (1 + perturb) + perturb * s,
@@ -57,7 +58,7 @@ std::vector<StabilityRow> stability_rows(const StabilityOptions& options,
 // The CSV (header + one line per row) and the JSON document of the rows.
 std::string stability_csv(const std::vector<StabilityRow>& rows);
 
-// The command: rows, files, summary; returns 0 or throws Error(VerificationFailed) after writing.
-int run_stability_report(const StabilityOptions& options);
+// The report: rows, files, the JSON document and the summary.
+ReportOutput stability_report(const StabilityOptions& options);
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

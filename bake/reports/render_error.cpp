@@ -1,10 +1,10 @@
 // relMSE of renders (render_error.hpp).
-#include "bake/cli/render_error.hpp"
+#include "bake/reports/render_error.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 double relmse_floor(const render::RenderResult& ref, const std::vector<uint8_t>& mask) {
   double sum = 0;
@@ -64,4 +64,4 @@ double relmse_between(const render::RenderResult& a, const render::RenderResult&
   return relmse_of_means(a, b, a, b, ref, mask).mean;
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

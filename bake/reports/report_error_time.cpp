@@ -1,8 +1,9 @@
 // clothbake report error-time SCENE.toml -o DIR (report_error_time.hpp; docs/rendering.md,
 // "Error against run time").
-#include "bake/cli/report_error_time.hpp"
+#include "bake/reports/report_error_time.hpp"
 
 #include <fmt/format.h>
+#include <fmt/printf.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,13 +15,11 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
-#include "bake/cli/command.hpp"
-#include "bake/cli/options.hpp"
-#include "bake/cli/render_error.hpp"
-#include "bake/cli/scene_bake.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_files.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "bake/pipeline/progress.hpp"
+#include "bake/reports/render_error.hpp"
+#include "bake/reports/scene_bake.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
@@ -29,8 +28,9 @@
 #include "render/heightfield_reference.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
+#include "render/sample_limit.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 namespace {
 
 namespace fs = std::filesystem;
@@ -102,7 +102,7 @@ void write_error_png(const fs::path& path, const render::RenderResult& a,
 
 }  // namespace
 
-int run_error_time_report(const ErrorTimeOptions& o) {
+ReportOutput error_time_report(const ErrorTimeOptions& o) {
   // A rendered method: the evaluator's, over the pixel footprint, or brute force path-traced.
   struct Method {
     std::string name;
@@ -117,14 +117,13 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     else if (eval::parse_method(name.c_str(), &m) && m != eval::Method::Reference)
       methods.push_back({name, m, false});
     else
-      throw CLI::ValidationError("--methods", "unknown method '" + name +
-                                                  "' (multiscale, multiscale-paper, brute, "
-                                                  "brute-path)");
+      throw Error(ExitCode::Usage, "--methods: unknown method '" + name +
+                                       "' (multiscale, multiscale-paper, brute, brute-path)");
   }
-  if (methods.empty()) throw CLI::ValidationError("--methods", "no method given");
-  if (o.spp.empty()) throw CLI::ValidationError("--spp", "no spp given");
+  if (methods.empty()) throw Error(ExitCode::Usage, "--methods: no method given");
+  if (o.spp.empty()) throw Error(ExitCode::Usage, "--spp: no spp given");
   for (uint32_t s : o.spp)
-    if (s == 0) throw CLI::ValidationError("--spp", "every spp must be at least 1");
+    if (s == 0) throw Error(ExitCode::Usage, "--spp: every spp must be at least 1");
   const fs::path out(o.output);
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
@@ -135,7 +134,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
 
   // Everything that can refuse the scene comes before anything is written.
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
-  bake_scene_fabrics(loaded, o.cache, /*quiet=*/o.json);
+  bake_scene_fabrics(loaded, o.cache, o.quiet);
   if (o.width > 0 && o.height > 0) {
     loaded.scene.camera.width = o.width;
     loaded.scene.camera.height = o.height;
@@ -163,8 +162,9 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   ref_options.spp = environment ? o.reference_spp : 1;
   ref_options.seed = o.seed + 1000003;
   for (uint32_t spp : o.spp)
-    check_render_samples(scene.camera.width, scene.camera.height, spp, "--spp");
-  check_render_samples(scene.camera.width, scene.camera.height, ref_options.spp, "--reference-spp");
+    render::check_render_samples(scene.camera.width, scene.camera.height, spp, "--spp");
+  render::check_render_samples(scene.camera.width, scene.camera.height, ref_options.spp,
+                               "--reference-spp");
   std::string key = fmt::format("{} {} {}x{} spp {} seed {}", CLOTHBAKE_VERSION_STRING,
                                 inputs::hash_file(o.scene), scene.camera.width, scene.camera.height,
                                 ref_options.spp, ref_options.seed);
@@ -246,7 +246,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
   }
   // On a terminal (not with --json) every render shows a bar, and the reference says what it
   // costs: it is the report's longest render by far.
-  pipeline::ProgressBar bar(!o.json && pipeline::ProgressBar::stderr_is_terminal());
+  pipeline::ProgressBar bar(!o.quiet && pipeline::ProgressBar::stderr_is_terminal());
   auto progress = [&bar](double f) { bar.update(f); };
   if (reference.rgb.empty()) {
     if (bar.enabled())
@@ -515,31 +515,31 @@ int run_error_time_report(const ErrorTimeOptions& o) {
       warn("report: plotting failed (python3-matplotlib missing?); the CSV and JSON are written");
   }
 
-  if (o.json) {
-    print_json(doc);
-    return 0;
-  }
-  std::printf("error against run time: %s, %dx%d, reference %s\n", terminal_safe(o.scene).c_str(),
-              scene.camera.width, scene.camera.height,
-              reference_seconds == 0 ? "from the cache"
-                                     : fmt::format("{:.3g} s", reference_seconds).c_str());
-  std::printf("  errors over %zu of %d pixels (silhouettes and shadow edges left out)\n",
-              pixels_compared, scene.camera.width * scene.camera.height);
-  std::printf("  %-17s %5s %10s %12s %12s\n", "method", "spp", "seconds", "relMSE", "bias est.");
+  ReportOutput result;
+  std::string& text = result.summary;
+  text += fmt::sprintf("error against run time: %s, %dx%d, reference %s\n",
+                       terminal_safe(o.scene).c_str(), scene.camera.width, scene.camera.height,
+                       reference_seconds == 0 ? "from the cache"
+                                              : fmt::format("{:.3g} s", reference_seconds).c_str());
+  text += fmt::sprintf("  errors over %zu of %d pixels (silhouettes and shadow edges left out)\n",
+                       pixels_compared, scene.camera.width * scene.camera.height);
+  text += fmt::sprintf("  %-17s %5s %10s %12s %12s\n", "method", "spp", "seconds", "relMSE",
+                       "bias est.");
   for (const Row& r : rows)
-    std::printf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds, r.relmse,
-                r.bias);
+    text += fmt::sprintf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds,
+                         r.relmse, r.bias);
   if (summary.contains("equal_error_speedup")) {
     const std::string bound = summary["equal_error_speedup_bound"].get<std::string>();
-    std::printf("  multi-scale at %u spp against brute force: %s%.2fx the speed at equal error%s\n",
-                operating->spp,
-                bound == "lower"   ? ">"
-                : bound == "upper" ? "<"
-                                   : "",
-                summary["equal_error_speedup"].get<double>(),
-                bound == "upper"   ? " (brute force's fastest render was already more accurate)"
-                : bound == "lower" ? " (brute force never got there in the sweep)"
-                                   : "");
+    text += fmt::sprintf(
+        "  multi-scale at %u spp against brute force: %s%.2fx the speed at equal error%s\n",
+        operating->spp,
+        bound == "lower"   ? ">"
+        : bound == "upper" ? "<"
+                           : "",
+        summary["equal_error_speedup"].get<double>(),
+        bound == "upper"   ? " (brute force's fastest render was already more accurate)"
+        : bound == "lower" ? " (brute force never got there in the sweep)"
+                           : "");
   }
   if (summary.contains("pairs"))
     for (const auto& pair : summary["pairs"]) {
@@ -548,7 +548,7 @@ int run_error_time_report(const ErrorTimeOptions& o) {
         const std::string b = pair[key].get<std::string>();
         return b == "lower" ? ">" : b == "upper" ? "<" : "";
       };
-      std::printf(
+      text += fmt::sprintf(
           "  multi-scale at %u spp against %s at equal error: %s%.3gx in time, %s%.3gx in "
           "samples per pixel\n",
           pair["spp"].get<uint32_t>(), pair["against"].get<std::string>().c_str(),
@@ -557,22 +557,23 @@ int run_error_time_report(const ErrorTimeOptions& o) {
     }
   if (!tables.is_null())
     for (const auto& [name, t] : tables["methods"].items())
-      std::printf(
+      text += fmt::sprintf(
           "  %s at %u spp, compressed against raw tables: relMSE %.3g (against the reference: "
           "raw %.4g, compressed %.4g)\n",
           name.c_str(), tables["spp"].get<uint32_t>(), t["relmse_compressed_vs_raw"].get<double>(),
           t["relmse_raw"].get<double>(), t["relmse_compressed"].get<double>());
   if (!near_field.is_null())
-    std::printf(
+    text += fmt::sprintf(
         "  near field (%s, ray-traced relief): relMSE %.4g with parallax offsets, %.4g "
         "without\n",
         near_field["object"].get<std::string>().c_str(),
         near_field["relmse_parallax_model"].get<double>(),
         near_field["relmse_without_offsets"].get<double>());
   // The plots are listed only when they were drawn.
-  std::printf("  %s/{error-time.csv,error-time.json%s}\n", terminal_safe(o.output).c_str(),
-              plotted ? ",error-time.png,grid.png" : "");
-  return 0;
+  text += fmt::sprintf("  %s/{error-time.csv,error-time.json%s}\n", terminal_safe(o.output).c_str(),
+                       plotted ? ",error-time.png,grid.png" : "");
+  result.doc = std::move(doc);
+  return result;
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

@@ -1,5 +1,7 @@
 // `clothbake report plan` (report_plan.hpp).
-#include "bake/cli/report_plan.hpp"
+#include "bake/reports/report_plan.hpp"
+
+#include <fmt/printf.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,13 +10,11 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "bake/cli/command.hpp"
-#include "bake/cli/options.hpp"
-#include "bake/cli/render_error.hpp"
-#include "bake/cli/scene_plan.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/scene_load.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "bake/pipeline/bake.hpp"
+#include "bake/reports/render_error.hpp"
+#include "bake/reports/scene_plan.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
@@ -23,8 +23,9 @@
 #include "model/splitmix64.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
+#include "render/sample_limit.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 namespace {
 
 namespace fs = std::filesystem;
@@ -54,16 +55,17 @@ pipeline::BakeResult bake_one(const std::string& fabric, const std::string& outp
 
 }  // namespace
 
-int run_plan_report(const PlanReportOptions& o) {
+ReportOutput plan_report(const PlanReportOptions& o) {
   if (o.spp == 0) throw Error(ExitCode::Usage, "--spp must be at least 1");
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
   if (o.width > 0) {
     loaded.scene.camera.width = o.width;
     loaded.scene.camera.height = o.height;
   }
-  check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp, "--spp");
-  check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.reference_spp,
-                       "--reference-spp");
+  render::check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height, o.spp,
+                               "--spp");
+  render::check_render_samples(loaded.scene.camera.width, loaded.scene.camera.height,
+                               o.reference_spp, "--reference-spp");
   const fs::path out(o.output);
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
@@ -251,40 +253,41 @@ int run_plan_report(const PlanReportOptions& o) {
                                 {"zero", planned_image.stats.fallback_zero}}},
                               {"fabrics", fabrics}};
   formats::write_text_atomically(out / "plan.json", doc.dump(2) + "\n");
-  if (o.json) {
-    print_json(doc);
-  } else {
-    std::printf("plan report for %s (budget %.3g %%, %dx%d, %u spp)\n",
-                terminal_safe(o.scene).c_str(), 100 * budget, w, h, unsigned(o.spp));
+  ReportOutput result;
+  std::string& text = result.summary;
+  {
+    text += fmt::sprintf("plan report for %s (budget %.3g %%, %dx%d, %u spp)\n",
+                         terminal_safe(o.scene).c_str(), 100 * budget, w, h, unsigned(o.spp));
     for (const FabricRow& row : rows) {
-      std::printf("%s: %llu -> %llu bytes (%.1fx smaller), bake %.2f -> %.2f s (%.2fx)\n",
-                  terminal_safe(row.fabric).c_str(),
-                  static_cast<unsigned long long>(row.full_bytes),
-                  static_cast<unsigned long long>(row.planned_bytes),
-                  double(row.full_bytes) / double(std::max<uint64_t>(row.planned_bytes, 1)),
-                  row.full_bake_seconds, row.planned_bake_seconds,
-                  row.full_bake_seconds / std::max(row.planned_bake_seconds, 1e-9));
-      std::printf(
+      text += fmt::sprintf(
+          "%s: %llu -> %llu bytes (%.1fx smaller), bake %.2f -> %.2f s (%.2fx)\n",
+          terminal_safe(row.fabric).c_str(), static_cast<unsigned long long>(row.full_bytes),
+          static_cast<unsigned long long>(row.planned_bytes),
+          double(row.full_bytes) / double(std::max<uint64_t>(row.planned_bytes, 1)),
+          row.full_bake_seconds, row.planned_bake_seconds,
+          row.full_bake_seconds / std::max(row.planned_bake_seconds, 1e-9));
+      text += fmt::sprintf(
           "  relMSE planned vs full %.3g +- %.2g (budget %.3g: %s; relative RMS %.3g %%; one "
           "same-seed pair %.3g); vs reference: full %.3g, planned %.3g\n",
           row.planned_vs_full, row.planned_vs_full_error, budget, row.pass ? "within" : "OVER",
           100 * std::sqrt(std::max(row.planned_vs_full, 0.0)), row.same_seed, row.full_vs_reference,
           row.planned_vs_reference);
       for (const auto& what : row.seeds.left_out)
-        std::printf("  left out: %s\n", terminal_safe(what).c_str());
+        text += fmt::sprintf("  left out: %s\n", terminal_safe(what).c_str());
     }
-    std::printf("out-of-plan estimates %llu (brute-force fallback %llu, zero %llu)\n",
-                static_cast<unsigned long long>(planned_image.stats.out_of_plan),
-                static_cast<unsigned long long>(planned_image.stats.fallback_brute),
-                static_cast<unsigned long long>(planned_image.stats.fallback_zero));
-    std::printf("  %s/{plan.json,side-by-side.png,full.exr,planned.exr,reference.exr,assets/}\n",
-                terminal_safe(o.output).c_str());
+    text += fmt::sprintf("out-of-plan estimates %llu (brute-force fallback %llu, zero %llu)\n",
+                         static_cast<unsigned long long>(planned_image.stats.out_of_plan),
+                         static_cast<unsigned long long>(planned_image.stats.fallback_brute),
+                         static_cast<unsigned long long>(planned_image.stats.fallback_zero));
+    text += fmt::sprintf(
+        "  %s/{plan.json,side-by-side.png,full.exr,planned.exr,reference.exr,assets/}\n",
+        terminal_safe(o.output).c_str());
   }
   if (!all_pass)
-    throw Error(ExitCode::VerificationFailed,
-                "report plan: a planned render is over the scene's budget (see " +
-                    (out / "plan.json").string() + ")");
-  return 0;
+    result.failure = "report plan: a planned render is over the scene's budget (see " +
+                     (out / "plan.json").string() + ")";
+  result.doc = std::move(doc);
+  return result;
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

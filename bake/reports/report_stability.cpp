@@ -1,7 +1,8 @@
 // `clothbake report stability` (report_stability.hpp; docs/hardening.md, "Stability report").
-#include "bake/cli/report_stability.hpp"
+#include "bake/reports/report_stability.hpp"
 
 #include <fmt/format.h>
+#include <fmt/printf.h>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -20,9 +21,8 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "bake/cli/command.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/map_limits.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/stages.hpp"
 #include "common/diagnostics.hpp"
@@ -42,7 +42,7 @@
 #include "verify/compressed_verify.hpp"
 #include "verify/radiance_verify.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 namespace {
 
 namespace fs = std::filesystem;
@@ -928,7 +928,7 @@ std::vector<StabilityRow> stability_rows(const StabilityOptions& o, const std::s
   return std::move(report.rows);
 }
 
-int run_stability_report(const StabilityOptions& o) {
+ReportOutput stability_report(const StabilityOptions& o) {
   const fs::path out(o.output);
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
@@ -972,23 +972,25 @@ int run_stability_report(const StabilityOptions& o) {
     if (ec) throw_input_error((out / name).string() + ": " + ec.message());
   }
   fs::remove_all(tmp, ec);
-  if (o.json) {
-    print_json(doc);
-  } else {
-    std::printf("stability report: %zu rows, %d failed; %s/{stability.csv,stability.json}\n",
-                rows.size(), failed, terminal_safe(o.output).c_str());
+  ReportOutput result;
+  std::string& text = result.summary;
+  {
+    text +=
+        fmt::sprintf("stability report: %zu rows, %d failed; %s/{stability.csv,stability.json}\n",
+                     rows.size(), failed, terminal_safe(o.output).c_str());
     for (const StabilityRow& r : rows)
       if (!r.pass)
-        std::printf("  FAILED %s %s %s: %llu non-finite, %llu negative, max rel error %.3g\n",
-                    r.case_name.c_str(), r.parameter.c_str(), r.quantity.c_str(),
-                    static_cast<unsigned long long>(r.n_nonfinite),
-                    static_cast<unsigned long long>(r.n_negative), r.max_rel_error);
+        text +=
+            fmt::sprintf("  FAILED %s %s %s: %llu non-finite, %llu negative, max rel error %.3g\n",
+                         r.case_name.c_str(), r.parameter.c_str(), r.quantity.c_str(),
+                         static_cast<unsigned long long>(r.n_nonfinite),
+                         static_cast<unsigned long long>(r.n_negative), r.max_rel_error);
   }
   if (failed > 0)
-    throw Error(ExitCode::VerificationFailed,
-                fmt::format("report stability: {} row(s) failed (see {})", failed,
-                            (out / "stability.csv").string()));
-  return 0;
+    result.failure = fmt::format("report stability: {} row(s) failed (see {})", failed,
+                                 (out / "stability.csv").string());
+  result.doc = std::move(doc);
+  return result;
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

@@ -1,5 +1,5 @@
 // Fabrics of a scene baked through the stage cache (scene_bake.hpp).
-#include "bake/cli/scene_bake.hpp"
+#include "bake/reports/scene_bake.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -14,8 +14,8 @@
 #include <map>
 
 #include "bake/cache/stage_cache.hpp"
-#include "bake/cli/terminal_text.hpp"
 #include "bake/inputs/fabric_load.hpp"
+#include "bake/inputs/terminal_text.hpp"
 #include "bake/pipeline/bake.hpp"
 #include "bake/pipeline/progress.hpp"
 #include "bake/pipeline/resource_usage.hpp"
@@ -27,7 +27,7 @@
 #include "compress/compress_settings.hpp"
 #include "formats/reader/layout.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 namespace fs = std::filesystem;
 
@@ -143,4 +143,4 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
   }
 }
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

@@ -7,7 +7,7 @@
 
 #include "bake/inputs/scene_load.hpp"
 
-namespace clothbake::cli {
+namespace clothbake::reports {
 
 // The cache folder: `option` when given, else $CLOTHBAKE_CACHE, else $HOME/.cache/clothbake.
 std::string scene_cache_dir(const std::string& option);
@@ -21,9 +21,9 @@ std::string scene_cache_dir(const std::string& option);
 // earlier bake. Sets objects[k].asset. Throws clothbake::Error (Input for a bad fabric or an
 // unwritable cache folder).
 // keep_raw_tables: bake (or reuse) the variant that also stores the raw tables and parallax codes
-// (`bake --keep-raw`; 2.0 GB for the 256^2 twill, CACHE/assets/<stem>-<key>-raw.cbk), for comparing the
-// compressed tables with the raw ones.
+// (`bake --keep-raw`; 2.0 GB for the 256^2 twill, CACHE/assets/<stem>-<key>-raw.cbk), for comparing
+// the compressed tables with the raw ones.
 void bake_scene_fabrics(inputs::LoadedScene& scene, const std::string& cache_option, bool quiet,
                         bool keep_raw_tables = false);
 
-}  // namespace clothbake::cli
+}  // namespace clothbake::reports

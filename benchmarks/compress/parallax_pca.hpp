@@ -2,7 +2,7 @@
 // Eq. 2): the candidate form that docs/compression.md, "Compressed parallax", measured and did not
 // choose (occlusion edges keep the RMS offset error near 1 texel at any affordable rank). Kept for
 // benchmarks/compress/parallax_study (the measurement is reproducible); the asset's compressed
-// form is compress/parallax_codes.hpp.
+// form is compress/parallax_hierarchy.hpp.
 //
 // What is compressed. Per texel x the table holds D = n^2 depths r(x, d) <= 0 (one per view bin).
 // r is smooth in the direction except at occlusion edges, so the D-vectors of all texels lie close

@@ -1,7 +1,8 @@
-// `clothbake report stability` (bake/cli/report_stability.hpp): the model rows in process (every
+// The stability report (bake/reports/report_stability.hpp), in process: the model rows (every
 // output finite, every comparison within its tolerance, and a perturbed direct computation
-// caught), the baked rows in process with a perturbation, and the command end to end (files, every
-// row finite, a flat field's parallax exactly 0, exit codes).
+// caught), the baked rows with a perturbation, and the whole report (its files and document,
+// every row finite, a flat field's parallax exactly 0). The command's exit codes:
+// tests/bake/cli/test_report_cli.cpp.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -10,9 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "bake/cli/report_stability.hpp"
+#include "bake/reports/report_stability.hpp"
 #include "common/diagnostics.hpp"
-#include "tests/support/run_cli.hpp"
 
 using namespace clothbake;
 namespace fs = std::filesystem;
@@ -30,9 +30,9 @@ fs::path scratch(const std::string& name) {
 }  // namespace
 
 TEST(StabilityReport, ModelRowsAreFiniteAndWithinTolerance) {
-  cli::StabilityOptions o;
+  reports::StabilityOptions o;
   o.baked = false;
-  const auto rows = cli::stability_rows(o, scratch("model").string());
+  const auto rows = reports::stability_rows(o, scratch("model").string());
   ASSERT_GT(rows.size(), 50u);
   std::set<std::string> parameters;
   for (const auto& r : rows) {
@@ -51,13 +51,13 @@ TEST(StabilityReport, ModelRowsAreFiniteAndWithinTolerance) {
 
 TEST(StabilityReport, APerturbedDirectComputationIsCaught) {
   // Every direct computation off by 100 % (plus 100 % of its scale: more than any tolerance, which
-  // are all below 1; the compressed parallax depths' reaches 0.5 of the relief, since the format 1.5
-  // steps near the pole are as coarse as the relief): every row that has a direct computation and a
-  // tolerance must fail, so none of them compares a value with itself.
-  cli::StabilityOptions o;
+  // are all below 1; the compressed parallax depths' reaches 0.5 of the relief, since the
+  // format 1.5 steps near the pole are as coarse as the relief): every row that has a direct
+  // computation and a tolerance must fail, so none of them compares a value with itself.
+  reports::StabilityOptions o;
   o.perturb_direct = 1.0;
   o.table_case = false;
-  const auto rows = cli::stability_rows(o, scratch("perturbed").string());
+  const auto rows = reports::stability_rows(o, scratch("perturbed").string());
   int checked = 0;
   bool flat_parallax = false;
   for (const auto& r : rows) {
@@ -71,16 +71,20 @@ TEST(StabilityReport, APerturbedDirectComputationIsCaught) {
   EXPECT_TRUE(flat_parallax);
 }
 
-TEST(StabilityReport, CommandWritesFiniteRowsAndFlatParallaxIsExactlyZero) {
-  const fs::path dir = scratch("cli");
+TEST(StabilityReport, WritesFiniteRowsAndFlatParallaxIsExactlyZero) {
+  const fs::path dir = scratch("report");
   const fs::path out = dir / "report";
-  const auto run = test_support::run_clothbake({"report", "stability", "-o", out.string()});
-  ASSERT_EQ(run.code, 0) << run.out << run.err;
+  reports::StabilityOptions o;
+  o.output = out.string();
+  const reports::ReportOutput report = reports::stability_report(o);
+  EXPECT_FALSE(report.failure) << *report.failure;
+  EXPECT_NE(report.summary.find("stability report: "), std::string::npos) << report.summary;
   ASSERT_TRUE(fs::is_regular_file(out / "stability.csv"));
   ASSERT_TRUE(fs::is_regular_file(out / "stability.json"));
   EXPECT_FALSE(fs::exists(dir / "report.tmp-report"));
   std::ifstream in(out / "stability.json");
   const nlohmann::json doc = nlohmann::json::parse(in);
+  EXPECT_EQ(doc, report.doc);  // the file holds what --json prints
   ASSERT_TRUE(doc["rows"].is_array());
   std::set<std::string> cases;
   int flat_parallax = 0, table_rows = 0;
@@ -116,17 +120,4 @@ TEST(StabilityReport, CommandWritesFiniteRowsAndFlatParallaxIsExactlyZero) {
   while (std::getline(csv, line))
     ++lines;
   EXPECT_EQ(lines, int(doc["rows"].size()) + 1);
-}
-
-TEST(StabilityReport, UsageAndOutputErrors) {
-  const fs::path dir = scratch("errors");
-  auto run = test_support::run_clothbake(
-      {"report", "stability", "fabric.toml", "-o", (dir / "r").string()});
-  EXPECT_EQ(run.code, 1) << run.err;
-  EXPECT_FALSE(fs::exists(dir / "r"));
-  run = test_support::run_clothbake({"report", "plan", "-o", (dir / "r").string()});
-  EXPECT_EQ(run.code, 1) << run.err;
-  std::ofstream(dir / "file") << "x";
-  run = test_support::run_clothbake({"report", "stability", "-o", (dir / "file").string()});
-  EXPECT_EQ(run.code, 2) << run.err;
 }
