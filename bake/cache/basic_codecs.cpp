@@ -5,7 +5,7 @@
 
 #include "bake/cache/codec.hpp"
 #include "fabric/fabric.hpp"
-#include "formats/reader/metadata_limits.hpp"
+#include "formats/validate/metadata_limits.hpp"
 #include "formats/writer/asset_writer.hpp"
 
 namespace clothbake::cache {

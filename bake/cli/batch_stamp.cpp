@@ -10,7 +10,7 @@
 
 #include "bake/inputs/fabric_files.hpp"
 #include "common/error.hpp"
-#include "formats/reader/metadata_limits.hpp"
+#include "formats/validate/metadata_limits.hpp"
 
 namespace clothbake::cli {
 namespace {

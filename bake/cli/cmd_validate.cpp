@@ -9,7 +9,7 @@
 #include "bake/cli/options.hpp"
 #include "bake/inputs/terminal_text.hpp"
 #include "common/diagnostics.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/metadata_json.hpp"
 #include "formats/writer/open_asset.hpp"
 

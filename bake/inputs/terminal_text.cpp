@@ -3,7 +3,7 @@
 
 #include <cstdio>
 
-#include "formats/reader/metadata_limits.hpp"
+#include "formats/validate/metadata_limits.hpp"
 
 namespace clothbake {
 

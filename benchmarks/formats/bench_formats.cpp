@@ -13,8 +13,8 @@
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
-#include "formats/reader/validate.hpp"
 #include "formats/reader/xxh64.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
 

@@ -5,8 +5,6 @@
 #include <cinttypes>
 #include <cmath>
 
-#include "formats/reader/validate.hpp"
-
 namespace clothbake::reader {
 namespace {
 
@@ -365,7 +363,7 @@ Status RawRadianceTables::check_against_labels(const uint8_t* labels) const noex
                              (x && y ? sat_element(b, x - 1, y - 1, k) : 0);
           const uint64_t mask = element_bits_ == 32 ? 0xffffffffull : ~0ull;
           if ((q & mask) != 0)
-            return Status::error(ErrorCode::Malformed, kCheckCrossSection,
+            return Status::error(ErrorCode::Malformed, Check::CrossSection,
                                  "radiance_tables %s: bin %u texel (%u, %u) has a value in the "
                                  "table of cluster %u but the label map puts it in cluster %u",
                                  radiance_kind_name(kind_), unsigned(b), unsigned(x), unsigned(y),

@@ -63,7 +63,7 @@ class RawRadianceTables final : public RadianceTables {
   Status check_contents() const noexcept;
   // O(size) scan against the label map (labels: N x N, texel (x, y) at y * N + x): every texel
   // whose label is not a column's cluster holds 0 in that column (T[c] = ... * [label = c]).
-  // kCheckCrossSection (CBK-E022, validate.hpp) naming the first offending bin, texel and cluster
+  // Check::CrossSection (CBK-E022) naming the first offending bin, texel and cluster
   // otherwise; InvalidArgument when not open or labels is null.
   Status check_against_labels(const uint8_t* labels) const noexcept;
 

@@ -2,7 +2,7 @@
 #include "formats/writer/metadata_json.hpp"
 
 #include "common/error.hpp"
-#include "formats/reader/metadata_limits.hpp"
+#include "formats/validate/metadata_limits.hpp"
 
 namespace clothbake::formats {
 namespace {

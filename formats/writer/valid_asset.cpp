@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/metadata_json.hpp"
 #include "formats/writer/open_asset.hpp"
 

@@ -19,7 +19,7 @@
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/map_encoding.hpp"
 #include "formats/reader/map_entropy.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
 

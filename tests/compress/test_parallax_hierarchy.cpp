@@ -23,7 +23,7 @@
 #include "formats/reader/parallax_hierarchy.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
 #include "raycast/parallax.hpp"

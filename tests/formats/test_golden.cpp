@@ -11,7 +11,7 @@
 
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "tests/formats/golden_asset.hpp"
 
 namespace {

@@ -16,7 +16,7 @@
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/map_encoding.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/half_float.hpp"
 #include "formats/writer/map_encoding.hpp"

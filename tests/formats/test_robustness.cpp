@@ -15,8 +15,8 @@
 
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
-#include "formats/reader/validate.hpp"
 #include "formats/reader/xxh64.hpp"
+#include "formats/validate/validate.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include "compress/map_entropy.hpp"
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
 

@@ -9,7 +9,7 @@
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/parallax_sections.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 
 using namespace clothbake::reader;
 

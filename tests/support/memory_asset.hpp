@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "formats/reader/asset.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 
 namespace clothbake::test_support {

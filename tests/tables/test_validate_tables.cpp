@@ -1,4 +1,4 @@
-// Full validation of the baked tables (formats/reader/validate.cpp): a small asset baked through
+// Full validation of the baked tables (formats/validate/validate.cpp): a small asset baked through
 // every stage validates clean; copies whose sections are each corrupted in a way that keeps them
 // structurally valid (the asset is re-serialised, so every checksum matches) fail with the stable
 // check ID of docs/format.md: resolutions that disagree (CBK-E016), cross-section inconsistencies
@@ -21,7 +21,7 @@
 #include "formats/reader/compressed_layout.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/radiance_layout.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 
 using namespace clothbake;

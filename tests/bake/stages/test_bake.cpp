@@ -16,7 +16,7 @@
 #include "common/error.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 #include "raycast/heightfield_scene.hpp"
 #include "tests/formats/test_fabric.hpp"
 

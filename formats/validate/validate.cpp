@@ -1,5 +1,5 @@
 // Deep validation (validate.hpp).
-#include "formats/reader/validate.hpp"
+#include "formats/validate/validate.hpp"
 
 #include <cinttypes>
 #include <cmath>
@@ -11,12 +11,12 @@
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/map_entropy.hpp"
-#include "formats/reader/metadata_limits.hpp"
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/radiance_tables.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "formats/reader/xxh64.hpp"
+#include "formats/validate/metadata_limits.hpp"
 #include "model/parameter_ranges.hpp"
 
 namespace clothbake::reader {

@@ -1,5 +1,5 @@
 // Metadata size and nesting limits (metadata_limits.hpp).
-#include "formats/reader/metadata_limits.hpp"
+#include "formats/validate/metadata_limits.hpp"
 
 namespace clothbake::reader {
 
