@@ -87,8 +87,12 @@ class TexelDecoder {
 }  // namespace
 
 uint64_t CompressedTableSet::payload_bytes() const {
+  const uint64_t coded =
+      empty() ? 0
+              : (coded_coefficients.empty() ? code_compressed_coefficients(*this).size()
+                                            : coded_coefficients.size());
   return sizeof(info) + cells.size() * sizeof(reader::CompressedCell) + cell_map.size() +
-         scales.size() * 4 + basis.size() * 2 + coefficients.size() * 2;
+         scales.size() * 4 + basis.size() * 2 + coded;
 }
 
 CompressedTableSet compress_tables(const DirectionalTexels& data, const CpcaOptions& options,
@@ -203,6 +207,7 @@ CompressedTableSet compress_tables(const DirectionalTexels& data, const CpcaOpti
     mv = std::max(mv, max_val[b]);
   }
   info.bake_error = s2 > 0.0 ? std::sqrt(e2 / s2) : 0.0;
+  if (!set.empty()) set.coded_coefficients = code_compressed_coefficients(set);
 
   if (stats) {
     *stats = {};
@@ -272,7 +277,8 @@ std::vector<formats::Section> compressed_sections(const CompressedTableSet& set)
   out.push_back(formats::make_array_section<reader::Half>(SectionType::RadianceCompressedTables,
                                                           instance(CompressedPart::Basis),
                                                           set.basis, {images, bins}));
-  const std::vector<uint8_t> coded = code_compressed_coefficients(set);
+  const std::vector<uint8_t> coded =
+      set.coded_coefficients.empty() ? code_compressed_coefficients(set) : set.coded_coefficients;
   out.push_back(formats::make_array_section<uint8_t>(SectionType::RadianceCompressedTables,
                                                      instance(CompressedPart::Coefficients), coded,
                                                      {uint32_t(coded.size())}));

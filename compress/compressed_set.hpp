@@ -36,9 +36,13 @@ struct CompressedTableSet {
   std::vector<float> scales;          // images
   std::vector<reader::Half> basis;    // images x bins
   std::vector<int16_t> coefficients;  // per texel in row-major order, its cell's rank
+  // Part 5 as stored: the coefficients entropy-coded (coefficient_coding.hpp); compress_tables
+  // fills it, compressed_sections codes the coefficients when it is empty.
+  std::vector<uint8_t> coded_coefficients;
 
   bool empty() const { return cells.empty(); }
-  uint64_t payload_bytes() const;  // bytes of the six payloads
+  // Bytes of the six payloads as stored (part 5: coded_coefficients, coded now if empty).
+  uint64_t payload_bytes() const;
 };
 
 struct CompressionStats {

@@ -48,9 +48,6 @@ Section yarn_id_map(const std::vector<uint16_t>& values, std::size_t texels, uin
   return make_array_section<uint16_t>(SectionType::YarnIdMap, 0, values, {n, n});
 }
 
-// Payload version of the code arrays (an intermediate form, coded by compress/map_entropy.hpp).
-constexpr uint16_t kCodesVersion = 1;
-
 // Refuses NaN/Inf before the 16-bit codes would hide them: names the map, the element and the
 // texel.
 void check_finite_map(SectionType type, const float* values, std::size_t count, uint32_t channels,
@@ -78,7 +75,7 @@ Section packed_height(const std::vector<float>& height, std::size_t texels, uint
                         " tile sides, beyond the f16 range of the stored map (|h| <= 65504)");
     codes[t] = formats::float_to_half(height[t]);
   }
-  return make_array_section<reader::Half>(SectionType::HeightMap, 0, codes, {n, n}, kCodesVersion);
+  return make_array_section<reader::Half>(SectionType::HeightMap, 0, codes, {n, n});
 }
 
 Section packed_unit_vectors(SectionType type, const std::vector<Vec3f>& values, std::size_t texels,
@@ -88,7 +85,7 @@ Section packed_unit_vectors(SectionType type, const std::vector<Vec3f>& values, 
   std::vector<int16_t> codes(values.size() * 2);
   for (std::size_t t = 0; t < values.size(); ++t)
     formats::unit_to_octahedral(values[t].data(), codes.data() + 2 * t);
-  return make_array_section<int16_t>(type, 0, codes, {n, n, 2}, kCodesVersion);
+  return make_array_section<int16_t>(type, 0, codes, {n, n, 2});
 }
 
 Section packed_unorm(SectionType type, const float* values, std::size_t count, uint32_t channels,
@@ -100,7 +97,7 @@ Section packed_unorm(SectionType type, const float* values, std::size_t count, u
     codes[i] = formats::float_to_unorm16(values[i]);
   std::vector<uint32_t> dims = {n, n};
   if (channels > 1) dims.push_back(channels);
-  return make_array_section<uint16_t>(type, 0, codes, dims, kCodesVersion);
+  return make_array_section<uint16_t>(type, 0, codes, dims);
 }
 
 }  // namespace

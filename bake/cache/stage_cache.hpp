@@ -30,8 +30,9 @@ inline constexpr uint32_t kCacheSchema = 4;  // bump when the entry layout or a 
 // Largest index an entry may declare (its outputs' names, tags, offsets and checksums: a few
 // hundred bytes in practice); checked before anything is read or allocated for it.
 inline constexpr uint64_t kMaxEntryIndexBytes = uint64_t(1) << 20;
-// Subfolder of finished assets that scene renders keep beside the entries (bake/cli/scene_bake):
-// counted by cache_info as stage "asset" and bounded with the entries (least recently used out).
+// Subfolder of finished assets that scene renders keep beside the entries
+// (bake/reports/scene_bake): counted by cache_info as stage "asset" and bounded with the entries
+// (least recently used out).
 inline constexpr const char* kAssetFolder = "assets";
 
 struct CacheOptions {

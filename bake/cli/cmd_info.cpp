@@ -107,10 +107,10 @@ nlohmann::json info_json(const std::string& path, const Asset& asset) {
     if (doc.contains("metadata") && doc["metadata"].is_object() &&
         doc["metadata"].contains("parameters"))
       params = &doc["metadata"]["parameters"];
-    if (params && by_name.contains("parallax_compressed") && !by_name.contains("parallax") &&
+    if (params && by_name.contains("parallax_entropy") && !by_name.contains("parallax") &&
         params->contains("parallax") && (*params)["parallax"].contains("compressed"))
       raw_total += int64_t((*params)["parallax"]["compressed"].value("raw_bytes", uint64_t(0))) -
-                   int64_t(by_name["parallax_compressed"].get<uint64_t>());
+                   int64_t(by_name["parallax_entropy"].get<uint64_t>());
     if (params && by_name.contains("radiance_compressed") && !by_name.contains("radiance_tables") &&
         params->contains("compress") && (*params)["compress"].contains("kinds")) {
       raw_total -= int64_t(by_name["radiance_compressed"].get<uint64_t>());

@@ -134,7 +134,6 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
 
   // Everything that can refuse the scene comes before anything is written.
   inputs::LoadedScene loaded = inputs::load_scene(o.scene);
-  bake_scene_fabrics(loaded, o.cache, o.quiet);
   if (o.width > 0 && o.height > 0) {
     loaded.scene.camera.width = o.width;
     loaded.scene.camera.height = o.height;
@@ -143,6 +142,12 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   bool environment = false;
   for (const render::Light& l : scene.lights)
     environment |= l.type == render::LightType::Environment;
+  // The sample bound before anything is baked (minutes for a scene's fabrics).
+  for (uint32_t spp : o.spp)
+    render::check_render_samples(scene.camera.width, scene.camera.height, spp, "--spp");
+  render::check_render_samples(scene.camera.width, scene.camera.height,
+                               environment ? o.reference_spp : 1, "--reference-spp");
+  bake_scene_fabrics(loaded, o.cache, o.quiet);
   std::size_t near_field_object = scene.objects.size();
   if (o.near_field) {
     for (std::size_t k = 0; k < scene.objects.size(); ++k)
@@ -161,10 +166,6 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   ref_options.method = eval::Method::Reference;
   ref_options.spp = environment ? o.reference_spp : 1;
   ref_options.seed = o.seed + 1000003;
-  for (uint32_t spp : o.spp)
-    render::check_render_samples(scene.camera.width, scene.camera.height, spp, "--spp");
-  render::check_render_samples(scene.camera.width, scene.camera.height, ref_options.spp,
-                               "--reference-spp");
   std::string key = fmt::format("{} {} {}x{} spp {} seed {}", CLOTHBAKE_VERSION_STRING,
                                 inputs::hash_file(o.scene), scene.camera.width, scene.camera.height,
                                 ref_options.spp, ref_options.seed);

@@ -29,9 +29,10 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
   return buf;
 }
 
-// Estimates. Sizes: the sections' shapes (docs/format.md), upper bounds where the bake
-// entropy-codes (the feature maps at their 16-bit codes, 20 bytes per texel, and the parallax
-// at one byte per texel and direction, before coding: the coded forms depend on the pattern); the
+// Estimates. Sizes: the sections' shapes (docs/format.md), sizes before coding where the bake
+// entropy-codes (the feature maps at their 16-bit codes, 20 bytes per texel, an upper bound; the
+// parallax at one byte per texel and direction, well above its coded size: that depends on the
+// pattern, docs/scene-plans.md, "Estimates"); the
 // compressed Integral-Radiance tables from a mean C-PCA rank of kMeanRank per texel (the 256^2
 // twill measured 15.1: 991149 coefficients over 65536 texels) capped at the kept bins, plus one
 // basis image per rank and cluster. Times: per-stage rates of the 256^2 twill (format 1.5, whose

@@ -1,7 +1,8 @@
 // Study behind the compressed parallax form (docs/compression.md, "Compressed parallax"): one
 // asset's raw parallax codes (bake with --keep-raw or --no-compress), compared in three forms:
 //
-//   parallax_study ASSET pca RANK...     per-texel directional PCA (compress/parallax_pca.hpp) at
+//   parallax_study ASSET pca RANK...     per-texel directional PCA
+//   (benchmarks/compress/parallax_pca.hpp) at
 //                                        fixed ranks: stored size, offset errors, fit time
 //   parallax_study ASSET codes BITS...   codes requantised to BITS bits with a per-direction step,
 //                                        zstd -19 size (zstd CLI), errors

@@ -1,16 +1,18 @@
-// The clothbake asset reader: opens a format-1 asset from a file (mmap on POSIX) or from a
+// The clothbake asset reader: opens a format-2 asset from a file (mmap on POSIX) or from a
 // caller's buffer and gives zero-copy, typed access to its sections.
 //
 // Contract (the whole reader library):
 //  - C++17, standard library only; no exceptions leave the API (every entry point is noexcept and
 //    returns a Status).
-//  - Heap allocation in exactly one place: CompressedRadianceTables::open (compressed_tables.hpp)
-//    decodes the compressed tables into SATs, basis and cell map it owns (new (std::nothrow), sized
-//    from shapes it has checked; a failed allocation is ErrorCode::Unsupported, not a throw), and
-//    validate_asset reaches it when it checks compressed tables. Everything else (Asset, the
-//    section views, raw-table queries, Status) allocates nothing: open_file maps the file (mmap)
-//    and views point into it, so a hostile file cannot cause a huge allocation except as the
-//    decoded size of compressed tables that passed every shape check.
+//  - Heap allocation only where a coded section is decoded, always with new (std::nothrow), sized
+//    from shapes already checked, a failure returned as a Status (never a throw):
+//    read_feature_maps (the decoded maps, CBK-E024), CompressedRadianceTables::open (SATs, basis,
+//    cell map and coefficients; ErrorCode::Unsupported) and ParallaxView on the compressed table
+//    (its block directory at open, each direction's decoded plane and SAT on first use).
+//    Everything else (Asset, the other views, raw-table queries, Status) allocates nothing:
+//    open_file maps the file (mmap) and views point into it, so a hostile file cannot cause a
+//    huge allocation except as the decoded size of coded sections that passed every shape check
+//    (each bounded: docs/format.md).
 //  - Safe on untrusted bytes: open() checks the header, the table and every offset and size
 //    (overflow-safe) before anything is dereferenced; a bad file yields a Status with a stable
 //    check ID, never a crash or an out-of-bounds read.

@@ -113,8 +113,13 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
                          "compressed_tables %s (info): flags %u unknown to this reader (0 or 1)",
                          kind_name(kind), unsigned(info.flags));
-  // A planned kind: the bins of bin_map instance 0 only.
+  // A planned kind: the bins of bin_map instance 0 only (the gap kind has one bin: never planned).
   BinMapView bin_map;
+  if ((info.flags & kCompressedPlannedFlag) != 0 && kind == RadianceTableKind::Gap)
+    return Status::error(ErrorCode::Unsupported, Check::SectionLayout,
+                         "compressed_tables gap (info): the one-bin gap kind cannot be planned "
+                         "(flags %u)",
+                         unsigned(info.flags));
   if ((info.flags & kCompressedPlannedFlag) != 0) {
     s = read_bin_map(asset, kHalfVectorBinMap, 0, &bin_map);
     if (!s.ok()) return s;

@@ -151,12 +151,13 @@ uint16_t known_section_version(SectionType type) noexcept {
     case SectionType::FabricInfo:
     case SectionType::YarnMaterials:
     case SectionType::YarnIdMap:
+      return 1;
     case SectionType::HeightMap:
     case SectionType::TangentMap:
     case SectionType::NormalMap:
     case SectionType::GapMap:
     case SectionType::AlbedoMap:
-      return 1;
+      return kFeatureMapVersion;
     default:
       return 0;
   }

@@ -6,9 +6,10 @@
 // against each other and the feature maps. Each finding carries a stable check ID (docs/format.md,
 // "Validation checks").
 //
-// C++17, standard library only, noexcept; allocates only to decode compressed tables (nothrow;
-// a failed allocation is reported, not thrown); reads every byte of the asset once or twice. Safe
-// on untrusted assets (that open() accepted).
+// C++17, standard library only, noexcept; allocates only through the reader's decoders (the coded
+// maps, the compressed tables, the compressed parallax: nothrow, a failed allocation is reported,
+// not thrown); reads every byte of the asset once or twice. Safe on untrusted assets (that open()
+// accepted). An opt-in library (clothbake_reader_validate): a renderer needs only the reader.
 #pragma once
 
 #include <cstdint>

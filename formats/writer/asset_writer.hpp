@@ -1,4 +1,4 @@
-// Writer of the clothbake asset container (format 1; docs/format.md). C++20.
+// Writer of the clothbake asset container (format 2; docs/format.md). C++20.
 //
 // Sections are built in memory (make_*_section), then laid out deterministically: sorted by
 // (type, instance), each at the next multiple of 64, zero padding, no timestamps or host names,

@@ -2,9 +2,11 @@
 // indexing out of bounds: every count, index and value range is checked at open().
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <cstring>
 
 #include "compress_test_util.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 
 namespace clothbake::compress {
 namespace {
@@ -121,6 +123,52 @@ TEST(CompressedReaderErrors, DamagedFields) {
     EXPECT_TRUE(status.code() == ErrorCode::Malformed || status.code() == ErrorCode::WrongType)
         << what << ": " << status.message();
   }
+}
+
+// The planned flag (info flags bit 0): it needs bin_map instance 0 of the tables' bins
+// (CBK-E019 without it, CBK-E015 when its n differs); other flag bits are unknown (CBK-E015), and
+// the one-bin gap kind is never planned (CBK-E015). With the map, only its bins answer.
+TEST(CompressedReaderErrors, PlannedFlagNeedsItsBinMap) {
+  auto flagged = [](uint32_t flags) {
+    auto s = good_sections();
+    std::memcpy(part(s, CompressedPart::Info).payload.data() +
+                    offsetof(reader::CompressedTableInfoRecord, flags),
+                &flags, 4);
+    return s;
+  };
+  reader::Status st = open(flagged(reader::kCompressedPlannedFlag));
+  EXPECT_EQ(st.code(), ErrorCode::NotFound) << st.message();
+  EXPECT_STREQ(st.check_id(), "CBK-E019");
+  st = open(flagged(2));
+  EXPECT_STREQ(st.check_id(), "CBK-E015") << st.message();
+  // With a bin map of the tables' n (4 x 4 bins here) that keeps bin 0 only.
+  uint32_t n = 0;
+  {
+    const auto s = good_sections();
+    reader::CompressedTableInfoRecord info;
+    std::memcpy(&info, s[0].payload.data(), sizeof info);
+    n = info.bins_per_side;
+  }
+  std::vector<uint8_t> keep(std::size_t(n) * n, 0);
+  keep[0] = 1;
+  auto s = flagged(reader::kCompressedPlannedFlag);
+  s.push_back(formats::make_array_section<uint8_t>(reader::SectionType::BinMap,
+                                                   reader::kHalfVectorBinMap, keep, {n, n}));
+  const auto asset = test::memory_asset(s);
+  reader::CompressedRadianceTables t;
+  ASSERT_TRUE(t.open(asset->asset, reader::RadianceTableKind::Specular).ok());
+  EXPECT_TRUE(t.is_planned());
+  // Bin 0 is the corner of the square (u, v < 1/n): a half vector whose lookup stays within half a
+  // bin of that corner is answered, the zenith (the middle bins) is not.
+  const double corner[3] = {-1, -1, 0.01}, zenith[3] = {0, 0, 1};
+  EXPECT_TRUE(t.covers_bins(corner));
+  EXPECT_FALSE(t.covers_bins(zenith));
+  // A map of another n.
+  auto wrong = flagged(reader::kCompressedPlannedFlag);
+  std::vector<uint8_t> other((n + 1) * (n + 1), 1);
+  wrong.push_back(formats::make_array_section<uint8_t>(
+      reader::SectionType::BinMap, reader::kHalfVectorBinMap, other, {n + 1, n + 1}));
+  EXPECT_STREQ(open(wrong).check_id(), "CBK-E015");
 }
 
 TEST(CompressedReaderErrors, BadQueryArguments) {

@@ -392,6 +392,15 @@ TEST(HierarchicalParallax, HostileSectionsFailWithStableIds) {
                                                        {1, 5, 256}, reader::kHierParallaxVersion);
     check(s, "CBK-E015", "CBK-E015");
   }
+  {  // the planned flag without bin_map instance 1 (its stored directions), and an unknown flag
+    auto s = base;
+    reinterpret_cast<reader::CompressedParallaxInfoRecord*>(find(s, 0).payload.data())->flags =
+        reader::kEntropyPlannedFlag;
+    check(s, "CBK-E019", "CBK-E019");
+    s = base;
+    reinterpret_cast<reader::CompressedParallaxInfoRecord*>(find(s, 0).payload.data())->flags = 2;
+    check(s, "CBK-E015", "CBK-E015");
+  }
   {  // a corrupted block of a level-0 direction: opens, reads zeros, fails validation (and so do
      // the directions predicted from it, which decode against a zero plane)
     auto s = base;

@@ -109,7 +109,7 @@ TEST(ParallaxVerify, FindsAPlantedCodeErrorAtItsSize) {
   options.samples = 35;
   options.max_rms_error = 1.0;
   auto r = verify::verify_parallax(o->asset, b.fabric, options);
-  // Within the texel's own rounding error (half a step) of the planted 40 steps.
+  // Within the texel's own rounding error (half a step) of the planted quarter range.
   EXPECT_NEAR(r.max_error, planted, 0.5 * b.packed.steps[d] * k[d] + 1e-12);
   EXPECT_GE(r.share_above_quarter, planted > 0.25 ? 1.0 / double(r.entries) : 0.0);
   EXPECT_TRUE(r.passed);

@@ -1,21 +1,82 @@
-// `clothbake report` through the executable: the exit codes of its usage and output errors (the
-// reports themselves are tested in process: tests/bake/reports).
+// `clothbake report` through the executable: `report stability` whole (its files, --json, every
+// row finite, a flat field's parallax exactly 0) and the exit codes of usage and output errors (the
+// reports' parts are tested in process: tests/bake/reports).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "tests/support/run_cli.hpp"
 
 namespace fs = std::filesystem;
+using clothbake::test_support::run_clothbake;
 
-TEST(ReportCli, UsageAndOutputErrors) {
+namespace {
+
+fs::path scratch(const std::string& name) {
   const fs::path dir =
-      fs::temp_directory_path() / ("clothbake_report_cli_" + std::to_string(::getpid()));
+      fs::temp_directory_path() / ("clothbake_report_cli_" + std::to_string(::getpid()) + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
+  return dir;
+}
+
+}  // namespace
+
+TEST(ReportCli, StabilityWritesFiniteRowsAndFlatParallaxIsExactlyZero) {
+  const fs::path dir = scratch("stability");
+  const fs::path out = dir / "report";
+  const auto run = run_clothbake({"report", "stability", "-o", out.string(), "--json"});
+  ASSERT_EQ(run.code, 0) << run.out << run.err;
+  ASSERT_TRUE(fs::is_regular_file(out / "stability.csv"));
+  ASSERT_TRUE(fs::is_regular_file(out / "stability.json"));
+  EXPECT_FALSE(fs::exists(dir / "report.tmp-report"));
+  std::ifstream in(out / "stability.json");
+  const nlohmann::json doc = nlohmann::json::parse(in);
+  EXPECT_EQ(doc, nlohmann::json::parse(run.out));  // --json prints what the file holds
+  ASSERT_TRUE(doc["rows"].is_array());
+  std::set<std::string> cases;
+  int flat_parallax = 0, table_rows = 0;
+  for (const auto& r : doc["rows"]) {
+    const std::string what = r["case"].get<std::string>() + " " +
+                             r["parameter"].get<std::string>() + " " +
+                             r["quantity"].get<std::string>();
+    cases.insert(r["case"].get<std::string>());
+    EXPECT_EQ(r["n_nonfinite"], 0) << what;
+    EXPECT_TRUE(r["max_abs_error"].is_number()) << what;
+    EXPECT_TRUE(r["max_rel_error"].is_number()) << what;
+    EXPECT_TRUE(r["pass"].get<bool>()) << what;
+    if (r["case"] == "flat" && r["quantity"].get<std::string>().rfind("parallax", 0) == 0) {
+      EXPECT_EQ(r["max_abs_error"].get<double>(), 0.0) << what;
+      EXPECT_GT(r["n_queries"].get<int>(), 1000) << what;
+      ++flat_parallax;
+    }
+    if (r["case"] == "table") ++table_rows;
+  }
+  EXPECT_EQ(flat_parallax, 4);  // depth and footprint, raw and compressed
+  EXPECT_GT(table_rows, 3);
+  for (const char* c : {"sggx", "spongecake", "sheen", "cloth_bsdf", "flat", "relief", "table"})
+    EXPECT_TRUE(cases.count(c)) << c;
+  // The amplitude at the accepted maximum (+-64 tile widths) was baked and queried.
+  bool max_height = false;
+  for (const auto& r : doc["rows"])
+    max_height |= r["case"] == "relief" && r["parameter"] == "amplitude=64";
+  EXPECT_TRUE(max_height);
+  // The CSV has the same rows.
+  std::ifstream csv(out / "stability.csv");
+  std::string line;
+  int lines = 0;
+  while (std::getline(csv, line))
+    ++lines;
+  EXPECT_EQ(lines, int(doc["rows"].size()) + 1);
+}
+
+TEST(ReportCli, UsageAndOutputErrors) {
+  const fs::path dir = scratch("errors");
   // An argument stability does not take, and plan without its scene: usage errors, nothing written.
   auto run = clothbake::test_support::run_clothbake(
       {"report", "stability", "fabric.toml", "-o", (dir / "r").string()});
