@@ -63,17 +63,33 @@ std::string cache_dir_from(const std::string& option) {
 }
 
 uint64_t parse_size(const std::string& text, const std::string& option) {
-  std::size_t used = 0;
-  double value = -1;
-  try {
-    value = std::stod(text, &used);
-  } catch (...) {
+  // DIGITS[.DIGITS][UNIT]: UNIT one of K, M, G, T (any case), optionally followed by "i", then an
+  // optional "B"; or a bare "B". A fraction needs a unit (a byte count is whole). Nothing else:
+  // no sign, spaces, exponent or hexadecimal.
+  auto refuse = [&]() -> uint64_t {
+    throw Error(ExitCode::Usage,
+                option + " expects a size such as 500M, 10G or 123456 (bytes), got '" + text + "'");
+  };
+  std::size_t at = 0;
+  auto digits = [&] {
+    const std::size_t start = at;
+    while (at < text.size() && text[at] >= '0' && text[at] <= '9')
+      ++at;
+    return at - start;
+  };
+  if (digits() == 0) return refuse();
+  bool fraction = false;
+  if (at < text.size() && text[at] == '.') {
+    ++at;
+    if (digits() == 0) return refuse();
+    fraction = true;
   }
-  std::string unit = text.substr(std::min(used, text.size()));
-  if (unit.size() > 1 && (unit.back() == 'B' || unit.back() == 'b')) unit.pop_back();
-  if (unit.size() > 1 && (unit.back() == 'i')) unit.pop_back();
+  const double value = std::stod(text.substr(0, at));
+  std::string unit = text.substr(at);
+  if (!unit.empty() && (unit.back() == 'B' || unit.back() == 'b')) unit.pop_back();
+  if (unit.size() == 2 && unit[1] == 'i') unit.pop_back();
   double scale = 0;
-  if (unit.empty() || unit == "B" || unit == "b")
+  if (unit.empty())
     scale = 1;
   else if (unit == "K" || unit == "k")
     scale = 1024.0;
@@ -83,9 +99,7 @@ uint64_t parse_size(const std::string& text, const std::string& option) {
     scale = 1024.0 * 1024 * 1024;
   else if (unit == "T" || unit == "t")
     scale = 1024.0 * 1024 * 1024 * 1024;
-  if (!(value >= 0) || scale == 0 || value * scale > 1.8e19)
-    throw Error(ExitCode::Usage,
-                option + " expects a size such as 500M, 10G or 123456 (bytes), got '" + text + "'");
+  if (scale == 0 || (fraction && scale == 1) || value * scale > 1.8e19) return refuse();
   return uint64_t(value * scale);
 }
 

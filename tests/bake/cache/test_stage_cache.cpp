@@ -772,11 +772,17 @@ TEST(CacheSize, ParsesTheDocumentedForms) {
   EXPECT_EQ(parse_size("123456", "--cache-max-size"), 123456u);
   EXPECT_EQ(parse_size("4K", "--cache-max-size"), 4096u);
   EXPECT_EQ(parse_size("2T", "--cache-max-size"), uint64_t(2) << 40);
+  EXPECT_EQ(parse_size("64KB", "--cache-max-size"), uint64_t(64) << 10);
+  EXPECT_EQ(parse_size("100B", "--cache-max-size"), 100u);
+  EXPECT_EQ(parse_size("0", "--cache-max-size"), 0u);
 }
 
 // Anything else is a usage error naming the option and the text.
 TEST(CacheSize, RefusesOtherTextNamingTheOption) {
-  for (const std::string text : {"abc", "-1", "10X", ""}) {
+  // Also what std::stod alone would take: hexadecimal, an exponent, spaces, a doubled suffix, a
+  // fraction of a byte.
+  for (const std::string text :
+       {"abc", "-1", "10X", "", "0x10", "1e3", " 5M", "5M ", "5bb", "1.5", "1.", ".5G", "+5"}) {
     try {
       parse_size(text, "--cache-max-size");
       ADD_FAILURE() << "'" << text << "' accepted";
