@@ -49,48 +49,49 @@ formats::Section entropy_code_map(const formats::Section& packed, const ShiftLis
       return parallax_residual_counts(plane[p].data(), n, sx, sy);
     });
   }
-  // Two groupings, the smaller kept: one table set per plane (large tiles: each plane's own
+  // Two groupings of the frequency tables: one set per plane (large tiles: each plane's own
   // statistics), or one for all planes (small tiles, where 2.5 KB of tables per plane would
-  // outweigh the blocks).
-  auto encode = [&](bool shared) {
-    const uint32_t groups = shared ? 1 : planes;
-    std::vector<uint16_t> tables;
-    if (shared) {
-      std::vector<uint64_t> sum(choice[0].counts.size(), 0);
-      for (const ShiftChoice& ch : choice)
-        for (std::size_t k = 0; k < sum.size(); ++k)
-          sum[k] += ch.counts[k];
-      tables = parallax_frequencies(sum);
-    } else {
-      for (const ShiftChoice& ch : choice) {
-        const std::vector<uint16_t> f = parallax_frequencies(ch.counts);
-        tables.insert(tables.end(), f.begin(), f.end());
-      }
+  // outweigh the blocks). Chosen by the Shannon estimate (residual bits plus tables) and coded
+  // once: the pooled counts' entropy is exactly the cost of every plane under the shared tables.
+  std::vector<uint64_t> pooled(choice[0].counts.size(), 0);
+  double separate_bits = 0;
+  for (const ShiftChoice& ch : choice) {
+    separate_bits += residual_entropy_bits(ch.counts);
+    for (std::size_t k = 0; k < pooled.size(); ++k)
+      pooled[k] += ch.counts[k];
+  }
+  const double table_bits = 8.0 * reader::kMapEntropyTableBytes;
+  const bool shared =
+      residual_entropy_bits(pooled) + table_bits < separate_bits + planes * table_bits;
+  const uint32_t groups = shared ? 1 : planes;
+  std::vector<uint16_t> tables;
+  if (shared) {
+    tables = parallax_frequencies(pooled);
+  } else {
+    for (const ShiftChoice& ch : choice) {
+      const std::vector<uint16_t> f = parallax_frequencies(ch.counts);
+      tables.insert(tables.end(), f.begin(), f.end());
     }
-    const std::size_t table_size = tables.size() / groups;
-    std::vector<std::vector<uint8_t>> blocks(planes);
-    for (uint32_t p = 0; p < planes; ++p) {
-      const uint32_t g = shared ? 0 : p;
-      blocks[p] = encode_parallax_block(plane[p].data(), n, choice[p].sx, choice[p].sy, g,
-                                        tables.data() + g * table_size);
-    }
-    std::vector<std::byte> out;
-    const uint32_t header[4] = {n, planes, groups, 0};
-    put(out, header, sizeof header);
-    uint64_t offset = 0;
+  }
+  const std::size_t table_size = tables.size() / groups;
+  std::vector<std::vector<uint8_t>> blocks(planes);
+  for (uint32_t p = 0; p < planes; ++p) {
+    const uint32_t g = shared ? 0 : p;
+    blocks[p] = encode_parallax_block(plane[p].data(), n, choice[p].sx, choice[p].sy, g,
+                                      tables.data() + g * table_size);
+  }
+  std::vector<std::byte> out;
+  const uint32_t header[4] = {n, planes, groups, 0};
+  put(out, header, sizeof header);
+  uint64_t offset = 0;
+  put(out, &offset, 8);
+  for (const auto& b : blocks) {
+    offset += b.size();
     put(out, &offset, 8);
-    for (const auto& b : blocks) {
-      offset += b.size();
-      put(out, &offset, 8);
-    }
-    put(out, tables.data(), tables.size() * sizeof(uint16_t));
-    for (const auto& b : blocks)
-      put(out, b.data(), b.size());
-    return out;
-  };
-  std::vector<std::byte> out = encode(false);
-  if (std::vector<std::byte> shared = encode(true); shared.size() < out.size())
-    out = std::move(shared);
+  }
+  put(out, tables.data(), tables.size() * sizeof(uint16_t));
+  for (const auto& b : blocks)
+    put(out, b.data(), b.size());
   formats::Section s;
   s.type = packed.type;
   s.instance = packed.instance;

@@ -7,7 +7,7 @@
 // of each code channel) is coded as one block of the block coder (compress/parallax_entropy.hpp):
 // the block's shift is the best of no shift and the plane's repeat candidates by the entropy of
 // its residuals; the frequency tables are one set per plane or one set for all planes, whichever
-// codes smaller (small tiles share). Lossless and deterministic. C++20.
+// the Shannon estimate says codes smaller (small tiles share). Lossless and deterministic. C++20.
 #pragma once
 
 #include <cstdint>

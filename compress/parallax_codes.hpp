@@ -1,7 +1,7 @@
 // What every parallax compressor shares (the one compressed form is the hierarchical table of
 // compress/parallax_hierarchy.hpp; docs/compression.md, "Hierarchical parallax"): the raw table as
-// the parallax stage produces it, the input check, the offset per unit depth of each view
-// direction and the info record of the compressed section (formats/reader/parallax_sections.hpp).
+// the parallax stage produces it, the input check and the offset per unit depth of each view
+// direction.
 //
 // Deterministic. C++20. Errors: clothbake::Error(Input) for an empty table or an error target out
 // of range.
@@ -9,8 +9,6 @@
 
 #include <cstdint>
 #include <vector>
-
-#include "formats/reader/parallax_sections.hpp"  // CompressedParallaxInfoRecord
 
 namespace clothbake::compress {
 
@@ -35,24 +33,5 @@ std::vector<double> parallax_offset_per_depth(int resolution, int dirs, double m
 // Throws Error(Input) for an empty table or max_error outside (0, 1] (naming
 // bake.parallax_max_error): the check of every parallax compressor.
 void check_parallax_compression_input(const ParallaxCodes& raw, double max_error);
-
-// The info record of the compressed form (HierarchicalParallax): its shape and measured errors,
-// with the given bits and flags.
-template <class Form>
-reader::CompressedParallaxInfoRecord parallax_info_record(const Form& p, uint32_t bits,
-                                                          uint32_t flags) {
-  reader::CompressedParallaxInfoRecord info{};
-  info.resolution = uint32_t(p.resolution);
-  info.dirs = uint32_t(p.dirs);
-  info.bits = bits;
-  info.flags = flags;
-  info.min_cos = p.min_cos;
-  info.reference_height = p.reference_height;
-  info.max_offset = p.max_offset;
-  info.rms_offset_error = p.rms_offset_error;
-  info.max_offset_error = p.max_offset_error;
-  info.max_depth_error = p.max_depth_error;
-  return info;
-}
 
 }  // namespace clothbake::compress

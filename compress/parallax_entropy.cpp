@@ -209,8 +209,4 @@ double residual_entropy_bits(const std::vector<uint64_t>& counts) {
   return bits;
 }
 
-std::size_t kept_direction_count(const std::vector<uint8_t>& keep) {
-  return std::size_t(std::count_if(keep.begin(), keep.end(), [](uint8_t k) { return k != 0; }));
-}
-
 }  // namespace clothbake::compress

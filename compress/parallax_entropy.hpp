@@ -71,7 +71,4 @@ ShiftChoice choose_shift(const std::vector<std::pair<uint32_t, uint32_t>>& candi
   return best;
 }
 
-// Directions a plan's keep mask keeps (its non-zero entries; one entry per view bin).
-std::size_t kept_direction_count(const std::vector<uint8_t>& keep);
-
 }  // namespace clothbake::compress

@@ -344,12 +344,34 @@ HierarchicalParallax hierarchical_parallax(const ParallaxCodes& raw, double max_
   return p;
 }
 
+std::size_t kept_direction_count(const std::vector<uint8_t>& keep) {
+  return std::size_t(std::count_if(keep.begin(), keep.end(), [](uint8_t k) { return k != 0; }));
+}
+
+namespace {
+// The info record of the table: its shape and measured errors, bits 16, with `flags`.
+reader::CompressedParallaxInfoRecord info_record(const HierarchicalParallax& p, uint32_t flags) {
+  reader::CompressedParallaxInfoRecord info{};
+  info.resolution = uint32_t(p.resolution);
+  info.dirs = uint32_t(p.dirs);
+  info.bits = 16;
+  info.flags = flags;
+  info.min_cos = p.min_cos;
+  info.reference_height = p.reference_height;
+  info.max_offset = p.max_offset;
+  info.rms_offset_error = p.rms_offset_error;
+  info.max_offset_error = p.max_offset_error;
+  info.max_depth_error = p.max_depth_error;
+  return info;
+}
+}  // namespace
+
 std::vector<formats::Section> hierarchical_parallax_sections(const HierarchicalParallax& p) {
   using reader::SectionType;
   const uint32_t d = uint32_t(p.dirs * p.dirs);
   const uint16_t v = reader::kHierParallaxVersion;
   const reader::CompressedParallaxInfoRecord info =
-      parallax_info_record(p, 16u, p.planned ? reader::kEntropyPlannedFlag : 0u);
+      info_record(p, p.planned ? reader::kEntropyPlannedFlag : 0u);
   if (p.stream.size() > 0xFFFFFFFFull)
     throw_input_error("parallax: the entropy-coded table exceeds 4 GiB");
   std::vector<formats::Section> out;

@@ -80,6 +80,9 @@ HierarchicalParallax hierarchical_parallax(const ParallaxCodes& raw,
                                            double max_error = kDefaultParallaxMaxError,
                                            const std::vector<uint8_t>& keep = {});
 
+// Directions a plan's keep mask keeps (its non-zero entries; one entry per view bin).
+std::size_t kept_direction_count(const std::vector<uint8_t>& keep);
+
 // The finest grouping of bin (i, j) of an n x n grid: 4 * level + ring quarter (0-11).
 uint32_t hierarchical_group(uint32_t i, uint32_t j, uint32_t n);
 

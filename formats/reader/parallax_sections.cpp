@@ -30,9 +30,8 @@ struct ParallaxView::Packed {
       : flags(new (std::nothrow) std::once_flag[dirs]),
         sats(new (std::nothrow) std::atomic<uint32_t*>[dirs]),
         plane_flags(new (std::nothrow) std::once_flag[dirs]),
-        planes16(new (std::nothrow) std::atomic<uint16_t*>[dirs]),
-        plane(new (std::nothrow) int32_t[dirs]) {
-    if (!flags || !sats || !plane_flags || !planes16 || !plane) return;
+        planes16(new (std::nothrow) std::atomic<uint16_t*>[dirs]) {
+    if (!flags || !sats || !plane_flags || !planes16) return;
     for (uint64_t d = 0; d < dirs; ++d) {
       sats[d].store(nullptr, std::memory_order_relaxed);
       planes16[d].store(nullptr, std::memory_order_relaxed);
@@ -52,7 +51,6 @@ struct ParallaxView::Packed {
   std::unique_ptr<std::atomic<uint32_t*>[]> sats;
   std::unique_ptr<std::once_flag[]> plane_flags;
   std::unique_ptr<std::atomic<uint16_t*>[]> planes16;
-  std::unique_ptr<int32_t[]> plane;  // planned table: bin -> bin, -1 = left out
   std::atomic<uint64_t> bytes{0};
 };
 
@@ -276,11 +274,7 @@ Status ParallaxView::open_coded(const Asset& asset) noexcept {
   if (!packed || packed->count != d)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_entropy: cannot allocate the block directory");
-  if (planned) {  // bin b is block b; a left-out bin has no plane
-    for (uint64_t b = 0; b < d; ++b)
-      packed->plane[b] = map.covers(uint32_t(b)) ? int32_t(b) : -1;
-    plane_ = packed->plane.get();
-  }
+  if (planned) covered_ = map.mask;  // in the asset's bytes, which outlive the view
   info_ = ParallaxInfoRecord{};
   info_.resolution = info.resolution;
   info_.dirs = info.dirs;
@@ -381,10 +375,10 @@ Status ParallaxView::decode_all() const noexcept {
 }
 
 uint32_t ParallaxView::stored_dirs() const noexcept {
-  if (!plane_) return info_.dirs * info_.dirs;
+  if (!covered_) return info_.dirs * info_.dirs;
   uint32_t k = 0;
   for (uint32_t b = 0; b < info_.dirs * info_.dirs; ++b)
-    k += plane_[b] >= 0 ? 1u : 0u;
+    k += covered_[b] != 0 ? 1u : 0u;
   return k;
 }
 

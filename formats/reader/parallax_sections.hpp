@@ -148,9 +148,9 @@ class ParallaxView {
   bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
   bool is_compressed() const noexcept { return packed_ != nullptr; }
   // A scene-planned table: only the directions of its bin map are stored.
-  bool is_planned() const noexcept { return plane_ != nullptr; }
+  bool is_planned() const noexcept { return covered_ != nullptr; }
   // Whether direction bin `bin` (< dirs^2) is stored (always, except in a planned table).
-  bool covers(uint32_t bin) const noexcept { return plane_ == nullptr || plane_[bin] >= 0; }
+  bool covers(uint32_t bin) const noexcept { return covered_ == nullptr || covered_[bin] != 0; }
   // Stored view directions (dirs^2, or the bin map's count in a planned table).
   uint32_t stored_dirs() const noexcept;
   // Compressed form: its record (zero for the raw form).
@@ -243,7 +243,7 @@ class ParallaxView {
   uint32_t groups_ = 0;
   CompressedParallaxInfoRecord packed_info_{};
   std::shared_ptr<Packed> packed_;
-  const int32_t* plane_ = nullptr;  // planned table: bin, or -1 = left out
+  const uint8_t* covered_ = nullptr;  // planned table: bin_map instance 1 (1 = stored)
   bool exact_sums_ = false;  // 65535 N^2 < 2^32: every prefix sum is one exact u32 (N <= 256)
 };
 

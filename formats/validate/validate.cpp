@@ -136,46 +136,14 @@ void check_metadata(const Asset& asset, Reporter& r) {
     r.report_status(status, s.index);
     return;
   }
-  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
   const std::size_t n = text.size();
-  for (std::size_t i = 0; i < n;) {
-    const unsigned char c = p[i];
-    std::size_t len;
-    uint32_t cp;
-    if (c < 0x80) {
-      if (c == 0) {
-        r.report(Check::Metadata, s.index, "metadata: NUL byte at offset %zu", i);
-        return;
-      }
-      ++i;
-      continue;
-    } else if ((c & 0xe0) == 0xc0) {
-      len = 2, cp = c & 0x1f;
-    } else if ((c & 0xf0) == 0xe0) {
-      len = 3, cp = c & 0x0f;
-    } else if ((c & 0xf8) == 0xf0) {
-      len = 4, cp = c & 0x07;
-    } else {
-      r.report(Check::Metadata, s.index, "metadata: invalid UTF-8 lead byte at offset %zu", i);
-      return;
-    }
-    if (n - i < len) {
-      r.report(Check::Metadata, s.index, "metadata: truncated UTF-8 sequence at offset %zu", i);
-      return;
-    }
-    for (std::size_t k = 1; k < len; ++k) {
-      if ((p[i + k] & 0xc0) != 0x80) {
-        r.report(Check::Metadata, s.index, "metadata: invalid UTF-8 at offset %zu", i + k);
-        return;
-      }
-      cp = (cp << 6) | (p[i + k] & 0x3f);
-    }
-    const uint32_t min_cp = len == 2 ? 0x80 : len == 3 ? 0x800 : 0x10000;
-    if (cp < min_cp || cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff)) {
-      r.report(Check::Metadata, s.index, "metadata: invalid UTF-8 code point at offset %zu", i);
-      return;
-    }
-    i += len;
+  if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos) {
+    r.report(Check::Metadata, s.index, "metadata: NUL byte at offset %zu", nul);
+    return;
+  }
+  if (const std::size_t bad = utf8_error_offset(text); bad != n) {
+    r.report(Check::Metadata, s.index, "metadata: invalid UTF-8 at offset %zu", bad);
+    return;
   }
   auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
   std::size_t first = 0, last = n;
