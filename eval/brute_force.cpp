@@ -12,10 +12,12 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
   TexelShading shading;
   // One view bin per estimate, drawn with its weight (the model's average over the four bins).
   const int bin = draw_view_bin(frame, rng.uniform());
+  const BinShift shift = bin_shift(data, frame, bin);
   auto sample = [&](double x, double y) {
     // Eq. 2 with the bin's depth of the texel containing p, then every factor at the texel of x'.
     int64_t tx = 0, ty = 0;
-    bin_destination(data, frame, bin, x, y, &tx, &ty);
+    shifted_destination(shift, data.texel(int64_t(std::floor(x)), int64_t(std::floor(y))), x, y,
+                        &tx, &ty);
     shade_texel(data, frame, tx, ty, &shading);
     for (int l = 0; l < model::kLobeCount; ++l)
       sums[l] += shading.lobes[l];

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "eval/cv_texels.hpp"
 #include "eval/evaluator.hpp"
 #include "eval/footprint_sums.hpp"
 #include "eval/pushforward_sums.hpp"
@@ -68,7 +69,11 @@ struct EvalData {
   // with the tangent turned normal to h.
   std::vector<model::TexelParams<double>> yarn_fibre;
   std::vector<uint32_t> image_cluster;  // per compressed specular image: its cluster
-  PushforwardSums pushforward;  // the unbiased form's whole-tile sums (pushforward_sums.hpp)
+  // Per cluster c: its compressed specular images are [cluster_image_begin[c], [c + 1]) (the
+  // tables store them cluster by cluster); C + 1 entries.
+  std::vector<uint32_t> cluster_image_begin;
+  PushforwardSums pushforward;     // the unbiased form's whole-tile sums (pushforward_sums.hpp)
+  ControlVariateTexels cv_texels;  // the unbiased form's per-texel records of g (cv_texels.hpp)
   uint32_t visibility_rank() const { return basis.is_open() ? basis.rank() : 0; }
   // e_0 = 1 and the texel's visibility basis coefficients e_1..e_M into e[0..M].
   void visibility_coefficients(uint64_t t, double* e) const {

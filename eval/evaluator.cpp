@@ -285,6 +285,12 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
       d->image_cluster.resize(tables.image_count());
       for (uint32_t i = 0; i < tables.image_count(); ++i)
         d->image_cluster[i] = tables.image_cluster(i);
+      d->cluster_image_begin.assign(clusters + 1, 0);
+      for (uint32_t i = 0; i < tables.image_count(); ++i)  // image_cluster is non-decreasing
+        d->cluster_image_begin[d->image_cluster[i] + 1] = i + 1;
+      for (uint32_t c = 0; c < clusters; ++c)
+        d->cluster_image_begin[c + 1] =
+            std::max(d->cluster_image_begin[c + 1], d->cluster_image_begin[c]);
       PushforwardChannels layout;
       layout.images = tables.image_count();
       layout.clusters = clusters;
@@ -292,6 +298,9 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
       if (!d->pushforward.init(d.get(), d->parallax.dirs() * d->parallax.dirs(), layout))
         return Status::error(ErrorCode::Unsupported, Check::None,
                              "cannot allocate the push-forward bookkeeping");
+      if (!d->cv_texels.build(*d))
+        return Status::error(ErrorCode::Unsupported, Check::None,
+                             "cannot allocate the control variate's texel records");
     }
   } catch (const std::bad_alloc&) {
     return Status::error(ErrorCode::Unsupported, Check::None,

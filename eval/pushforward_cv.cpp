@@ -37,41 +37,168 @@ struct Constants : ActiveLobes {
   const double* image_at_h = nullptr;
 };
 
-// v(t) of texel index t in cluster c.
-double texel_visibility(const EvalData& data, const Constants& k, uint64_t t, uint32_t c) {
-  const double* b = k.vis[c];
-  double v = b[0];
-  if (k.rank > 0) {
-    const float* e = data.basis.coefficients(t);
-    for (uint32_t j = 0; j < k.rank; ++j)
-      v += b[j + 1] * double(e[j]);
-  }
-  return v;
-}
-
-// g of every lobe asked for at texel (x, y) (any integers: the tile wraps), added to g[].
-void control_variate(const EvalData& data, const Constants& k, int64_t qx, int64_t qy,
+// g of every lobe asked for at texel index t (< N^2), added to g[]: one packed record
+// (cv_texels.hpp) and the per-estimate constants.
+void control_variate(const EvalData& data, const Constants& k, uint64_t t,
                      Rgb g[model::kLobeCount]) {
-  const uint64_t t = data.texel(qx, qy);
-  const uint32_t c = data.clusters.label_at(t);
-  const double v = texel_visibility(data, k, t, c);
-  const double gap = data.maps.gap[t];
-  if (k.specular) {
-    uint32_t first = 0;
-    double weights[reader::kMaxCompressedRank + 1];
-    const uint32_t count = data.specular.compressed.texel_image_weights_at(t, &first, weights);
-    if (count > 0) {
-      double value = 0.0;
-      for (uint32_t j = 0; j < count; ++j)
-        value += weights[j] * k.image_at_h[first + j];
-      g[int(k.specular_lobe)] += k.specular_scale[data.image_cluster[first]] * (value * v);
-    }
+  const ControlVariateTexels& records = data.cv_texels;
+  const ControlVariateTexels::Header& texel = records.header(t);
+  const double* b = k.vis[texel.label];
+  double v = b[0];
+  const float* e = records.coefficients(t);
+  for (uint32_t j = 0; j < k.rank; ++j)
+    v += b[j + 1] * double(e[j]);
+  const double gap = texel.gap;
+  if (k.specular && texel.count > 0) {
+    // The table value at h: image `first` (the cell mean) has weight 1, the others their stored
+    // coefficients.
+    const double* at_h = k.image_at_h + texel.first_image;
+    const int16_t* q = records.image_weights(t);
+    double value = at_h[0];
+    for (uint32_t j = 1; j < texel.count; ++j)
+      value += double(q[j - 1]) * at_h[j];
+    g[int(k.specular_lobe)] +=
+        k.specular_scale[data.image_cluster[texel.first_image]] * (value * v);
   }
-  if (k.diffuse)
-    g[int(k.diffuse_lobe)] +=
-        k.diffuse_scale * texel_diffuse_albedo(data, t, k.diffuse_lobe) * (gap * v);
+  if (k.diffuse) {
+    const YarnShading& yarn = data.yarns[texel.yarn];
+    const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
+                                                                  : yarn.diffuse_transmittance) *
+                       Rgb(texel.colour[0], texel.colour[1], texel.colour[2]);
+    g[int(k.diffuse_lobe)] += k.diffuse_scale * albedo * (gap * v);
+  }
   if (k.sheen) g[int(Lobe::Sheen)] += k.sheen_scale * v;
   if (k.delta) g[int(Lobe::DeltaTransmission)] += k.delta_scale * ((1.0 - gap) * v);
+}
+
+inline void prefetch(const void* address) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+  if (address != nullptr) __builtin_prefetch(address);
+#else
+  (void)address;
+#endif
+}
+
+// Every cache line of texel t's record (cv_texels.hpp).
+inline void prefetch_record(const EvalData& data, uint64_t t) noexcept {
+  const char* record = static_cast<const char*>(data.cv_texels.address(t));
+  const uint32_t stride = data.cv_texels.stride();
+  for (uint32_t offset = 0; offset < stride; offset += 64)
+    prefetch(record + offset);
+  prefetch(record + stride - 1);
+}
+
+// The points of an estimate with few samples, drawn before its constants (pushforward_control_
+// variates): position, source texel, destination texel.
+struct EarlyPoints {
+  static constexpr uint32_t kCapacity = 64;
+  struct Point {
+    double x, y;
+    uint64_t source;
+  };
+  bool drawn = false;
+  uint32_t count = 0;
+  Point points[kCapacity];
+  uint64_t destination[kCapacity];
+};
+
+// Every cache line of [begin, begin + bytes).
+inline void prefetch_lines(const void* begin, std::size_t bytes) noexcept {
+  const char* p = static_cast<const char*>(begin);
+  for (std::size_t offset = 0; offset < bytes; offset += 64)
+    prefetch(p + offset);
+}
+
+// Calls visit(t) with the destination texel index t (< N^2) of each of `count` stratified points of
+// `rect` (stratified_points' order and draws) in the bin of `shift`. The points go in chunks: their
+// source texels' codes are prefetched as they are drawn, then the destinations' records, then
+// visit runs, so that a chunk's cache misses overlap instead of queueing one sample at a time
+// (the samples land at random texels of planes and records of megabytes).
+template <class Visit>
+void visit_destinations(const EvalData& data, const BinShift& shift, const Footprint& rect,
+                        uint32_t count, Rng& rng, Visit visit) {
+  constexpr uint32_t kChunk = 16;
+  struct Point {
+    double x, y;
+    uint64_t source;
+  };
+  Point chunk[kChunk];
+  uint64_t destination[kChunk];
+  uint32_t filled = 0;
+  auto flush = [&] {
+    for (uint32_t i = 0; i < filled; ++i) {
+      int64_t tx = 0, ty = 0;
+      shifted_destination(shift, chunk[i].source, chunk[i].x, chunk[i].y, &tx, &ty);
+      destination[i] = data.texel(tx, ty);
+      prefetch_record(data, destination[i]);
+    }
+    for (uint32_t i = 0; i < filled; ++i)
+      visit(destination[i]);
+    filled = 0;
+  };
+  stratified_points(rect, count, rng, [&](double x, double y) {
+    const uint64_t source = data.texel(int64_t(std::floor(x)), int64_t(std::floor(y)));
+    prefetch(source_code(shift, source));
+    chunk[filled++] = {x, y, source};
+    if (filled == kChunk) flush();
+  });
+  flush();
+}
+
+// The two loops of the base that run over every compressed image are compiled twice on x86-64
+// Linux with GCC: for the baseline and for x86-64-v3 (AVX2), picked once when the program loads.
+// Both add the same products in the same order (no contraction into FMA under ISO C++), so the
+// estimate does not depend on the machine's choice.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define CLOTHBAKE_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define CLOTHBAKE_VECTOR_CLONES
+#endif
+
+// Each image's value at h: out[i] = sum_q weights[q] rows[q][i], i < images (the four bins' rows
+// of the tables' basis; unused bins have weight 0).
+CLOTHBAKE_VECTOR_CLONES void images_at_h(const float* const rows[4], const double weights[4],
+                                         uint32_t images, double* out) noexcept {
+  for (uint32_t i = 0; i < images; ++i)
+    out[i] = weights[0] * double(rows[0][i]) + weights[1] * double(rows[1][i]) +
+             weights[2] * double(rows[2][i]) + weights[3] * double(rows[3][i]);
+}
+
+// Per cluster c (< clusters): sum_j vis[c][j] sum_{images i of c} image_at_h[i] sums[i r1 + j],
+// into out[c]. A cluster's images are one range (begin[c] .. begin[c + 1]); they are summed in two
+// interleaved partial sums per component (no chain of dependent additions through the images).
+// kR: r1 known at compile time (0: read `r1`).
+template <uint32_t kR>
+CLOTHBAKE_VECTOR_CLONES void cluster_specular_sums(const uint32_t* begin, uint32_t clusters,
+                                                   const double* image_at_h, const double* sums,
+                                                   uint32_t r1_runtime,
+                                                   const double (*vis)[kMaxRank + 1],
+                                                   double* out) noexcept {
+  const uint32_t r1 = kR ? kR : r1_runtime;
+  for (uint32_t c = 0; c < clusters; ++c) {
+    double even[kMaxRank + 1] = {}, odd[kMaxRank + 1] = {};
+    uint32_t i = begin[c];
+    const uint32_t end = begin[c + 1];
+    for (; i + 1 < end; i += 2) {
+      const double b0 = image_at_h[i], b1 = image_at_h[i + 1];
+      const double* s0 = sums + uint64_t(i) * r1;
+      const double* s1 = s0 + r1;
+      for (uint32_t j = 0; j < r1; ++j) {
+        even[j] += b0 * s0[j];
+        odd[j] += b1 * s1[j];
+      }
+    }
+    if (i < end) {
+      const double b0 = image_at_h[i];
+      const double* s0 = sums + uint64_t(i) * r1;
+      for (uint32_t j = 0; j < r1; ++j)
+        even[j] += b0 * s0[j];
+    }
+    double v = 0.0;
+    for (uint32_t j = 0; j < r1; ++j)
+      v += vis[c][j] * (even[j] + odd[j]);
+    out[c] = v;
+  }
 }
 
 // Eq. 10's attenuation f_s / D for the fibre `params` with its tangent turned normal to h: the
@@ -159,9 +286,45 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
                          "cannot allocate the push-forward sums of a view bin");
   const PushforwardChannels& layout = data.pushforward.layout();
+  const BinShift shift = bin_shift(data, frame, bin);
+
+  // The cheap samples of g over B's two rectangles, split in proportion to their areas.
+  const uint32_t m = remainder_samples(data, block, spp);
+  uint32_t counts[2] = {0, 0};
+  if (m > 0) {
+    const double* areas = block.areas;
+    const double total = areas[0] + areas[1];
+    uint32_t first = areas[1] > 0.0 ? uint32_t(std::lround(double(m) * areas[0] / total)) : m;
+    if (areas[0] > 0.0 && first == 0) first = 1;
+    if (areas[1] > 0.0 && first == m) first = m > 1 ? m - 1 : m;
+    counts[0] = areas[0] > 0.0 ? first : 0;
+    counts[1] = areas[1] > 0.0 ? m - first : 0;
+  }
+  // An estimate with few samples (2 spp and a remainder of a few dozen) draws all its points now,
+  // in the generator's order (the residual's, then each rectangle's), and asks for their parallax
+  // codes: they arrive while the constants and the base are computed.
+  EarlyPoints early;
+  early.drawn = spp + counts[0] + counts[1] <= EarlyPoints::kCapacity;
+  if (early.drawn) {
+    auto draw = [&](double x, double y) {
+      const uint64_t source = data.texel(int64_t(std::floor(x)), int64_t(std::floor(y)));
+      prefetch(source_code(shift, source));
+      early.points[early.count++] = {x, y, source};
+    };
+    stratified_points(p, spp, rng, draw);
+    for (int r = 0; r < 2; ++r)
+      if (counts[r] > 0) stratified_points(block.rects[r], counts[r], rng, draw);
+  }
 
   Constants k;
   static_cast<ActiveLobes&>(k) = active_lobes(data, frame);
+  // The base reads the bin's sums and four rows of the tables' basis, kilobytes each at addresses
+  // that change with the view and h: asked for now, they arrive while the constants are computed.
+  prefetch_lines(sums, sizeof(double) * layout.count());
+  if (k.specular)
+    for (uint32_t q = 0; q < k.h_bins.count; ++q)
+      prefetch_lines(data.specular.compressed.image_basis_row(k.h_bins.bin[q]),
+                     sizeof(float) * layout.images);
   const bool reflect = frame.wi.z * frame.wo.z > 0.0;
   k.rank = data.visibility_rank();
 
@@ -205,6 +368,15 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
   if (k.delta) k.delta_scale = t_sheen;
 
+  if (early.drawn)  // the destinations, and their records asked for before the base is computed
+    for (uint32_t i = 0; i < early.count; ++i) {
+      int64_t tx = 0, ty = 0;
+      const EarlyPoints::Point& point = early.points[i];
+      shifted_destination(shift, point.source, point.x, point.y, &tx, &ty);
+      early.destination[i] = data.texel(tx, ty);
+      prefetch_record(data, early.destination[i]);
+    }
+
   // Each image's value at h, once per estimate (on the stack up to kStackImages images, which every
   // example fabric stays under; beyond, one allocation per estimate).
   double stack_images[kStackImages];
@@ -221,14 +393,15 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       }
       image_at_h = heap_images.data();
     }
-    // Bin by bin: each bin's row of the basis is contiguous (vectorised, one stream at a time).
-    std::fill(image_at_h, image_at_h + layout.images, 0.0);
-    for (uint32_t q = 0; q < k.h_bins.count; ++q) {
-      const float* row = tables.image_basis_row(k.h_bins.bin[q]);
-      const double weight = k.h_bins.weight[q];
-      for (uint32_t i = 0; i < layout.images; ++i)
-        image_at_h[i] += weight * double(row[i]);
+    // The four bins' rows at once (a bilinear lookup with fewer bins pads with weight 0).
+    const float* rows[4];
+    double weights[4];
+    for (uint32_t q = 0; q < 4; ++q) {
+      const bool used = q < k.h_bins.count;
+      rows[q] = tables.image_basis_row(k.h_bins.bin[used ? q : 0]);
+      weights[q] = used ? k.h_bins.weight[q] : 0.0;
     }
+    images_at_h(rows, weights, layout.images, image_at_h);
     k.image_at_h = image_at_h;
   }
 
@@ -236,17 +409,13 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   Rgb base[model::kLobeCount];
   const uint32_t r1 = k.rank + 1;
   if (k.specular) {
-    double per_cluster[reader::kMaxVisibilityClusters] = {};
-    for (uint32_t i = 0; i < layout.images; ++i) {
-      const double basis = image_at_h[i];
-      if (basis == 0.0) continue;
-      const uint32_t c = data.image_cluster[i];
-      const double* s = sums + layout.spec(i, 0);
-      double v = 0.0;
-      for (uint32_t j = 0; j < r1; ++j)
-        v += k.vis[c][j] * s[j];
-      per_cluster[c] += basis * v;
-    }
+    double per_cluster[reader::kMaxVisibilityClusters];
+    if (r1 == 5)  // the default rank 4: the component loops unrolled
+      cluster_specular_sums<5>(data.cluster_image_begin.data(), clusters, image_at_h, sums, r1,
+                               k.vis, per_cluster);
+    else
+      cluster_specular_sums<0>(data.cluster_image_begin.data(), clusters, image_at_h, sums, r1,
+                               k.vis, per_cluster);
     Rgb sum;
     for (uint32_t c = 0; c < clusters; ++c)
       sum += k.specular_scale[c] * per_cluster[c];
@@ -274,37 +443,34 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   // The residual f - g at spp stratified points over P, both at the sample's destination.
   Rgb residual[model::kLobeCount];
   TexelShading shading;
-  stratified_points(p, spp, rng, [&](double x, double y) {
-    int64_t tx = 0, ty = 0;
-    bin_destination(data, frame, bin, x, y, &tx, &ty);
-    shade_texel(data, frame, tx, ty, &shading);
+  const int64_t n = int64_t(data.n);
+  auto residual_sample = [&](uint64_t t) {
+    shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount];
-    control_variate(data, k, tx, ty, g);
+    control_variate(data, k, t, g);
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - g[l];
-  });
-  // The integral of g over the rest B by cheap samples, stratified over B's two rectangles in
-  // proportion to their areas, each rectangle's mean times its area and its sign (period_block).
-  const uint32_t m = remainder_samples(data, block, spp);
+  };
+  if (early.drawn)
+    for (uint32_t i = 0; i < spp; ++i)
+      residual_sample(early.destination[i]);
+  else
+    visit_destinations(data, shift, p, spp, rng, residual_sample);
+  // The integral of g over the rest B by cheap samples, stratified over B's two rectangles, each
+  // rectangle's mean times its area and its sign (period_block).
   Rgb remainder[model::kLobeCount];
-  if (m > 0) {
-    const double* areas = block.areas;
-    const double total = areas[0] + areas[1];
-    uint32_t first = areas[1] > 0.0 ? uint32_t(std::lround(double(m) * areas[0] / total)) : m;
-    if (areas[0] > 0.0 && first == 0) first = 1;
-    if (areas[1] > 0.0 && first == m) first = m > 1 ? m - 1 : m;
-    const uint32_t counts[2] = {first, m - first};
-    for (int r = 0; r < 2; ++r) {
-      if (counts[r] == 0 || !(areas[r] > 0.0)) continue;
-      Rgb piece[model::kLobeCount];
-      stratified_points(block.rects[r], counts[r], rng, [&](double x, double y) {
-        int64_t tx = 0, ty = 0;
-        bin_destination(data, frame, bin, x, y, &tx, &ty);
-        control_variate(data, k, tx, ty, piece);
-      });
-      for (int l = 0; l < model::kLobeCount; ++l)
-        remainder[l] += piece[l] * (block.signs[r] * areas[r] / double(counts[r]));
-    }
+  uint32_t next = spp;  // the early points of the rectangles follow the residual's
+  for (int r = 0; r < 2; ++r) {
+    if (counts[r] == 0) continue;
+    Rgb piece[model::kLobeCount];
+    auto cheap_sample = [&](uint64_t t) { control_variate(data, k, t, piece); };
+    if (early.drawn)
+      for (uint32_t i = 0; i < counts[r]; ++i)
+        cheap_sample(early.destination[next++]);
+    else
+      visit_destinations(data, shift, block.rects[r], counts[r], rng, cheap_sample);
+    for (int l = 0; l < model::kLobeCount; ++l)
+      remainder[l] += piece[l] * (block.signs[r] * block.areas[r] / double(counts[r]));
   }
   for (int l = 0; l < model::kLobeCount; ++l)
     out->lobes[l] += (base[l] + remainder[l]) / area + residual[l] / double(spp);

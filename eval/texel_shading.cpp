@@ -127,15 +127,22 @@ int draw_view_bin(const ShadingFrame& frame, double u) noexcept {
   return last;
 }
 
+BinShift bin_shift(const EvalData& data, const ShadingFrame& frame, int k) noexcept {
+  BinShift shift;
+  if (!data.options.parallax) return shift;
+  const uint32_t bin = uint32_t(frame.parallax_bins.index[k]);
+  shift.codes = data.parallax.bin_codes(bin);
+  shift.step = data.parallax.depth_step(bin);
+  shift.offset_per_depth[0] = frame.bin_offset_per_depth[k][0];
+  shift.offset_per_depth[1] = frame.bin_offset_per_depth[k][1];
+  return shift;
+}
+
 void bin_destination(const EvalData& data, const ShadingFrame& frame, int k, double x, double y,
                      int64_t* tx, int64_t* ty) noexcept {
-  const double r =
-      data.options.parallax
-          ? data.parallax.bin_depth_at(uint32_t(frame.parallax_bins.index[k]),
-                                       data.texel(int64_t(std::floor(x)), int64_t(std::floor(y))))
-          : 0.0;
-  *tx = int64_t(std::floor(x + r * frame.bin_offset_per_depth[k][0]));
-  *ty = int64_t(std::floor(y + r * frame.bin_offset_per_depth[k][1]));
+  const BinShift shift = bin_shift(data, frame, k);
+  shifted_destination(shift, data.texel(int64_t(std::floor(x)), int64_t(std::floor(y))), x, y, tx,
+                      ty);
 }
 
 void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>& f,

@@ -11,6 +11,7 @@
 // C++17, standard library only, no allocation. Internal to the evaluator library.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "eval/eval_data.hpp"
@@ -71,8 +72,33 @@ ActiveLobes active_lobes(const EvalData& data, const ShadingFrame& frame) noexce
 // whose cumulative weight exceeds u (the last with a positive weight if rounding leaves none).
 int draw_view_bin(const ShadingFrame& frame, double u) noexcept;
 
-// The destination texel of point p = (x, y) in view bin k (Eq. 2 with the bin's depth of the
-// texel containing p at the bin's centre direction): floor(p + r_k(floor(p)) * factor_k).
+// View bin k of a frame, ready for many destinations: its codes plane (null without parallax, for
+// a bin that is not stored or whose plane cannot be allocated: r = 0), depth step and offset per
+// unit depth. One per estimate; no allocation beyond the reader decoding the bin's plane once.
+struct BinShift {
+  const uint16_t* codes = nullptr;
+  double step = 0.0;
+  double offset_per_depth[2] = {0.0, 0.0};
+};
+BinShift bin_shift(const EvalData& data, const ShadingFrame& frame, int k) noexcept;
+
+// The source texel index of point (x, y) (any finite coordinates: the tile wraps), and the address
+// of its code in `shift` (for a prefetch; null when the bin has no codes).
+inline const uint16_t* source_code(const BinShift& shift, uint64_t source) noexcept {
+  return shift.codes ? shift.codes + source : nullptr;
+}
+
+// The destination texel of point p = (x, y) whose texel has index `source`, in the bin of
+// `shift`: floor(p + r_k(source) * factor_k) (Eq. 2 with the bin's depth of the texel containing p
+// at the bin's centre direction), r_k = -code * step.
+inline void shifted_destination(const BinShift& shift, uint64_t source, double x, double y,
+                                int64_t* tx, int64_t* ty) noexcept {
+  const double r = shift.codes ? -double(shift.codes[source]) * shift.step : 0.0;
+  *tx = int64_t(std::floor(x + r * shift.offset_per_depth[0]));
+  *ty = int64_t(std::floor(y + r * shift.offset_per_depth[1]));
+}
+
+// The same for one point of view bin k (bin_shift and shifted_destination in one call).
 void bin_destination(const EvalData& data, const ShadingFrame& frame, int k, double x, double y,
                      int64_t* tx, int64_t* ty) noexcept;
 

@@ -64,7 +64,7 @@ uint64_t pixel_seed(uint64_t seed, uint32_t pass, uint64_t pixel) {
 
 struct Counters {
   std::atomic<uint64_t> estimates{0}, texel_evals{0}, samples{0}, direct{0}, cloth_pixels{0};
-  std::atomic<uint64_t> without_control_variate{0};
+  std::atomic<uint64_t> without_control_variate{0}, remainder_samples{0};
   std::atomic<uint64_t> out_of_plan{0}, fallback_brute{0}, fallback_zero{0};
   std::mutex mutex;
   double min_texels = INFINITY, max_texels = 0;
@@ -256,6 +256,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       if (e.counters.direct) counters.direct.fetch_add(1, std::memory_order_relaxed);
       if (e.counters.without_control_variate)
         counters.without_control_variate.fetch_add(1, std::memory_order_relaxed);
+      counters.remainder_samples.fetch_add(e.counters.remainder_samples, std::memory_order_relaxed);
       return s.ok() ? e.value : Rgb();
     };
     // A BSDF-sampled direction and its density (continuous techniques only).
@@ -338,22 +339,35 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     return sum / double(spp);
   };
 
-  std::atomic<uint64_t> rows_done{0};
+  // Pixels go in 8 x 8 tiles, a tile per task: neighbouring pixels share view bins, half-vector
+  // bins and parallax planes, so a tile's estimates read what the cache already holds (a row of
+  // 128 pixels touches about 40 view directions; a tile about 9). Every pixel has its own seed:
+  // the image does not depend on the order or the thread count.
+  constexpr int kTile = 8;
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  std::atomic<uint64_t> pixels_done{0};
   uint32_t pass = 0;
   do {
-    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-      for (int py = rows.begin(); py != rows.end(); ++py) {
-        for (int px = 0; px < w; ++px) {
-          const Rgb c = shade(px, py, pass);
-          double* out = &sum[(std::size_t(py) * w + px) * 3];
-          out[0] += c.r;
-          out[1] += c.g;
-          out[2] += c.b;
-        }
-        const uint64_t done = rows_done.fetch_add(1) + 1;
-        if (progress && pass_options.time_budget <= 0) progress(double(done) / h);
-      }
-    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y, 1),
+                      [&](const tbb::blocked_range<int>& tiles) {
+                        for (int tile = tiles.begin(); tile != tiles.end(); ++tile) {
+                          const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
+                          const int x1 = std::min(w, x0 + kTile), y1 = std::min(h, y0 + kTile);
+                          for (int py = y0; py < y1; ++py)
+                            for (int px = x0; px < x1; ++px) {
+                              const Rgb c = shade(px, py, pass);
+                              double* out = &sum[(std::size_t(py) * w + px) * 3];
+                              out[0] += c.r;
+                              out[1] += c.g;
+                              out[2] += c.b;
+                            }
+                          const uint64_t done =
+                              pixels_done.fetch_add(uint64_t(x1 - x0) * (y1 - y0)) +
+                              uint64_t(x1 - x0) * (y1 - y0);
+                          if (progress && pass_options.time_budget <= 0)
+                            progress(double(done) / (double(w) * h));
+                        }
+                      });
     ++pass;
     if (progress && pass_options.time_budget > 0) {
       const double elapsed =
@@ -375,6 +389,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   st.samples = counters.samples;
   st.direct = counters.direct;
   st.without_control_variate = counters.without_control_variate;
+  st.remainder_samples = counters.remainder_samples;
   st.out_of_plan = counters.out_of_plan;
   st.fallback_brute = counters.fallback_brute;
   st.fallback_zero = counters.fallback_zero;

@@ -102,6 +102,7 @@ int run_render(const RenderCliOptions& o) {
                 {"samples", s.samples},
                 {"direct_footprints", s.direct},
                 {"without_control_variate", s.without_control_variate},
+                {"remainder_samples", s.remainder_samples},
                 {"out_of_plan", s.out_of_plan},
                 {"out_of_plan_brute_fallback", s.fallback_brute},
                 {"out_of_plan_zero", s.fallback_zero},

@@ -299,6 +299,12 @@ bool ParallaxView::ensure_plane(uint32_t bin) const noexcept {
   return plane16(bin) != nullptr;
 }
 
+const uint16_t* ParallaxView::bin_codes(uint32_t bin) const noexcept {
+  if (!covers(bin)) return nullptr;
+  if (codes_) return codes_ + uint64_t(bin) * info_.resolution * info_.resolution;
+  return packed_ ? plane16(bin) : nullptr;
+}
+
 namespace {
 // Decodes the hierarchical block of `bin` into `plane` with its references' decoded planes (the
 // caller decoded them; a null one is read as zeros through `zeros`).

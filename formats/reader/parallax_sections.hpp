@@ -166,6 +166,12 @@ class ParallaxView {
   Status decode_all() const noexcept;
   // The depth step of `bin` (tile-side units per code; the raw form's depth_scale for every bin).
   double depth_step(uint32_t bin) const noexcept;
+  // The N^2 codes of `bin`, row-major (texel index t = y N + x; r = -code * depth_step(bin)): the
+  // raw table's plane in the asset, or the compressed form's decoded plane (decoded now if it is
+  // not yet; owned by the view). Null when the bin is not stored (planned) or its plane cannot be
+  // allocated: bin_depth then answers 0. For callers that read many texels of one bin (the
+  // evaluator's samples) without a branch per texel. Thread-safe. Precondition: bin < dirs^2.
+  const uint16_t* bin_codes(uint32_t bin) const noexcept;
 
   const ParallaxInfoRecord& info() const noexcept { return info_; }
   uint32_t resolution() const noexcept { return info_.resolution; }

@@ -253,11 +253,16 @@ TEST(HierarchicalParallax, APlannedTableStoresItsDirectionsWithTheFullCodes) {
     ASSERT_EQ(view.covers(b), keep[b] != 0) << b;
     if (!keep[b]) {
       EXPECT_FALSE(view.ensure_plane(b));
+      EXPECT_EQ(view.bin_codes(b), nullptr);
       continue;
     }
     EXPECT_EQ(view.depth_step(b), full.steps[b]);
-    for (uint32_t t = 0; t < n * n; ++t)
+    const uint16_t* plane = view.bin_codes(b);
+    ASSERT_NE(plane, nullptr);
+    for (uint32_t t = 0; t < n * n; ++t) {
       ASSERT_EQ(view.bin_code(b, t % n, t / n), full.codes[uint64_t(b) * n * n + t]) << b;
+      ASSERT_EQ(plane[t], full.codes[uint64_t(b) * n * n + t]) << b;
+    }
   }
   // A view whose bilinear bins are all kept answers; one that needs a left-out bin does not.
   const model::DirectionGrid<double> grid{int(dirs), table.min_cos};

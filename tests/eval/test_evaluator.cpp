@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "eval/eval_data.hpp"
@@ -500,6 +502,88 @@ TEST(Multiscale, FootprintsFarFromWholePeriodsAreSampledAsBruteForce) {
           .ok());
   EXPECT_FALSE(paper.counters.without_control_variate);
   EXPECT_GT(paper.counters.table_queries, 0u);
+}
+
+// The control variate's packed records hold, texel by texel, exactly what the asset's views give:
+// the label, the yarn, the gap and colour, the visibility coefficients and the compressed tables'
+// image weights (cv_texels.hpp). g at a sample reads only the record.
+TEST(Multiscale, TexelRecordsAreTheViewsValues) {
+  for (const std::string* path : {&assets().twill, &assets().satin}) {
+    auto o = open(*path);
+    const EvalData& d = *o->evaluator.data();
+    const ControlVariateTexels& records = d.cv_texels;
+    ASSERT_FALSE(records.empty());
+    ASSERT_EQ(records.rank(), d.visibility_rank());
+    ASSERT_EQ(records.stride() % 16, 0u);
+    ASSERT_EQ(reinterpret_cast<std::uintptr_t>(records.address(0)) % 64, 0u);
+    uint32_t widest = 0;
+    for (uint64_t t = 0; t < uint64_t(d.n) * d.n; ++t) {
+      const ControlVariateTexels::Header& h = records.header(t);
+      EXPECT_EQ(h.label, d.clusters.label_at(t));
+      EXPECT_EQ(h.yarn, d.maps.yarn_id[t]);
+      EXPECT_EQ(h.gap, d.maps.gap[t]);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_EQ(h.colour[c], d.maps.albedo.data[3 * t + c]);
+      double e[17];
+      d.visibility_coefficients(t, e);
+      for (uint32_t j = 0; j < records.rank(); ++j)
+        EXPECT_EQ(double(records.coefficients(t)[j]), e[j + 1]);
+      uint32_t first = 0;
+      double w[256];
+      const uint32_t count = d.specular.compressed.texel_image_weights_at(t, &first, w);
+      ASSERT_EQ(h.count, count);
+      if (count > 0) {
+        EXPECT_EQ(h.first_image, first);
+      }
+      for (uint32_t j = 1; j < count; ++j)
+        EXPECT_EQ(double(records.image_weights(t)[j - 1]), w[j]);
+      widest = std::max(widest, count);
+      if (::testing::Test::HasFailure()) return;  // one texel's report is enough
+    }
+    EXPECT_GE(records.stride(),
+              sizeof(ControlVariateTexels::Header) + 4 * records.rank() + 2 * (widest - 1));
+  }
+}
+
+// The destinations of the estimators' samples (bin_shift and shifted_destination, the plane of
+// codes read directly) against the reader's depth of each bin, texel by texel, and the codes plane
+// against bin_depth for every bin of a view.
+namespace {
+void expect_destinations_are_bin_depth_offsets(const std::string& path) {
+  auto o = open(path);
+  const EvalData& d = *o->evaluator.data();
+  SCOPED_TRACE(path);
+  const double wo[3] = {-0.4, 0.1, 0.85};
+  ShadingFrame frame;
+  Status status;
+  ASSERT_TRUE(make_frame(d, kReflectWi, wo, kAllLobes, &frame, &status));
+  Rng rng(3);
+  for (int k = 0; k < 4; ++k) {
+    if (!(frame.parallax_bins.weight[k] > 0.0)) continue;
+    const uint32_t bin = uint32_t(frame.parallax_bins.index[k]);
+    const BinShift shift = bin_shift(d, frame, k);
+    ASSERT_NE(shift.codes, nullptr);
+    EXPECT_EQ(shift.codes, d.parallax.bin_codes(bin));
+    for (uint32_t y = 0; y < d.n; ++y)
+      for (uint32_t x = 0; x < d.n; ++x)
+        ASSERT_EQ(-double(shift.codes[uint64_t(y) * d.n + x]) * shift.step,
+                  d.parallax.bin_depth(bin, x, y));
+    for (int s = 0; s < 2000; ++s) {
+      // Points anywhere, also beyond the tile (it wraps).
+      const double x = (rng.uniform() * 3.0 - 1.0) * d.n, y = (rng.uniform() * 3.0 - 1.0) * d.n;
+      const double r = d.parallax.bin_depth(bin, int64_t(std::floor(x)), int64_t(std::floor(y)));
+      int64_t tx = 0, ty = 0;
+      bin_destination(d, frame, k, x, y, &tx, &ty);
+      EXPECT_EQ(tx, int64_t(std::floor(x + r * frame.bin_offset_per_depth[k][0])));
+      EXPECT_EQ(ty, int64_t(std::floor(y + r * frame.bin_offset_per_depth[k][1])));
+    }
+  }
+}
+}  // namespace
+
+TEST(Multiscale, SampleDestinationsAreTheBinDepthOffsets) {
+  for (const std::string* path : {&assets().twill, &assets().satin})  // raw and coded parallax
+    expect_destinations_are_bin_depth_offsets(*path);
 }
 
 // The whole-tile push-forward sums of a view bin against an independent push-forward: s x s

@@ -6,14 +6,32 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <system_error>
+#include <vector>
 
 namespace clothbake::fuzz {
+
+// The scratch directories of this process, removed when it exits normally (libFuzzer ends a run
+// with exit(), which runs atexit handlers; a crash keeps them beside its reproducer).
+inline std::vector<std::string>& scratch_directories() {
+  static std::vector<std::string> dirs;
+  return dirs;
+}
 
 // A fresh directory /tmp/clothbake-fuzz-NAME-XXXXXX (the harness's own, for its whole run).
 inline std::string scratch_directory(const std::string& name) {
   std::string dir = "/tmp/clothbake-fuzz-" + name + "-XXXXXX";
   if (!::mkdtemp(dir.data())) __builtin_trap();
+  if (scratch_directories().empty())
+    std::atexit([] {
+      for (const std::string& d : scratch_directories()) {
+        std::error_code ignored;
+        std::filesystem::remove_all(d, ignored);
+      }
+    });
+  scratch_directories().push_back(dir);
   return dir;
 }
 

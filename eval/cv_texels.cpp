@@ -1,0 +1,67 @@
+// The control variate's packed per-texel records (cv_texels.hpp).
+#include "eval/cv_texels.hpp"
+
+#include <algorithm>
+#include <new>
+
+#include "eval/eval_data.hpp"
+
+namespace clothbake::eval {
+
+void ControlVariateTexels::AlignedFree::operator()(unsigned char* p) const noexcept {
+  ::operator delete[](p, std::align_val_t(64));
+}
+
+bool ControlVariateTexels::build(const EvalData& data) noexcept {
+  bytes_.reset();
+  stride_ = rank_ = 0;
+  const reader::CompressedRadianceTables& tables = data.specular.compressed;
+  if (!tables.is_open() || data.yarns.size() > 65535 || tables.image_count() > 65535 ||
+      data.cluster_count() > 256)
+    return false;
+  const uint32_t n = data.n;
+  const uint64_t texels = uint64_t(n) * n;
+  const uint32_t rank = data.visibility_rank();
+  // The widest cell sets the stride.
+  uint32_t max_count = 1;
+  {
+    double unused[reader::kMaxCompressedRank + 1];
+    for (uint64_t t = 0; t < texels; ++t) {
+      uint32_t first = 0;
+      max_count = std::max(max_count, tables.texel_image_weights_at(t, &first, unused));
+    }
+  }
+  const uint64_t stride =
+      (sizeof(Header) + 4 * uint64_t(rank) + 2 * uint64_t(max_count - 1) + 15) / 16 * 16;
+  unsigned char* raw = static_cast<unsigned char*>(
+      ::operator new[](texels* stride, std::align_val_t(64), std::nothrow));
+  if (raw == nullptr) return false;
+  bytes_.reset(raw);
+  stride_ = uint32_t(stride);
+  rank_ = rank;
+  double weights[reader::kMaxCompressedRank + 1];
+  for (uint64_t t = 0; t < texels; ++t) {
+    unsigned char* record = raw + t * stride;
+    std::fill(record, record + stride, static_cast<unsigned char>(0));
+    uint32_t first = 0;
+    const uint32_t count = tables.texel_image_weights_at(t, &first, weights);
+    Header h{};
+    h.first_image = uint16_t(count > 0 ? first : 0);
+    h.count = uint16_t(count);
+    h.label = uint8_t(data.clusters.label_at(t));
+    h.yarn = data.maps.yarn_id[t];
+    h.gap = data.maps.gap[t];
+    for (int c = 0; c < 3; ++c)
+      h.colour[c] = data.maps.albedo.data[3 * t + c];
+    new (record) Header(h);
+    const float* source = rank > 0 ? data.basis.coefficients(t) : nullptr;
+    for (uint32_t j = 0; j < rank; ++j)
+      new (record + sizeof(Header) + 4 * j) float(source[j]);
+    // Stored coefficients are int16 (the reader widens them to double exactly).
+    for (uint32_t j = 1; j < count; ++j)
+      new (record + sizeof(Header) + 4 * rank + 2 * (j - 1)) int16_t(int16_t(weights[j]));
+  }
+  return true;
+}
+
+}  // namespace clothbake::eval

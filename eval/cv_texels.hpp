@@ -1,0 +1,81 @@
+// Per-texel records of the unbiased form's control variate g (docs/evaluator.md, "Unbiased
+// multi-scale", "Cost per estimate"), packed so that one evaluation of g reads one record.
+//
+// g at texel t needs its cluster label, its visibility basis coefficients e_1..e_M, its gap value,
+// its colour and yarn (the diffuse lobe) and the compressed specular tables' image weights of its
+// cell. Read from the asset's views these are nine arrays at nine unrelated addresses (the label
+// map, the basis coefficients, the gap and colour maps, the yarn map, the cell map, the first
+// coefficient index and the coefficients), each a cache miss for the cheap samples of g, which
+// land at random texels. A record holds the same values, bit for bit (so g and the push-forward
+// sums its base is integrated from stay one function), in one or two cache lines:
+//
+//   offset  type            field
+//   0       u16             first_image   the cell's first compressed image (0 without a cell)
+//   2       u16             count         images of the cell: rank + 1 (0: the texel has no cell)
+//   4       u8              label         the texel's visibility cluster
+//   5       u8              (padding)
+//   6       u16             yarn          the texel's yarn index
+//   8       f32             gap           I(t)
+//   12      f32[3]          colour        the albedo map's RGB
+//   24      f32[M]          e             the visibility basis coefficients e_1..e_M
+//   24+4M   i16[count - 1]  q             the stored coefficients of images first+1 ..
+//   first+count-1
+//                                         (image `first`, the cell mean, has weight 1)
+//
+// The stride is 24 + 4M + 2 (max count - 1) rounded up to 16 bytes; the array is 64-byte aligned.
+// Internal to the evaluator library (its layout may change; nothing on disk).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+namespace clothbake::eval {
+
+struct EvalData;
+
+class ControlVariateTexels {
+ public:
+  struct Header {
+    uint16_t first_image;
+    uint16_t count;
+    uint8_t label;
+    uint8_t padding;
+    uint16_t yarn;
+    float gap;
+    float colour[3];
+  };
+  static_assert(sizeof(Header) == 24);
+
+  // Builds the records of every texel from `data`'s open views (the compressed specular tables
+  // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 6.3 MB
+  // for the 256^2 satin, rank 4, 27 images a cell) or a value does not fit its field (more than
+  // 65 535 images or yarns, more than 256 clusters). Not thread-safe against readers; call once.
+  bool build(const EvalData& data) noexcept;
+
+  bool empty() const noexcept { return bytes_ == nullptr; }
+  uint32_t stride() const noexcept { return stride_; }
+  uint32_t rank() const noexcept { return rank_; }
+
+  // The record of texel index t (< N^2): its header, then e (rank() floats) and q.
+  const Header& header(uint64_t t) const noexcept {
+    return *reinterpret_cast<const Header*>(bytes_.get() + t * stride_);
+  }
+  const float* coefficients(uint64_t t) const noexcept {
+    return reinterpret_cast<const float*>(bytes_.get() + t * stride_ + sizeof(Header));
+  }
+  const int16_t* image_weights(uint64_t t) const noexcept {
+    return reinterpret_cast<const int16_t*>(bytes_.get() + t * stride_ + sizeof(Header) +
+                                            4 * std::size_t(rank_));
+  }
+  const void* address(uint64_t t) const noexcept { return bytes_.get() + t * stride_; }
+
+ private:
+  struct AlignedFree {
+    void operator()(unsigned char* p) const noexcept;
+  };
+  std::unique_ptr<unsigned char[], AlignedFree> bytes_;
+  uint32_t stride_ = 0, rank_ = 0;
+};
+
+}  // namespace clothbake::eval
