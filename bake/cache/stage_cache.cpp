@@ -472,12 +472,16 @@ void DiskCache::enforce_bound() {
     if (info.bytes <= options_.max_bytes) return;
     // The entries this run was answered from stay: their payloads may not have been read yet (a
     // later stage reads them), and removing one would be reported as a corrupt entry.
-    std::set<std::string> in_use;
+    std::set<std::string> in_use = kept_files_;
     for (const std::string& path : hit_paths_)
       in_use.insert(fs::path(path).filename().string());
     prune_cache(options_.dir, options_.max_bytes, in_use);
   } catch (const Error&) {
   }
+}
+
+void DiskCache::keep_file(const std::string& path) {
+  kept_files_.insert(fs::path(path).filename().string());
 }
 
 namespace {

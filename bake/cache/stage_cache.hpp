@@ -80,6 +80,10 @@ class DiskCache final : public pipeline::StageCache {
   // Prunes the folder to the bound when it holds more (done after each store; a caller that adds
   // files of its own, such as the assets of scene renders, calls it after adding them).
   void enforce_bound();
+  // A file of the folder (a path; only its name is compared, as prune_cache does) that the bound
+  // never removes while this cache lives: the assets a scene render has already chosen, which a
+  // later fabric's bake of the same render must not prune before the render opens them.
+  void keep_file(const std::string& path);
 
  private:
   struct Key {
@@ -104,7 +108,8 @@ class DiskCache final : public pipeline::StageCache {
   std::map<std::string, std::optional<Key>> content_;   // memoised content digests
   std::map<std::string, std::pair<Key, int>> pending_;  // stage -> key, lock fd
   std::map<std::string, std::string> keys_;
-  std::set<std::string> hit_paths_;  // entries answered from since the last discard_hits
+  std::set<std::string> hit_paths_;   // entries answered from since the last discard_hits
+  std::set<std::string> kept_files_;  // keep_file: names the bound never removes
 };
 
 struct CacheInfo {

@@ -12,6 +12,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <string>
+#include <vector>
 
 #include "bake/cache/stage_cache.hpp"
 #include "bake/inputs/fabric_load.hpp"
@@ -86,6 +88,7 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
   std::unique_ptr<cache::DiskCache> stage_cache;  // one for every fabric (it forgets between runs)
   const cache::Codecs codecs = stages::artifact_codecs();
   std::map<std::string, std::string> asset_of;  // fabric path -> asset: each fabric loaded once
+  std::vector<std::string> chosen;  // the render's assets so far: a later bake must not prune them
   compress::CompressRequest compression;
   compression.keep_raw = keep_raw_tables;
   for (std::size_t k = 0; k < loaded.fabrics.size(); ++k) {
@@ -120,7 +123,10 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
         cache::CacheOptions options;
         options.dir = cache;
         stage_cache = std::make_unique<cache::DiskCache>(options, codecs);
+        for (const std::string& earlier : chosen)
+          stage_cache->keep_file(earlier);
       }
+      stage_cache->keep_file(asset.string());
       // From the path, as `clothbake bake f.toml` does (the asset's metadata lists load_fabric
       // among the stages), so that the asset has the bytes of that command's.
       // On a terminal the bake says what it is doing (a scene's first render can bake for
@@ -140,6 +146,8 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
     }
     loaded.scene.objects[k].asset = asset.string();
     asset_of[loaded.fabrics[k]] = asset.string();
+    chosen.push_back(asset.string());
+    if (stage_cache) stage_cache->keep_file(asset.string());
   }
 }
 

@@ -630,6 +630,30 @@ TEST_F(DiskCacheTest, StoresDoNotRemoveTheEntriesTheRunIsAnsweredFrom) {
   EXPECT_TRUE(fs::exists(entry(*bounded, "a")));
 }
 
+// A scene render bakes its fabrics one after another through one cache: the assets it has
+// already chosen (keep_file) stay however small the bound, while an asset of an earlier render is
+// pruned as usual.
+TEST_F(DiskCacheTest, KeptFilesStayWhenTheBoundPrunes) {
+  const fs::path assets = fs::path(cache_dir_) / kAssetFolder;
+  fs::create_directories(assets);
+  spit(assets / "chosen.cbk", std::string(5000, 'c'));
+  spit(assets / "other.cbk", std::string(5000, 'o'));
+  const auto now = fs::file_time_type::clock::now();
+  fs::last_write_time(assets / "chosen.cbk", now - 600s);  // the oldest: first to go otherwise
+  fs::last_write_time(assets / "other.cbk", now - 300s);
+  auto cache = open(1);
+  cache->keep_file((assets / "chosen.cbk").string());
+  run(*cache, with_text("t"), {shout_stage(runs_)});  // a store enforces the bound
+  EXPECT_TRUE(fs::exists(assets / "chosen.cbk"));
+  EXPECT_FALSE(fs::exists(assets / "other.cbk"));
+  cache->enforce_bound();
+  EXPECT_TRUE(fs::exists(assets / "chosen.cbk"));
+  // Without keep_file the same bound takes it.
+  auto fresh = open(1);
+  fresh->enforce_bound();
+  EXPECT_FALSE(fs::exists(assets / "chosen.cbk"));
+}
+
 // `cache info` / `cache prune` on a folder of entries, a scene-render asset (counted as stage
 // "asset", bounded with the entries) and temporary files left by killed stores: prune removes the
 // oldest files first until the rest fit, everything at 0, and only the temporary files older than
