@@ -54,12 +54,19 @@ bool ControlVariateTexels::build(const EvalData& data) noexcept {
     for (int c = 0; c < 3; ++c)
       h.colour[c] = data.maps.albedo.data[3 * t + c];
     new (record) Header(h);
-    const float* source = rank > 0 ? data.basis.coefficients(t) : nullptr;
-    for (uint32_t j = 0; j < rank; ++j)
-      new (record + sizeof(Header) + 4 * j) float(source[j]);
-    // Stored coefficients are int16 (the reader widens them to double exactly).
-    for (uint32_t j = 1; j < count; ++j)
-      new (record + sizeof(Header) + 4 * rank + 2 * (j - 1)) int16_t(int16_t(weights[j]));
+    // One array object each (trivial types: no array cookie), read back as arrays.
+    if (rank > 0) {
+      float* e = new (record + sizeof(Header)) float[rank];
+      const float* source = data.basis.coefficients(t);
+      for (uint32_t j = 0; j < rank; ++j)
+        e[j] = source[j];
+    }
+    if (max_count > 1) {
+      int16_t* q = new (record + sizeof(Header) + 4 * uint64_t(rank)) int16_t[max_count - 1];
+      // Stored coefficients are int16 (the reader widens them to double exactly).
+      for (uint32_t j = 1; j < count; ++j)
+        q[j - 1] = int16_t(weights[j]);
+    }
   }
   return true;
 }

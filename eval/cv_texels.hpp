@@ -49,8 +49,9 @@ class ControlVariateTexels {
 
   // Builds the records of every texel from `data`'s open views (the compressed specular tables
   // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 6.3 MB
-  // for the 256^2 satin, rank 4, 27 images a cell) or a value does not fit its field (more than
-  // 65 535 images or yarns, more than 256 clusters). Not thread-safe against readers; call once.
+  // for the 256^2 satin, rank 4, cells of about 27 images: 96 bytes a texel) or a value does not
+  // fit its field (more than 65 535 images or yarns, more than 256 clusters: the reader's own
+  // limits are lower). Not thread-safe against readers; call once, before sharing the data.
   bool build(const EvalData& data) noexcept;
 
   bool empty() const noexcept { return bytes_ == nullptr; }

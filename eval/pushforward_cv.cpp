@@ -288,6 +288,22 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const PushforwardChannels& layout = data.pushforward.layout();
   const BinShift shift = bin_shift(data, frame, bin);
 
+  // Each image's value at h, once per estimate (on the stack up to kStackImages images, which every
+  // example fabric stays under; beyond, one allocation per estimate, made before any point is
+  // drawn so that a refusal leaves the generator as the other refusals do).
+  double stack_images[kStackImages];
+  std::vector<double> heap_images;
+  double* image_at_h = stack_images;
+  if (layout.images > kStackImages) {
+    try {
+      heap_images.resize(layout.images);
+    } catch (const std::bad_alloc&) {
+      return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
+                           "cannot allocate the images' values at h");
+    }
+    image_at_h = heap_images.data();
+  }
+
   // The cheap samples of g over B's two rectangles, split in proportion to their areas.
   const uint32_t m = remainder_samples(data, block, spp);
   uint32_t counts[2] = {0, 0};
@@ -304,7 +320,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   // in the generator's order (the residual's, then each rectangle's), and asks for their parallax
   // codes: they arrive while the constants and the base are computed.
   EarlyPoints early;
-  early.drawn = spp + counts[0] + counts[1] <= EarlyPoints::kCapacity;
+  early.drawn = uint64_t(spp) + counts[0] + counts[1] <= EarlyPoints::kCapacity;
   if (early.drawn) {
     auto draw = [&](double x, double y) {
       const uint64_t source = data.texel(int64_t(std::floor(x)), int64_t(std::floor(y)));
@@ -377,22 +393,8 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       prefetch_record(data, early.destination[i]);
     }
 
-  // Each image's value at h, once per estimate (on the stack up to kStackImages images, which every
-  // example fabric stays under; beyond, one allocation per estimate).
-  double stack_images[kStackImages];
-  std::vector<double> heap_images;
-  double* image_at_h = stack_images;
   if (k.specular) {
     const reader::CompressedRadianceTables& tables = data.specular.compressed;
-    if (layout.images > kStackImages) {
-      try {
-        heap_images.resize(layout.images);
-      } catch (const std::bad_alloc&) {
-        return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
-                             "cannot allocate the images' values at h");
-      }
-      image_at_h = heap_images.data();
-    }
     // The four bins' rows at once (a bilinear lookup with fewer bins pads with weight 0).
     const float* rows[4];
     double weights[4];

@@ -22,6 +22,7 @@
 #include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
+#include "tests/support/fabric_asset_sections.hpp"
 
 namespace {
 
@@ -30,9 +31,7 @@ using formats::Section;
 using reader::SectionType;
 
 std::vector<Section> sections_of(const Fabric& fabric) {
-  auto s = fabric_record_sections(fabric);
-  for (auto& m : compress::feature_map_sections(fabric.maps))
-    s.push_back(std::move(m));
+  auto s = test_support::fabric_asset_sections(fabric);
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;
 }

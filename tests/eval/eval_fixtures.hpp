@@ -1,4 +1,4 @@
-// Assets the evaluator tests share, baked once per test process with the built `clothbake`:
+// Assets the evaluator tests share, baked once per test process through the bake library:
 //   twill: the demo twill at 64^2 with raw and compressed tables (--keep-raw), its clusters split
 //          by yarn and a rank-4 visibility basis (the bake's defaults)
 //   flat:  a flat 16^2 fabric where every approximation of the paper is exact: constant height
@@ -14,7 +14,12 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
+#include "bake/pipeline/bake.hpp"
+#include "bake/stages/stages.hpp"
+#include "common/diagnostics.hpp"
+#include "compress/compress_settings.hpp"
 #include "tests/support/run_cli.hpp"
 
 namespace clothbake::eval_test {
@@ -111,12 +116,28 @@ inline void run_or_fail(const std::vector<std::string>& argv) {
   ASSERT_EQ(run.code, 0) << argv[0] << " failed:\n" << run.out << run.err;
 }
 
-inline void bake(const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {"bake"};
-  argv.insert(argv.end(), args.begin(), args.end());
-  argv.push_back("--quiet");
-  const test_support::CliRun run = test_support::run_clothbake(argv);
-  ASSERT_EQ(run.code, 0) << run.out << run.err;
+// Bakes the fabric `toml` into `out` in this process, through the bake library, as `clothbake bake
+// TOML -o OUT --quiet --no-cache [--keep-raw] [--stages ...]` does: the evaluator's tests need no
+// executable.
+inline void bake(const std::string& toml, const std::string& out, bool keep_raw = false,
+                 std::vector<std::string> stage_names = {}) {
+  pipeline::BakeRequest request;
+  request.fabric_path = toml;
+  request.output_path = out;
+  request.stages = std::move(stage_names);
+  if (keep_raw) {
+    compress::CompressRequest compression;
+    compression.keep_raw = true;
+    request.seeds.put(stages::kCompressSettingsArtifact, compression);
+  }
+  set_quiet(true);
+  try {
+    pipeline::bake(request, stages::bake_stages());
+  } catch (const std::exception& e) {
+    set_quiet(false);
+    FAIL() << toml << ": " << e.what();
+  }
+  set_quiet(false);
 }
 
 // Bakes the four assets into a fresh temporary folder (once per process).
@@ -140,10 +161,10 @@ inline const Assets& assets() {
     a.flat = path("flat.cbk");
     a.bare = path("bare.cbk");
     a.satin = path("satin.cbk");
-    bake({path("twill.toml"), "-o", a.twill, "--keep-raw"});
-    bake({path("flat.toml"), "-o", a.flat});
-    bake({path("satin.toml"), "-o", a.satin});
-    bake({path("twill.toml"), "-o", a.bare, "--stages", "feature_maps,parallax,cluster"});
+    bake(path("twill.toml"), a.twill, true);
+    bake(path("flat.toml"), a.flat);
+    bake(path("satin.toml"), a.satin);
+    bake(path("twill.toml"), a.bare, false, {"feature_maps", "parallax", "cluster"});
     return a;
   }();
   return baked;

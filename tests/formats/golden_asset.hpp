@@ -13,6 +13,7 @@
 #include "fabric/fabric_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
+#include "tests/support/fabric_asset_sections.hpp"
 
 namespace clothbake::test_support {
 
@@ -21,9 +22,7 @@ inline std::vector<formats::Section> golden_sections() {
   // The settings the checked-in file was written with (the metadata records them), whatever
   // today's defaults: the golden bytes test the writer, not the defaults.
   fabric.bake.visibility_dirs = 32;
-  std::vector<formats::Section> sections = fabric_record_sections(fabric);
-  for (auto& s : compress::feature_map_sections(fabric.maps))
-    sections.push_back(std::move(s));
+  std::vector<formats::Section> sections = test_support::fabric_asset_sections(fabric);
   nlohmann::json metadata;
   metadata["format"] = "clothbake-asset";
   metadata["tool"] = {{"name", "clothbake"}, {"version", "golden"}};

@@ -21,6 +21,7 @@
 #include "formats/writer/half_float.hpp"
 #include "formats/writer/map_encoding.hpp"
 #include "tests/formats/test_fabric.hpp"
+#include "tests/support/fabric_asset_sections.hpp"
 
 namespace {
 
@@ -148,9 +149,7 @@ Fabric noisy_fabric(int n) {
 }
 
 std::vector<Section> asset_sections(const Fabric& fabric) {
-  auto s = fabric_record_sections(fabric);
-  for (auto& m : compress::feature_map_sections(fabric.maps))
-    s.push_back(std::move(m));
+  auto s = test_support::fabric_asset_sections(fabric);
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;
 }

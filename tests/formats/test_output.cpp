@@ -24,6 +24,7 @@
 #include "formats/writer/asset_writer.hpp"
 #include "formats/writer/atomic_file.hpp"
 #include "tests/formats/test_fabric.hpp"
+#include "tests/support/fabric_asset_sections.hpp"
 #include "tests/support/input_error.hpp"
 
 namespace {
@@ -47,9 +48,7 @@ class Output : public ::testing::Test {
   }
   static std::vector<formats::Section> sections(int n, const std::string& name) {
     const Fabric fabric = test_support::make_test_fabric(n, name);
-    auto s = fabric_record_sections(fabric);
-    for (auto& m : compress::feature_map_sections(fabric.maps))
-      s.push_back(std::move(m));
+    auto s = test_support::fabric_asset_sections(fabric);
     s.push_back(formats::make_metadata_section({{"fabric", name}}));
     return s;
   }

@@ -17,6 +17,7 @@
 #include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
+#include "tests/support/fabric_asset_sections.hpp"
 
 namespace {
 
@@ -108,9 +109,7 @@ TEST(RoundTrip, FabricSections) {
   // The test fabric's values are codes (6/64 heights, axes, 0, 1 and halves would be within the
   // unorm bound): compare within the codes' bounds.
   const Fabric fabric = test_support::make_test_fabric(16);
-  std::vector<Section> sections = fabric_record_sections(fabric);
-  for (auto& s : compress::feature_map_sections(fabric.maps))
-    sections.push_back(std::move(s));
+  std::vector<Section> sections = test_support::fabric_asset_sections(fabric);
   sections.push_back(metadata());
   Opened opened(formats::serialize_asset(sections));
   ASSERT_TRUE(opened.status.ok()) << opened.status.message();

@@ -11,6 +11,7 @@
 #include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
+#include "tests/support/fabric_asset_sections.hpp"
 
 namespace {
 
@@ -20,9 +21,7 @@ using reader::SectionType;
 
 // The fabric's records and coded maps (test_map_encoding.cpp plants hostile codes in the maps).
 std::vector<Section> fabric_sections(const Fabric& fabric) {
-  auto s = fabric_record_sections(fabric);
-  for (auto& m : compress::feature_map_sections(fabric.maps))
-    s.push_back(std::move(m));
+  auto s = test_support::fabric_asset_sections(fabric);
   s.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
   return s;
 }

@@ -12,6 +12,7 @@
 #include "formats/writer/asset_writer.hpp"
 #include "tables/radiance_fill.hpp"
 #include "tables/radiance_sections.hpp"
+#include "tests/support/fabric_asset_sections.hpp"
 
 namespace clothbake::verify_testing {
 
@@ -36,9 +37,7 @@ inline std::vector<formats::Section> asset_sections(
   vc.visibility_dirs = 4;
   vc.labels = block_labels(n, clusters);
   vc.mean_visibility.assign(std::size_t(clusters) * 16, 1.0f);
-  std::vector<formats::Section> sections = fabric_record_sections(fabric);
-  for (auto& s : compress::feature_map_sections(fabric.maps))
-    sections.push_back(std::move(s));
+  std::vector<formats::Section> sections = test_support::fabric_asset_sections(fabric);
   for (auto& s : cluster::cluster_sections(vc))
     sections.push_back(std::move(s));
   auto inputs = tables::radiance_inputs(fabric, vc.labels, clusters);
