@@ -7,7 +7,7 @@
 // map, the basis coefficients, the gap and colour maps, the yarn map, the cell map, the first
 // coefficient index and the coefficients), each a cache miss for the cheap samples of g, which
 // land at random texels. A record holds the same values, bit for bit (so g and the push-forward
-// sums its base is integrated from stay one function), in one or two cache lines:
+// sums its base is integrated from stay one function), in one record of one to three cache lines:
 //
 //   offset  type            field
 //   0       u16             first_image   the cell's first compressed image (0 without a cell)
@@ -48,8 +48,8 @@ class ControlVariateTexels {
   static_assert(sizeof(Header) == 24);
 
   // Builds the records of every texel from `data`'s open views (the compressed specular tables
-  // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 6.3 MB
-  // for the 256^2 satin, rank 4, cells of about 27 images: 96 bytes a texel) or a value does not
+  // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 9.4 MB
+  // for the 256^2 satin, rank 4, widest cell 53 images: 144 bytes a texel) or a value does not
   // fit its field (more than 65 535 images or yarns, more than 256 clusters: the reader's own
   // limits are lower). Not thread-safe against readers; call once, before sharing the data.
   bool build(const EvalData& data) noexcept;

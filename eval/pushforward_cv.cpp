@@ -88,18 +88,32 @@ inline void prefetch_record(const EvalData& data, uint64_t t) noexcept {
   prefetch(record + stride - 1);
 }
 
-// The points of an estimate with few samples, drawn before its constants (pushforward_control_
-// variates): position, source texel, destination texel.
-struct EarlyPoints {
-  static constexpr uint32_t kCapacity = 64;
+// Up to kCapacity sample points of one view bin in two stages, so that their cache misses overlap:
+// add() keeps a point and prefetches its source texel's parallax code; resolve() computes every
+// kept point's destination texel and prefetches its record. The caller evaluates afterwards.
+template <uint32_t kCapacity>
+struct PointBatch {
   struct Point {
     double x, y;
     uint64_t source;
   };
-  bool drawn = false;
   uint32_t count = 0;
   Point points[kCapacity];
   uint64_t destination[kCapacity];
+
+  void add(const EvalData& data, const BinShift& shift, double x, double y) noexcept {
+    const uint64_t source = data.texel(int64_t(std::floor(x)), int64_t(std::floor(y)));
+    prefetch(source_code(shift, source));
+    points[count++] = {x, y, source};
+  }
+  void resolve(const EvalData& data, const BinShift& shift) noexcept {
+    for (uint32_t i = 0; i < count; ++i) {
+      int64_t tx = 0, ty = 0;
+      shifted_destination(shift, points[i].source, points[i].x, points[i].y, &tx, &ty);
+      destination[i] = data.texel(tx, ty);
+      prefetch_record(data, destination[i]);
+    }
+  }
 };
 
 // Every cache line of [begin, begin + bytes).
@@ -117,30 +131,16 @@ inline void prefetch_lines(const void* begin, std::size_t bytes) noexcept {
 template <class Visit>
 void visit_destinations(const EvalData& data, const BinShift& shift, const Footprint& rect,
                         uint32_t count, Rng& rng, Visit visit) {
-  constexpr uint32_t kChunk = 16;
-  struct Point {
-    double x, y;
-    uint64_t source;
-  };
-  Point chunk[kChunk];
-  uint64_t destination[kChunk];
-  uint32_t filled = 0;
+  PointBatch<16> chunk;
   auto flush = [&] {
-    for (uint32_t i = 0; i < filled; ++i) {
-      int64_t tx = 0, ty = 0;
-      shifted_destination(shift, chunk[i].source, chunk[i].x, chunk[i].y, &tx, &ty);
-      destination[i] = data.texel(tx, ty);
-      prefetch_record(data, destination[i]);
-    }
-    for (uint32_t i = 0; i < filled; ++i)
-      visit(destination[i]);
-    filled = 0;
+    chunk.resolve(data, shift);
+    for (uint32_t i = 0; i < chunk.count; ++i)
+      visit(chunk.destination[i]);
+    chunk.count = 0;
   };
   stratified_points(rect, count, rng, [&](double x, double y) {
-    const uint64_t source = data.texel(int64_t(std::floor(x)), int64_t(std::floor(y)));
-    prefetch(source_code(shift, source));
-    chunk[filled++] = {x, y, source};
-    if (filled == kChunk) flush();
+    chunk.add(data, shift, x, y);
+    if (chunk.count == 16) flush();
   });
   flush();
 }
@@ -319,14 +319,11 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   // An estimate with few samples (2 spp and a remainder of a few dozen) draws all its points now,
   // in the generator's order (the residual's, then each rectangle's), and asks for their parallax
   // codes: they arrive while the constants and the base are computed.
-  EarlyPoints early;
-  early.drawn = uint64_t(spp) + counts[0] + counts[1] <= EarlyPoints::kCapacity;
-  if (early.drawn) {
-    auto draw = [&](double x, double y) {
-      const uint64_t source = data.texel(int64_t(std::floor(x)), int64_t(std::floor(y)));
-      prefetch(source_code(shift, source));
-      early.points[early.count++] = {x, y, source};
-    };
+  constexpr uint32_t kEarlyPoints = 64;
+  PointBatch<kEarlyPoints> early;
+  const bool drawn_early = uint64_t(spp) + counts[0] + counts[1] <= kEarlyPoints;
+  if (drawn_early) {
+    auto draw = [&](double x, double y) { early.add(data, shift, x, y); };
     stratified_points(p, spp, rng, draw);
     for (int r = 0; r < 2; ++r)
       if (counts[r] > 0) stratified_points(block.rects[r], counts[r], rng, draw);
@@ -384,14 +381,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
   if (k.delta) k.delta_scale = t_sheen;
 
-  if (early.drawn)  // the destinations, and their records asked for before the base is computed
-    for (uint32_t i = 0; i < early.count; ++i) {
-      int64_t tx = 0, ty = 0;
-      const EarlyPoints::Point& point = early.points[i];
-      shifted_destination(shift, point.source, point.x, point.y, &tx, &ty);
-      early.destination[i] = data.texel(tx, ty);
-      prefetch_record(data, early.destination[i]);
-    }
+  early.resolve(data, shift);  // the records asked for before the base is computed
 
   if (k.specular) {
     const reader::CompressedRadianceTables& tables = data.specular.compressed;
@@ -453,7 +443,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - g[l];
   };
-  if (early.drawn)
+  if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
       residual_sample(early.destination[i]);
   else
@@ -466,7 +456,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     if (counts[r] == 0) continue;
     Rgb piece[model::kLobeCount];
     auto cheap_sample = [&](uint64_t t) { control_variate(data, k, t, piece); };
-    if (early.drawn)
+    if (drawn_early)
       for (uint32_t i = 0; i < counts[r]; ++i)
         cheap_sample(early.destination[next++]);
     else

@@ -32,6 +32,17 @@ struct FabricMaps {
   std::vector<Vec3f> albedo;      // linear RGB base colour of the yarn at this texel, [0, 1]
 
   std::size_t texel_count() const { return std::size_t(resolution) * std::size_t(resolution); }
+  // Sets the resolution to n and every map to n^2 value-initialised texels (may throw bad_alloc).
+  void allocate(int n) {
+    resolution = n;
+    const std::size_t count = texel_count();
+    height.assign(count, 0.f);
+    tangent.assign(count, Vec3f{});
+    normal.assign(count, Vec3f{});
+    gap.assign(count, 0.f);
+    yarn_id.assign(count, 0);
+    albedo.assign(count, Vec3f{});
+  }
   std::size_t index(int x, int y) const {
     return std::size_t(y) * std::size_t(resolution) + std::size_t(x);
   }

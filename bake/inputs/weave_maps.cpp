@@ -329,14 +329,7 @@ FabricMaps generate_weave_maps(const WeaveSpec& spec, int resolution, const std:
     rows[std::size_t(i)] = surface.locate_pick(c * surface.tile().height_mm);
   }
   FabricMaps maps;
-  maps.resolution = n;
-  const std::size_t count = maps.texel_count();
-  maps.height.resize(count);
-  maps.tangent.resize(count);
-  maps.normal.resize(count);
-  maps.gap.resize(count);
-  maps.yarn_id.resize(count);
-  maps.albedo.resize(count);
+  maps.allocate(n);
   auto to_float3 = [](const model::Vec3d& v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
   tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& range) {
     for (int y = range.begin(); y < range.end(); ++y) {

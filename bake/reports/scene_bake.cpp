@@ -113,6 +113,8 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
     const std::string key = asset_key(fabric, codecs) + (keep_raw_tables ? "-raw" : "");
     const std::string stem = fs::path(loaded.fabrics[k]).stem().string();
     const fs::path asset = fs::path(cache) / cache::kAssetFolder / (stem + "-" + key + ".cbk");
+    chosen.push_back(asset.string());
+    if (stage_cache) stage_cache->keep_file(asset.string());
     // One process bakes a given asset; a concurrent render of the same fabric waits, then uses it.
     const FileLock lock(fs::path(cache) / "locks" / ("asset-" + key + ".lock"));
     std::error_code ec;
@@ -123,10 +125,9 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
         cache::CacheOptions options;
         options.dir = cache;
         stage_cache = std::make_unique<cache::DiskCache>(options, codecs);
-        for (const std::string& earlier : chosen)
-          stage_cache->keep_file(earlier);
+        for (const std::string& kept : chosen)  // this one included
+          stage_cache->keep_file(kept);
       }
-      stage_cache->keep_file(asset.string());
       // From the path, as `clothbake bake f.toml` does (the asset's metadata lists load_fabric
       // among the stages), so that the asset has the bytes of that command's.
       // On a terminal the bake says what it is doing (a scene's first render can bake for
@@ -146,8 +147,6 @@ void bake_scene_fabrics(inputs::LoadedScene& loaded, const std::string& cache_op
     }
     loaded.scene.objects[k].asset = asset.string();
     asset_of[loaded.fabrics[k]] = asset.string();
-    chosen.push_back(asset.string());
-    if (stage_cache) stage_cache->keep_file(asset.string());
   }
 }
 

@@ -14,14 +14,7 @@ namespace clothbake::test_support {
 inline Fabric make_test_fabric(int n, const std::string& name = "test-plain") {
   Fabric f;
   f.name = name;
-  f.maps.resolution = n;
-  const std::size_t texels = std::size_t(n) * std::size_t(n);
-  f.maps.height.resize(texels);
-  f.maps.tangent.resize(texels);
-  f.maps.normal.resize(texels);
-  f.maps.gap.resize(texels);
-  f.maps.yarn_id.resize(texels);
-  f.maps.albedo.resize(texels);
+  f.maps.allocate(n);
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
       const std::size_t i = f.maps.index(x, y);
