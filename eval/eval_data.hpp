@@ -14,9 +14,9 @@
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
 #include "formats/reader/parallax_sections.hpp"
-#include "formats/reader/radiance_tables.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "model/cloth_bsdf.hpp"
 
 namespace clothbake::eval {

@@ -15,7 +15,7 @@
 #include "common/error.hpp"
 #include "compress/directional_texels.hpp"
 #include "formats/reader/compressed_tables.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/splitmix64.hpp"
 #include "tables/radiance_fill.hpp"
@@ -245,8 +245,7 @@ void throughput(const reader::Asset& asset, const reader::CompressedRadianceTabl
       std::vector<formats::Section> sections = tables::radiance_sections(std::move(set));
       bytes = formats::serialize_asset(sections);
     }
-    const reader::Status s =
-        built.open_memory(bytes.data(), bytes.size(), {reader::Verify::Structure});
+    const reader::Status s = built.open_memory(bytes.data(), bytes.size());
     if (!s.ok())
       throw_internal_error(std::string("verify: raw tables built in memory: ") + s.message());
     const reader::Status t = raw_tables.open(built, kind);

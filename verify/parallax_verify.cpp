@@ -77,8 +77,7 @@ ParallaxVerifyReport verify_parallax(const reader::Asset& asset, const Fabric& f
       std::vector<formats::Section> sections = raycast::parallax_sections(std::move(table));
       bytes = formats::serialize_asset(sections);
     }
-    const reader::Status s =
-        built.open_memory(bytes.data(), bytes.size(), {reader::Verify::Structure});
+    const reader::Status s = built.open_memory(bytes.data(), bytes.size());
     if (!s.ok())
       throw_internal_error(std::string("verify: parallax built in memory: ") + s.message());
     const reader::Status t = raw.open(built, reader::ParallaxSource::Raw);

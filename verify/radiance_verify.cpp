@@ -12,7 +12,7 @@
 
 #include "common/error.hpp"
 #include "formats/reader/cluster_sections.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/open_asset.hpp"
 #include "model/sggx.hpp"
 #include "tables/half_vector_bins.hpp"

@@ -22,7 +22,8 @@
 #include "formats/reader/asset.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
+#include "formats/validate/checksums.hpp"
 #include "formats/writer/atomic_file.hpp"
 #include "formats/writer/open_asset.hpp"
 #include "formats/writer/valid_asset.hpp"
@@ -145,7 +146,7 @@ Image section_export_image(const Asset& asset, const ExportOptions& o, SectionTy
   SectionInfo section;
   Status status = asset.find(type, o.instance, &section);
   if (!status.ok()) throw_input_error(o.asset + ": " + status.message());
-  status = asset.verify_section(section);
+  status = reader::verify_section(asset, section);
   if (!status.ok()) throw Error(ExitCode::InvalidAsset, o.asset + ": " + formats::describe(status));
   const std::string label = o.section + " (instance " + std::to_string(o.instance) + ")";
   // The coded feature maps (16-bit codes, entropy-coded) are exported as the floats the reader
@@ -259,7 +260,7 @@ Action setup_export(CLI::App& app) {
       for (uint32_t i = 0; i < asset.section_count(); ++i) {
         SectionInfo s;
         if (!asset.section(i, &s).ok() || s.type != type) continue;
-        if (const Status v = asset.verify_section(s); !v.ok())
+        if (const Status v = reader::verify_section(asset, s); !v.ok())
           throw Error(ExitCode::InvalidAsset, o->asset + ": " + formats::describe(v));
       }
       image = radiance_image(asset, o->asset, type == SectionType::RadianceCompressedTables,

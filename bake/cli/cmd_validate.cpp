@@ -48,7 +48,7 @@ Action setup_validate(CLI::App& app) {
   return [path, json] {
     std::vector<Finding> findings;
     Asset asset;
-    const Status status = asset.open_file(path->c_str(), {Verify::Structure});
+    const Status status = asset.open_file(path->c_str());
     if (status.code() == ErrorCode::Io || status.code() == ErrorCode::InvalidArgument)
       throw Error(formats::exit_code_of(status), formats::describe(status));
     if (!status.ok()) {

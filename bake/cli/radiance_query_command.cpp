@@ -6,7 +6,7 @@
 
 #include "common/error.hpp"
 #include "formats/reader/compressed_tables.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/open_asset.hpp"
 
 namespace clothbake::cli {

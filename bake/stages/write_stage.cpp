@@ -142,7 +142,7 @@ void run_write(StageContext& ctx) {
   summary.pending = pending;
   summary.size_bytes = formats::asset_size(formats::SectionRefs(sections));
   reader::Asset asset;
-  const reader::Status status = asset.open_file(summarised.c_str(), {reader::Verify::Structure});
+  const reader::Status status = asset.open_file(summarised.c_str());
 
   if (!status.ok())
     throw_internal_error(std::string("the asset just written does not open: ") + status.message());

@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
   };
   for (int a = 1; a < argc; ++a) {
     reader::Asset asset;
-    if (!asset.open_file(argv[a], {reader::Verify::Structure}).ok()) {
+    if (!asset.open_file(argv[a]).ok()) {
       std::fprintf(stderr, "cannot open %s\n", argv[a]);
       return 2;
     }

@@ -19,7 +19,7 @@
 #include "compress/compressed_set.hpp"
 #include "compress/cpca.hpp"
 #include "formats/reader/compressed_tables.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/splitmix64.hpp"
 #include "tables/radiance_fill.hpp"
@@ -159,7 +159,7 @@ void BM_QueryRaw(benchmark::State& state) {
   }();
   reader::Asset asset;
   reader::RawRadianceTables t;
-  if (!asset.open_memory(bytes.data(), bytes.size(), {reader::Verify::Structure}).ok() ||
+  if (!asset.open_memory(bytes.data(), bytes.size()).ok() ||
       !t.open(asset, reader::RadianceTableKind::Specular).ok()) {
     state.SkipWithError("cannot open");
     return;

@@ -18,6 +18,7 @@
 
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
+#include "formats/validate/checksums.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "raycast/parallax.hpp"
 #include "raycast/raycast_sections.hpp"
@@ -50,7 +51,7 @@ struct Fixture {
       return bytes.size();
     };
     const std::size_t raw_size = store(rs, &raw_bytes);
-    (void)raw_asset.open_memory(raw_bytes.data(), raw_size, {reader::Verify::Structure});
+    (void)raw_asset.open_memory(raw_bytes.data(), raw_size);
     (void)raw.open(raw_asset);
   }
 };
@@ -115,7 +116,7 @@ struct EntropyFixture {
     size = b.size();
     bytes.resize((size + 7) / 8);
     std::memcpy(bytes.data(), b.data(), size);
-    ok = asset.open_memory(bytes.data(), size, {reader::Verify::Structure}).ok() &&
+    ok = asset.open_memory(bytes.data(), size).ok() &&
          view.open(asset, reader::ParallaxSource::Compressed).ok();
   }
 };
@@ -132,8 +133,8 @@ void BM_EntropyOpenWithChecksums(benchmark::State& state) {
   for (auto _ : state) {
     reader::Asset a;
     reader::ParallaxView v;
-    benchmark::DoNotOptimize(
-        a.open_memory(f.bytes.data(), f.size, {reader::Verify::Checksums}).ok() && v.open(a).ok());
+    benchmark::DoNotOptimize(a.open_memory(f.bytes.data(), f.size).ok() &&
+                             reader::verify_checksums(a).ok() && v.open(a).ok());
   }
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(f.size));
 }

@@ -20,7 +20,7 @@
 #include "benchmarks/compress/stand_in_clusters.hpp"
 #include "compress/compressed_set.hpp"
 #include "formats/reader/compressed_tables.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
 #include "model/splitmix64.hpp"
@@ -179,7 +179,7 @@ int main(int argc, char** argv) {
     auto rb = formats::serialize_asset(rs);
     rs.clear();
     reader::Asset ra;
-    ra.open_memory(rb.data(), rb.size(), {reader::Verify::Structure});
+    ra.open_memory(rb.data(), rb.size());
     reader::RawRadianceTables raw;
     auto st3 = raw.open(ra, reader::RadianceTableKind::Specular);
     if (!st3.ok()) {

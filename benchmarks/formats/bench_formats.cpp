@@ -13,8 +13,9 @@
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
-#include "formats/reader/xxh64.hpp"
+#include "formats/validate/checksums.hpp"
 #include "formats/validate/validate.hpp"
+#include "formats/validate/xxh64.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
 
@@ -54,7 +55,7 @@ void BM_OpenStructure(benchmark::State& state) {
   const auto& words = asset_words(int(state.range(0)), &size);
   for (auto _ : state) {
     reader::Asset asset;
-    auto status = asset.open_memory(words.data(), size, {reader::Verify::Structure});
+    auto status = asset.open_memory(words.data(), size);
     benchmark::DoNotOptimize(status);
   }
   state.counters["asset_MB"] = double(size) / 1e6;
@@ -66,7 +67,8 @@ void BM_OpenWithChecksums(benchmark::State& state) {
   const auto& words = asset_words(int(state.range(0)), &size);
   for (auto _ : state) {
     reader::Asset asset;
-    auto status = asset.open_memory(words.data(), size, {reader::Verify::Checksums});
+    auto status = asset.open_memory(words.data(), size);
+    if (status.ok()) status = reader::verify_checksums(asset);
     if (!status.ok()) state.SkipWithError(status.message());
     benchmark::DoNotOptimize(status);
   }
@@ -79,8 +81,7 @@ void BM_ValidateDeep(benchmark::State& state) {
   std::size_t size;
   const auto& words = asset_words(int(state.range(0)), &size);
   reader::Asset asset;
-  if (!asset.open_memory(words.data(), size, {reader::Verify::Structure}).ok())
-    state.SkipWithError("open failed");
+  if (!asset.open_memory(words.data(), size).ok()) state.SkipWithError("open failed");
   for (auto _ : state)
     benchmark::DoNotOptimize(reader::validate_asset(asset, nullptr, nullptr));
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(size));
@@ -91,8 +92,7 @@ void BM_FindSection(benchmark::State& state) {
   std::size_t size;
   const auto& words = asset_words(2048, &size);  // 73 sections
   reader::Asset asset;
-  if (!asset.open_memory(words.data(), size, {reader::Verify::Structure}).ok())
-    state.SkipWithError("open failed");
+  if (!asset.open_memory(words.data(), size).ok()) state.SkipWithError("open failed");
   uint32_t instance = 0;
   for (auto _ : state) {
     reader::ArrayView<float> view;
@@ -108,8 +108,7 @@ void BM_ReadFeatureMaps(benchmark::State& state) {
   std::size_t size;
   const auto& words = asset_words(1024, &size);
   reader::Asset asset;
-  if (!asset.open_memory(words.data(), size, {reader::Verify::Structure}).ok())
-    state.SkipWithError("open failed");
+  if (!asset.open_memory(words.data(), size).ok()) state.SkipWithError("open failed");
   for (auto _ : state) {
     reader::FeatureMaps maps;
     auto status = reader::read_feature_maps(asset, &maps);

@@ -9,8 +9,6 @@
 #include <cstdio>
 #include <cstring>
 
-#include "formats/reader/xxh64.hpp"
-
 #if defined(__unix__) || defined(__APPLE__)
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -121,7 +119,7 @@ void Asset::close() noexcept {
   header_ = FileHeader{};
 }
 
-Status Asset::open_file(const char* path, const OpenOptions& options) noexcept {
+Status Asset::open_file(const char* path) noexcept {
   close();
   if (path == nullptr) return Status::error(ErrorCode::InvalidArgument, Check::None, "null path");
 #ifdef CLOTHBAKE_READER_POSIX
@@ -144,7 +142,7 @@ Status Asset::open_file(const char* path, const OpenOptions& options) noexcept {
   if (size == 0) {
     ::close(fd);
     static const uint64_t empty = 0;
-    status = open_memory(&empty, 0, options);
+    status = open_memory(&empty, 0);
   } else {
     void* map = mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
     ::close(fd);
@@ -154,7 +152,7 @@ Status Asset::open_file(const char* path, const OpenOptions& options) noexcept {
       s.prefix(path);
       return s;
     }
-    status = open_memory(map, size, options);
+    status = open_memory(map, size);
     if (status.ok()) {
       mapping_ = map;
       mapping_size_ = size;
@@ -165,7 +163,6 @@ Status Asset::open_file(const char* path, const OpenOptions& options) noexcept {
   if (!status.ok()) status.prefix(path);
   return status;
 #else
-  (void)options;
   Status s = Status::error(ErrorCode::Unsupported, Check::None,
                            "open_file needs POSIX mmap on this platform; use open_memory");
   s.prefix(path);
@@ -173,7 +170,7 @@ Status Asset::open_file(const char* path, const OpenOptions& options) noexcept {
 #endif
 }
 
-Status Asset::open_memory(const void* data, std::size_t size, const OpenOptions& options) noexcept {
+Status Asset::open_memory(const void* data, std::size_t size) noexcept {
   close();
   if (data == nullptr) return Status::error(ErrorCode::InvalidArgument, Check::None, "null buffer");
   if (reinterpret_cast<uintptr_t>(data) % 8 != 0)
@@ -220,16 +217,6 @@ Status Asset::open_memory(const void* data, std::size_t size, const OpenOptions&
     return Status::error(ErrorCode::Truncated, Check::Truncated,
                          "truncated: %zu bytes, the section table ends at byte %" PRIu64, size,
                          table_end);
-
-  Xxh64Stream hash(0);
-  hash.update(bytes, kHeaderChecksumOffset);
-  hash.update(bytes + sizeof(FileHeader), std::size_t(table_bytes));
-  const uint64_t computed = hash.digest();
-  if (computed != header.header_checksum)
-    return Status::error(ErrorCode::Corrupt, Check::HeaderChecksum,
-                         "header checksum mismatch (stored %016" PRIx64 ", computed %016" PRIx64
-                         "): the header or section table is corrupt",
-                         header.header_checksum, computed);
 
   if (header.file_size % kSectionAlignment != 0 || header.file_size < table_end)
     return Status::error(ErrorCode::Malformed, Check::HeaderField,
@@ -325,21 +312,6 @@ Status Asset::open_memory(const void* data, std::size_t size, const OpenOptions&
     }
   }
 
-  if (options.verify == Verify::Checksums) {
-    for (uint32_t i = 0; i < header.section_count; ++i) {
-      SectionEntry e;
-      std::memcpy(&e, bytes + sizeof(FileHeader) + uint64_t(i) * header.section_entry_size,
-                  sizeof e);
-      const uint64_t sum = xxh64(bytes + e.offset, std::size_t(e.stored_size), 0);
-      if (sum != e.checksum)
-        return Status::error(ErrorCode::Corrupt, Check::SectionChecksum,
-                             "%s: checksum mismatch (stored %016" PRIx64 ", computed %016" PRIx64
-                             "): its payload is corrupt",
-                             describe(what_buffer, sizeof what_buffer, i, e.type, e.instance),
-                             e.checksum, sum);
-    }
-  }
-
   bytes_ = bytes;
   size_ = size;
   header_ = header;
@@ -400,22 +372,6 @@ Status Asset::find(SectionType type, uint32_t instance, SectionInfo* out) const 
   return Status::error(ErrorCode::NotFound, Check::MissingSection,
                        "no section of type 0x%04x (instance %u)", unsigned(type),
                        unsigned(instance));
-}
-
-Status Asset::verify_section(const SectionInfo& section) const noexcept {
-  if (!is_open() || section.index >= header_.section_count)
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "bad section");
-  // Use the table, not the caller's copy, so that a modified SectionInfo cannot point outside.
-  const SectionEntry e = entry(section.index);
-  const uint64_t sum = xxh64(bytes_ + e.offset, std::size_t(e.stored_size), 0);
-  if (sum != e.checksum) {
-    char what[96];
-    return Status::error(ErrorCode::Corrupt, Check::SectionChecksum,
-                         "%s: checksum mismatch (stored %016" PRIx64 ", computed %016" PRIx64 ")",
-                         describe(what, sizeof what, section.index, e.type, e.instance), e.checksum,
-                         sum);
-  }
-  return {};
 }
 
 Status Asset::typed_section(SectionType type, uint32_t instance, ElementType element,

@@ -15,7 +15,8 @@
 //    (each bounded: docs/format.md).
 //  - Safe on untrusted bytes: open() checks the header, the table and every offset and size
 //    (overflow-safe) before anything is dereferenced; a bad file yields a Status with a stable
-//    check ID, never a crash or an out-of-bounds read.
+//    check ID, never a crash or an out-of-bounds read. open() reads no payload byte and verifies
+//    no checksum: that is opt-in (formats/validate/checksums.hpp, clothbake_reader_validate).
 //  - Views point into the mapped file or the caller's buffer: they are valid while the Asset (and,
 //    for open_memory, the buffer) lives. A mapped file must not be truncated by another process
 //    while open (POSIX delivers SIGBUS); clothbake's writer never modifies an asset in place.
@@ -31,14 +32,6 @@
 #include "formats/reader/status.hpp"
 
 namespace clothbake::reader {
-
-// How much open() verifies. Structure: header, version, table, every offset/size/shape and the
-// header checksum (O(section count)). Checksums: also every section's checksum (reads every byte).
-enum class Verify : uint8_t { Structure, Checksums };
-
-struct OpenOptions {
-  Verify verify = Verify::Checksums;
-};
 
 // IEEE binary16 element (ElementType::F16); convert with half_to_float().
 struct Half {
@@ -137,15 +130,15 @@ class Asset {
   Asset(const Asset&) = delete;
   Asset& operator=(const Asset&) = delete;
 
-  // Maps the file read-only and checks it (see Verify). Messages start with the path. On error
-  // the Asset stays closed. Errors: Io (missing, not a regular file, cannot map) and every
-  // open_memory error.
-  Status open_file(const char* path, const OpenOptions& options = {}) noexcept;
+  // Maps the file read-only and checks its structure (header, version, table, every offset, size
+  // and shape: O(section count)). Messages start with the path. On error the Asset stays closed.
+  // Errors: Io (missing, not a regular file, cannot map) and every open_memory error.
+  Status open_file(const char* path) noexcept;
 
   // Uses `size` bytes at `data` (not copied; must outlive the Asset and stay unchanged). `data`
   // must be 8-byte aligned (InvalidArgument otherwise) so that typed views are aligned.
-  // Errors: NotAnAsset, Truncated, UnsupportedVersion, Corrupt, Malformed, Unsupported.
-  Status open_memory(const void* data, std::size_t size, const OpenOptions& options = {}) noexcept;
+  // Errors: NotAnAsset, Truncated, UnsupportedVersion, Malformed, Unsupported.
+  Status open_memory(const void* data, std::size_t size) noexcept;
 
   void close() noexcept;
   bool is_open() const noexcept { return bytes_ != nullptr; }
@@ -153,7 +146,8 @@ class Asset {
   uint16_t version_major() const noexcept { return header_.version_major; }
   uint16_t version_minor() const noexcept { return header_.version_minor; }
   uint64_t file_size() const noexcept { return size_; }
-  // The header checksum: a hash of the table, hence of every section's content.
+  // The stored header checksum: a hash of the table, hence of every section's content (not
+  // verified by open(); checksums.hpp verifies it).
   uint64_t content_hash() const noexcept { return header_.header_checksum; }
   const FileHeader& header() const noexcept { return header_; }
   // The whole file (file_size() bytes).
@@ -164,8 +158,6 @@ class Asset {
   Status section(uint32_t index, SectionInfo* out) const noexcept;
   // The section of this type and instance (binary search); NotFound if absent.
   Status find(SectionType type, uint32_t instance, SectionInfo* out) const noexcept;
-  // Recomputes one section's checksum (for assets opened with Verify::Structure). Corrupt if off.
-  Status verify_section(const SectionInfo& section) const noexcept;
 
   // Typed view of a Raw section. Errors: NotFound, Unsupported (codec), WrongType (element type).
   template <class T>

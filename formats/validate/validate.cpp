@@ -13,9 +13,9 @@
 #include "formats/reader/map_entropy.hpp"
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
-#include "formats/reader/radiance_tables.hpp"
 #include "formats/reader/visibility_sections.hpp"
-#include "formats/reader/xxh64.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
+#include "formats/validate/checksums.hpp"
 #include "formats/validate/metadata_limits.hpp"
 #include "model/parameter_ranges.hpp"
 
@@ -603,6 +603,7 @@ ValidationSummary validate_asset(const Asset& asset, FindingCallback callback,
   const FileHeader& header = asset.header();
   const unsigned char* bytes = asset.bytes();
   const bool newer_minor = header.version_minor > kFormatMinor;
+  if (const Status h = verify_header_checksum(asset); !h.ok()) r.report_status(h, kNoSection);
   if (newer_minor)
     r.report(Check::NewerMinor, kNoSection,
              "asset format %u.%u is newer than this reader (%u.%u): sections it does not know are "
@@ -627,7 +628,7 @@ ValidationSummary validate_asset(const Asset& asset, FindingCallback callback,
       r.report(Check::Padding, kNoSection,
                "padding byte at offset %" PRIu64 " (before %s) is not zero", cursor + at, what);
     cursor = s.offset + s.stored_size;
-    Status status = asset.verify_section(s);
+    Status status = verify_section(asset, s);
     if (!status.ok()) {
       r.report_status(status, i);
       continue;  // the content is not trustworthy: skip its semantic checks

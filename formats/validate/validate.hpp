@@ -35,8 +35,8 @@ struct ValidationSummary {
   uint32_t warnings = 0;
 };
 
-// Runs every check on an open asset (open it with Verify::Structure to see every checksum
-// failure here rather than the first one from open()). `callback` may be null.
+// Runs every check on an open asset, the header checksum and every section checksum included
+// (each failure is a finding). `callback` may be null.
 ValidationSummary validate_asset(const Asset& asset, FindingCallback callback, void* user) noexcept;
 
 // Convenience: reports the open() failure of a file as a finding (for a uniform listing).

@@ -31,7 +31,11 @@ void throw_if_failed(const reader::Status& status, const std::string& context) {
 
 reader::Asset open_asset(const std::string& path, reader::Verify verify) {
   reader::Asset asset;
-  const reader::Status status = asset.open_file(path.c_str(), {verify});
+  reader::Status status = asset.open_file(path.c_str());
+  if (status.ok() && verify == reader::Verify::Checksums) {
+    status = reader::verify_checksums(asset);
+    if (!status.ok()) status.prefix(path.c_str());
+  }
   if (!status.ok()) throw Error(exit_code_of(status), describe(status));
   return asset;
 }

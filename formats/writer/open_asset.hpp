@@ -5,6 +5,7 @@
 
 #include "common/error.hpp"
 #include "formats/reader/asset.hpp"
+#include "formats/validate/checksums.hpp"
 
 namespace clothbake::formats {
 
@@ -21,7 +22,8 @@ std::string describe(const reader::Status& status);
 // "CONTEXT: " + describe(). Returns when the status is Ok.
 void throw_if_failed(const reader::Status& status, const std::string& context);
 
-// Opens an asset or throws clothbake::Error with exit_code_of() and describe().
+// Opens an asset (structure, and with Verify::Checksums every checksum: checksums.hpp) or throws
+// clothbake::Error with exit_code_of() and describe(); the message starts with the path.
 reader::Asset open_asset(const std::string& path, reader::Verify verify);
 
 }  // namespace clothbake::formats

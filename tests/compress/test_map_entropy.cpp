@@ -82,7 +82,7 @@ struct Opened {
     const auto bytes = formats::serialize_asset(sections);
     words.resize((bytes.size() + 7) / 8);
     std::memcpy(words.data(), bytes.data(), bytes.size());
-    status = asset.open_memory(words.data(), bytes.size(), {reader::Verify::Structure});
+    status = asset.open_memory(words.data(), bytes.size());
   }
 };
 

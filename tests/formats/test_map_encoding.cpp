@@ -160,7 +160,7 @@ struct Opened {
   reader::Status status;
   explicit Opened(const std::vector<std::byte>& bytes) : words((bytes.size() + 7) / 8) {
     std::memcpy(words.data(), bytes.data(), bytes.size());
-    status = asset.open_memory(words.data(), bytes.size(), {reader::Verify::Structure});
+    status = asset.open_memory(words.data(), bytes.size());
   }
 };
 

@@ -14,6 +14,7 @@
 #include "fabric/fabric_sections.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/validate/checksums.hpp"
 #include "formats/validate/validate.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "tests/formats/test_fabric.hpp"
@@ -35,7 +36,9 @@ struct Opened {
                   reader::Verify verify = reader::Verify::Checksums)
       : words((bytes.size() + 7) / 8) {
     std::memcpy(words.data(), bytes.data(), bytes.size());
-    status = asset.open_memory(words.data(), bytes.size(), {verify});
+    status = asset.open_memory(words.data(), bytes.size());
+    if (status.ok() && verify == reader::Verify::Checksums)
+      status = reader::verify_checksums(asset);
   }
 };
 

@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "formats/reader/xxh64.hpp"
+#include "formats/validate/xxh64.hpp"
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "formats/reader/asset.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
 #include "table_fixtures.hpp"

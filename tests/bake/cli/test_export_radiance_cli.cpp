@@ -24,7 +24,7 @@
 #include "common/image_io/image_io.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "tests/support/run_cli.hpp"
 
 using namespace clothbake;

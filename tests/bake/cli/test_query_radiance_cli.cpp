@@ -21,7 +21,7 @@
 #include "bake/pipeline/bake.hpp"
 #include "bake/stages/stages.hpp"
 #include "formats/reader/compressed_tables.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "tests/support/run_cli.hpp"
 
 using namespace clothbake;

@@ -4,7 +4,7 @@
 
 #include "bake/cli/radiance_query_command.hpp"
 #include "common/error.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "tests/verify/verify_fixtures.hpp"
 
 using namespace clothbake;

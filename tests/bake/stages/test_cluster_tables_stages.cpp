@@ -13,7 +13,7 @@
 #include "cluster/visibility_clusters.hpp"
 #include "compress/compress_settings.hpp"
 #include "formats/reader/cluster_sections.hpp"
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 
 using namespace clothbake;

@@ -1,6 +1,6 @@
 // XXH64 from the public specification (see xxh64.hpp). Reads are done with memcpy so that any
 // alignment is fine; compilers turn them into plain loads.
-#include "formats/reader/xxh64.hpp"
+#include "formats/validate/xxh64.hpp"
 
 #include <cstring>
 

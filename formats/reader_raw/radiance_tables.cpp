@@ -1,6 +1,6 @@
 // Raw Integral-Radiance tables: opening with checks, exact fixed-point footprint queries
 // (radiance_tables.hpp).
-#include "formats/reader/radiance_tables.hpp"
+#include "formats/reader_raw/radiance_tables.hpp"
 
 #include <cinttypes>
 #include <cmath>

@@ -1,5 +1,5 @@
 // XXH64, the 64-bit xxHash of Yann Collet, implemented from the public specification
-// (github.com/Cyan4973/xxHash, doc/xxhash_spec.md) so that the reader library needs no third-party
+// (github.com/Cyan4973/xxHash, doc/xxhash_spec.md) so that the reader libraries need no third-party
 // code. It is the checksum of the asset format (header, table and every section). The writer uses
 // Debian's libxxhash; tests/formats/test_xxh64.cpp cross-checks both on many lengths and seeds.
 //
