@@ -301,7 +301,10 @@ Action setup_info(CLI::App& app) {
   add_asset_argument(app, *path);
   add_json_flag(app, *json);
   return [path, json] {
+    // The structure and the header checksum (which covers the table, hence every section's
+    // checksum that info prints); not every payload, so that damaged assets can be described.
     const Asset asset = formats::open_asset(*path, Verify::Structure);
+    formats::throw_if_failed(reader::verify_header_checksum(asset), *path);
     const nlohmann::json doc = info_json(*path, asset);
     if (*json)
       print_json_with_sections(doc, asset);
