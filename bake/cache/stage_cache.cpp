@@ -367,6 +367,8 @@ bool DiskCache::load(const pipeline::Stage& stage, const pipeline::Artifacts& av
 }
 
 void DiskCache::begin_run() {
+  // A new run, or a retry after a corrupt entry: count only what this run does (CacheCounts).
+  counts_->hits = counts_->misses = counts_->unstored = 0;
   derived_.clear();
   content_.clear();
   keys_.clear();

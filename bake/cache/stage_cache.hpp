@@ -47,6 +47,10 @@ std::string cache_dir_from(const std::string& option);
 // naming `option` for anything else.
 uint64_t parse_size(const std::string& text, const std::string& option);
 
+// hits, misses and unstored describe the current pipeline run (since the last begin_run): when a
+// corrupt entry makes the driver run again, they describe the attempt that produced the result,
+// so hits + misses + unstored is the number of cacheable stages that ran. corrupt counts every
+// entry removed since the DiskCache was made, the aborted attempts' included.
 struct CacheCounts {
   int hits = 0;
   int misses = 0;    // ran and stored

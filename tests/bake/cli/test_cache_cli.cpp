@@ -182,6 +182,9 @@ TEST_F(Cache, CorruptedEntriesAreRecomputedNeverUsed) {
     const auto report = bake("b.cbk", true, &run);
     EXPECT_NE(report["warnings"].dump().find("is corrupt"), std::string::npos) << kind << run.out;
     EXPECT_GE(report["cache"]["corrupt"].get<int>(), 1) << kind;
+    // Hits and stores are those of the attempt that wrote the asset: every cacheable stage once.
+    EXPECT_EQ(report["cache"]["hits"].get<int>() + report["cache"]["stored"].get<int>(), 7)
+        << kind << report["cache"].dump();
     EXPECT_EQ(slurp(dir_ / "b.cbk"), good) << kind;
     fs::remove(dir_ / "b.cbk");
     // Recomputed and stored again: the next bake is all hits, no warning.
