@@ -11,7 +11,8 @@
 //                         the paper's operating point marked (scripts/plot_compression.py,
 //                         python3-matplotlib, run as a subprocess on the CSV; a failure to plot
 //                         is a warning, the CSV stays).
-// Visibility clusters come from the bake's own stages (visibility, cluster).
+// Visibility clusters come from the bake's own stages (visibility, cluster;
+// bake/reports/compression_data.hpp).
 // Files are written to a temporary directory next to DIR and moved into place at the end.
 // Exit codes: 0, 1 usage, 2 bad fabric or unwritable output.
 //
@@ -37,13 +38,10 @@
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/pipeline/driver.hpp"
-#include "bake/pipeline/stage.hpp"
+#include "bake/reports/compression_data.hpp"
 #include "bake/reports/report_error_time.hpp"
 #include "bake/reports/report_plan.hpp"
 #include "bake/reports/report_stability.hpp"
-#include "bake/stages/stages.hpp"
-#include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "compress/compression_report.hpp"
@@ -77,43 +75,6 @@ std::vector<T> positive_list(const std::string& text, const std::string& option)
                          .positive = true,
                          .max = integers ? double(std::numeric_limits<int>::max()) : 1e308});
   return std::vector<T>(values.begin(), values.end());
-}
-
-// Visibility labels of `fabric`: the bake's own visibility and cluster stages (without the
-// always-run fabric records and writer, which need an output).
-std::vector<uint8_t> visibility_labels(const Fabric& fabric, int* clusters, std::string* source) {
-  std::vector<pipeline::Stage> list;
-  for (auto& s : stages::bake_stages())
-    if (!s.always) list.push_back(std::move(s));
-  pipeline::Artifacts seeded;
-  seeded.put("fabric", fabric);
-  pipeline::RunOptions run;
-  pipeline::RunResult result = pipeline::run_pipeline({"cluster"}, std::move(seeded), run, list);
-  const auto& c = result.artifacts.get<cluster::VisibilityClusters>("clusters");
-  *clusters = c.clusters;
-  *source = "visibility clusters (bake stages)";
-  return c.labels;
-}
-
-struct KindData {
-  Fabric fabric;
-  std::vector<uint8_t> labels;
-  int clusters = 0;
-  std::string label_source;
-  tables::FabricRadianceInputs inputs;
-  compress::DirectionalTexels data;
-};
-
-std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<int> resolution) {
-  auto k = std::make_unique<KindData>();
-  LoadOptions lo;
-  lo.resolution = resolution;
-  k->fabric = load_fabric_description(path, lo).fabric;
-  k->labels = visibility_labels(k->fabric, &k->clusters, &k->label_source);
-  k->inputs = tables::radiance_inputs(k->fabric, k->labels, k->clusters);
-  k->data = compress::directional_texels(reader::RadianceTableKind::Specular, k->inputs.view,
-                                         k->fabric.bake.radiance_dirs);
-  return k;
 }
 
 // Prints a report's JSON document (--json) or its summary; exit 0, or exit 5 with its failure
@@ -269,10 +230,10 @@ int run_compression_report(const ReportCliOptions& o) {
   if (fs::exists(out) && !fs::is_directory(out))
     throw_input_error(o.output + ": exists and is not a directory");
 
-  const auto full = load_kind_data(o.fabric, o.resolution);
+  const auto full = reports::load_compression_data(o.fabric, o.resolution);
   options.seed = full->fabric.bake.seed;
-  std::unique_ptr<KindData> low;
-  if (options.sat) low = load_kind_data(o.fabric, o.sat_resolution);
+  std::unique_ptr<reports::CompressionData> low;
+  if (options.sat) low = reports::load_compression_data(o.fabric, o.sat_resolution);
   compress::RawTablesBuilder raw_builder = [&]() {
     tables::RadianceOptions ro;
     ro.bins_per_side = full->data.bins_per_side;
