@@ -10,7 +10,6 @@
 
 #include "common/error.hpp"
 #include "compress/compressed_set.hpp"
-#include "compress/sat_pca.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -30,19 +29,13 @@ double process_seconds() {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-struct Probe {
-  reader::Footprint rect;
-  double h[3];
-  std::size_t side = 0;  // index into report_sides
-};
-
-std::vector<Probe> make_probes(int n, int per_side, uint64_t seed) {
+std::vector<ReportProbe> make_probes(int n, int per_side, uint64_t seed) {
   const auto sides = report_sides(n);
   model::SplitMix64 rng(seed);
-  std::vector<Probe> out;
+  std::vector<ReportProbe> out;
   for (std::size_t s = 0; s < sides.size(); ++s)
     for (int i = 0; i < per_side; ++i) {
-      Probe p;
+      ReportProbe p;
       const double x0 = (rng.uniform() * 2.0 - 0.5) * n, y0 = (rng.uniform() * 2.0 - 0.5) * n;
       p.rect = {x0, y0, x0 + sides[s], y0 + sides[s]};
       const double ct = std::max(1e-3, rng.uniform()), phi = 2 * M_PI * rng.uniform();
@@ -68,7 +61,8 @@ std::vector<double> coverage(double a0, double a1, int n) {
 }
 
 // Reference F_c of every probe (probes x clusters).
-std::vector<double> reference_sums(const DirectionalTexels& d, const std::vector<Probe>& probes) {
+std::vector<double> reference_sums(const DirectionalTexels& d,
+                                   const std::vector<ReportProbe>& probes) {
   const int n = d.resolution;
   const std::size_t clusters = std::size_t(d.cluster_count);
   std::vector<double> out(probes.size() * clusters, 0.0);
@@ -93,19 +87,18 @@ std::vector<double> reference_sums(const DirectionalTexels& d, const std::vector
   return out;
 }
 
-using QueryAll = std::function<bool(const reader::Footprint&, const double*, double*)>;
-
-std::vector<double> footprint_errors(const DirectionalTexels& d, const std::vector<Probe>& probes,
-                                     const std::vector<double>& reference, const QueryAll& query) {
+std::vector<double> footprint_errors(const DirectionalTexels& d, const ReportProbes& probes,
+                                     const QueryAll& query) {
   const std::size_t clusters = std::size_t(d.cluster_count);
   const std::size_t sides = report_sides(d.resolution).size();
   std::vector<double> e2(sides, 0.0), r2(sides, 0.0), got(clusters);
-  for (std::size_t p = 0; p < probes.size(); ++p) {
-    if (!query(probes[p].rect, probes[p].h, got.data())) return std::vector<double>(sides, NAN);
+  for (std::size_t p = 0; p < probes.probes.size(); ++p) {
+    const ReportProbe& probe = probes.probes[p];
+    if (!query(probe.rect, probe.h, got.data())) return std::vector<double>(sides, NAN);
     for (std::size_t c = 0; c < clusters; ++c) {
-      const double ref = reference[p * clusters + c], diff = got[c] - ref;
-      e2[probes[p].side] += diff * diff;
-      r2[probes[p].side] += ref * ref;
+      const double ref = probes.reference[p * clusters + c], diff = got[c] - ref;
+      e2[probe.side] += diff * diff;
+      r2[probe.side] += ref * ref;
     }
   }
   std::vector<double> out(sides);
@@ -138,33 +131,56 @@ double query_nanoseconds(int n, int count, uint64_t seed, const QueryAll& query,
   return count > 0 ? 1e9 * best / count : 0.0;
 }
 
-uint64_t raw_float_bytes(const DirectionalTexels& d) {
+}  // namespace
+
+std::vector<double> report_sides(int resolution) {
+  return {1, 2, 4, 8, 16, 64, double(resolution), 3.0 * resolution};
+}
+
+ReportProbes report_probes(const DirectionalTexels& data, int samples, uint64_t seed) {
+  ReportProbes out;
+  out.probes = make_probes(data.resolution, samples, seed);
+  out.reference = reference_sums(data, out.probes);
+  return out;
+}
+
+void measure_queries(const DirectionalTexels& data, const ReportProbes& probes,
+                     const QueryAll& query, int timing_queries, uint64_t seed, ReportRow* row) {
+  row->footprint_error = footprint_errors(data, probes, query);
+  row->query_ns =
+      query_nanoseconds(data.resolution, timing_queries, seed, query, data.cluster_count);
+}
+
+void time_compression(const std::function<void()>& compress, ReportRow* row) {
+  const double c0 = process_seconds();
+  const auto w0 = std::chrono::steady_clock::now();
+  compress();
+  row->compress_cpu_seconds = process_seconds() - c0;
+  row->compress_wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+}
+
+uint64_t raw_float_bytes(const DirectionalTexels& data) {
   std::vector<char> used(256, 0);
-  for (uint8_t c : d.cluster)
+  for (uint8_t c : data.cluster)
     if (c != kNoStratum) used[c] = 1;
   uint64_t stored = 0;
   for (char u : used)
     stored += uint64_t(u);
-  return stored * uint64_t(d.bins()) * d.texels() * 4;
+  return stored * uint64_t(data.bins()) * data.texels() * 4;
 }
 
-// One texel-layout row: compress, open through the reader, measure.
-ReportRow texel_row(const DirectionalTexels& d, const CpcaOptions& o,
-                    const std::vector<Probe>& probes, const std::vector<double>& reference,
-                    const ReportOptions& options) {
+ReportRow texel_row(const DirectionalTexels& data, const CpcaOptions& cpca,
+                    const ReportProbes& probes, const ReportOptions& options) {
   ReportRow row;
   row.layout = "texel";
-  row.mode = o.target_error > 0 ? "target" : "fixed";
-  row.resolution = d.resolution;
-  row.clusters = o.clusters_per_stratum;
-  row.target = o.target_error;
-  const double c0 = process_seconds();
-  const auto w0 = std::chrono::steady_clock::now();
+  row.mode = cpca.target_error > 0 ? "target" : "fixed";
+  row.resolution = data.resolution;
+  row.clusters = cpca.clusters_per_stratum;
+  row.target = cpca.target_error;
   CompressionStats stats;
-  const CompressedTableSet set = compress_tables(d, o, &stats);
-  row.compress_cpu_seconds = process_seconds() - c0;
-  row.compress_wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  CompressedTableSet set;
+  time_compression([&] { set = compress_tables(data, cpca, &stats); }, &row);
   row.rank = stats.max_rank;
   row.images = stats.images;
   row.stored_bytes = stats.compressed_bytes;
@@ -175,60 +191,52 @@ ReportRow texel_row(const DirectionalTexels& d, const CpcaOptions& o,
   const std::vector<std::byte> bytes = formats::serialize_asset(compressed_sections(set));
   reader::Asset asset;
   reader::CompressedRadianceTables tables;
-  if (!asset.open_memory(bytes.data(), bytes.size()).ok() || !tables.open(asset, d.kind).ok())
+  if (!asset.open_memory(bytes.data(), bytes.size()).ok() || !tables.open(asset, data.kind).ok())
     throw_internal_error("report: compressed tables do not reopen");
   row.decoded_bytes = tables.decoded_bytes();
-  const QueryAll query = [&](const reader::Footprint& r, const double* h, double* out) {
-    return tables.try_query_all(r, h, out);
-  };
-  row.footprint_error = footprint_errors(d, probes, reference, query);
-  row.query_ns =
-      query_nanoseconds(d.resolution, options.timing_queries, options.seed, query, d.cluster_count);
+  measure_queries(
+      data, probes,
+      [&](const reader::Footprint& r, const double* h, double* out) {
+        return tables.try_query_all(r, h, out);
+      },
+      options.timing_queries, options.seed, &row);
   return row;
 }
 
-}  // namespace
-
-std::vector<double> report_sides(int resolution) {
-  return {1, 2, 4, 8, 16, 64, double(resolution), 3.0 * resolution};
-}
-
 std::vector<ReportRow> compression_sweep(
-    const DirectionalTexels& full, const DirectionalTexels* low, const ReportOptions& options,
+    const DirectionalTexels& data, const ReportOptions& options,
     const RawTablesBuilder& raw_builder,
     const std::function<void(int, int, const std::string&)>& progress) {
   std::vector<ReportRow> rows;
   const int total = int(options.clusters.size() * options.ranks.size() + options.targets.size() +
-                        (options.sat && low ? options.sat_shapes.size() * 3 + 2 : 0) +
                         (options.raw && raw_builder ? 1 : 0));
   int done = 0;
   auto step = [&](const std::string& label) {
     if (progress) progress(done, total, label);
     ++done;
   };
-  const auto probes = make_probes(full.resolution, options.samples, options.seed);
-  const auto reference = reference_sums(full, probes);
+  const ReportProbes probes = report_probes(data, options.samples, options.seed);
 
   if (options.raw && raw_builder) {
     step("raw tables");
     const std::vector<std::byte> bytes = raw_builder();
     reader::Asset asset;
     reader::RawRadianceTables raw;
-    if (!asset.open_memory(bytes.data(), bytes.size()).ok() || !raw.open(asset, full.kind).ok())
+    if (!asset.open_memory(bytes.data(), bytes.size()).ok() || !raw.open(asset, data.kind).ok())
       throw_internal_error("report: raw tables do not open");
     ReportRow row;
     row.layout = "raw";
-    row.resolution = full.resolution;
-    row.raw_float_bytes = raw_float_bytes(full);
+    row.resolution = data.resolution;
+    row.raw_float_bytes = raw_float_bytes(data);
     row.stored_bytes = row.raw_float_bytes;
     row.decoded_bytes = row.raw_float_bytes;
     row.ratio = 1.0;
-    const QueryAll query = [&](const reader::Footprint& r, const double* h, double* out) {
-      return raw.try_query_all(r, h, out);
-    };
-    row.footprint_error = footprint_errors(full, probes, reference, query);
-    row.query_ns = query_nanoseconds(full.resolution, options.timing_queries, options.seed, query,
-                                     full.cluster_count);
+    measure_queries(
+        data, probes,
+        [&](const reader::Footprint& r, const double* h, double* out) {
+          return raw.try_query_all(r, h, out);
+        },
+        options.timing_queries, options.seed, &row);
     rows.push_back(row);
   }
   for (int k : options.clusters)
@@ -242,7 +250,7 @@ std::vector<ReportRow> compression_sweep(
       o.clusters_per_stratum = k;
       o.rank = r;
       o.seed = options.seed;
-      rows.push_back(texel_row(full, o, probes, reference, options));
+      rows.push_back(texel_row(data, o, probes, options));
     }
   for (double target : options.targets) {
     std::string label = "texel target ";
@@ -252,66 +260,7 @@ std::vector<ReportRow> compression_sweep(
     o.rank = 64;
     o.target_error = target;
     o.seed = options.seed;
-    rows.push_back(texel_row(full, o, probes, reference, options));
-  }
-  if (options.sat && low) {
-    const auto low_probes = make_probes(low->resolution, options.samples, options.seed + 1);
-    const auto low_reference = reference_sums(*low, low_probes);
-    // The texel layout at the reduced resolution, for comparison.
-    for (double target : {0.02, 0.008}) {
-      std::string label = "texel (low) target ";
-      label += std::to_string(target);
-      step(label);
-      CpcaOptions o;
-      o.rank = 64;
-      o.target_error = target;
-      o.seed = options.seed;
-      rows.push_back(texel_row(*low, o, low_probes, low_reference, options));
-    }
-    for (SatNormalisation mode :
-         {SatNormalisation::None, SatNormalisation::Plane, SatNormalisation::PlaneUnit})
-      for (const auto& [k, r] : options.sat_shapes) {
-        std::string label = "sat ";
-        label += sat_normalisation_name(mode);
-        label += " k=";
-        label += std::to_string(k);
-        label += " r=";
-        label += std::to_string(r);
-        step(label);
-        SatPcaOptions so;
-        so.clusters = k;
-        so.rank = r;
-        so.normalisation = mode;
-        so.seed = options.seed;
-        const double c0 = process_seconds();
-        const auto w0 = std::chrono::steady_clock::now();
-        const SatPcaModel model = SatPcaModel::fit(*low, so);
-        ReportRow row;
-        row.compress_cpu_seconds = process_seconds() - c0;
-        row.compress_wall_seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
-        row.layout = "sat";
-        row.normalisation = sat_normalisation_name(mode);
-        row.mode = "fixed";
-        row.resolution = low->resolution;
-        row.clusters = k;
-        row.rank = r;
-        row.images = model.groups() * (1 + r);
-        row.stored_bytes = model.stored_bytes();
-        row.raw_float_bytes = raw_float_bytes(*low);
-        row.ratio = row.stored_bytes ? double(row.raw_float_bytes) / double(row.stored_bytes) : 0;
-        row.normalised_mse = model.normalised_mse();
-        row.paper_point = mode == SatNormalisation::PlaneUnit && k == 4 && r == 10;
-        const QueryAll query = [&](const reader::Footprint& rect, const double* h, double* out) {
-          for (int c = 0; c < low->cluster_count; ++c)
-            if (!model.query(rect, h, c, &out[c])) return false;
-          return true;
-        };
-        row.footprint_error = footprint_errors(*low, low_probes, low_reference, query);
-        row.query_ns = query_nanoseconds(low->resolution, options.timing_queries / 10, options.seed,
-                                         query, low->cluster_count);
-        rows.push_back(row);
-      }
+    rows.push_back(texel_row(data, o, probes, options));
   }
   if (progress) progress(total, total, "done");
   return rows;

@@ -6,25 +6,29 @@
 // Rows:
 //  - layout "texel" (what clothbake stores, compressed_set.hpp): fixed (k, r) shapes and target
 //    errors; queries through the reader (formats/reader/compressed_tables.hpp);
-//  - layout "sat" (the paper's, sat_pca.hpp) with normalisation none / plane / plane+unit, at a
-//    reduced resolution (it fits C x B x N^2 floats), with the texel layout at that resolution
-//    for an apples-to-apples comparison; queries through the unoptimised in-memory model;
 //  - layout "raw": the raw fixed-point tables (optional; built in memory), the reference size and
 //    query time.
+// The paper's whole-SAT layout is not stored by clothbake and is measured outside the product, by
+// benchmarks/compress/sat_layout_study.cpp: it writes "sat" rows (normalisation, normalised_mse,
+// paper_point filled) with report_csv, measured by the same probes and helpers (report_probes,
+// measure_queries, texel_row) as the sweep's rows.
 // Footprint error: sqrt(sum (F - F_ref)^2 / sum F_ref^2) over random positions, half vectors and
 // every cluster, F_ref the direct sum of the uncompressed texel values. Times: thread CPU time on
 // one thread (not disturbed by other processes), compression on all threads (process CPU time
 // and wall time).
 //
-// C++20. Errors: as compress_tables / SatPcaModel::fit.
+// C++20. Errors: as compress_tables.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
-#include <utility>
 #include <vector>
 
+#include "compress/cpca.hpp"
 #include "compress/directional_texels.hpp"
+#include "formats/reader/radiance_query.hpp"
 
 namespace clothbake::compress {
 
@@ -32,8 +36,6 @@ struct ReportOptions {
   std::vector<int> clusters = {1, 2, 4};       // texel layout: k per visibility cluster
   std::vector<int> ranks = {2, 4, 8, 16, 32};  // texel layout: fixed r
   std::vector<double> targets = {0.03, 0.02, 0.01, 0.008, 0.005};  // texel layout, k = 1
-  std::vector<std::pair<int, int>> sat_shapes = {{4, 10}, {1, 10}, {4, 20}, {1, 40}, {8, 10}};
-  bool sat = true;    // run the paper's layout (needs `low` data)
   bool raw = true;    // measure the raw tables (needs the fill inputs: see RawTablesBuilder)
   int samples = 300;  // footprints per size class
   int timing_queries = 20000;
@@ -44,7 +46,7 @@ struct ReportOptions {
 std::vector<double> report_sides(int resolution);
 
 struct ReportRow {
-  std::string layout;               // "texel", "sat", "raw"
+  std::string layout;               // "texel", "raw" (the study: "sat")
   std::string normalisation = "-";  // sat: none / plane / plane+unit; "-" otherwise
   std::string mode = "-";           // "fixed" or "target" ("-" for raw)
   int resolution = 0;
@@ -68,12 +70,44 @@ struct ReportRow {
 // (for the "raw" row); supplied by the caller, which has the fill inputs.
 using RawTablesBuilder = std::function<std::vector<std::byte>()>;
 
-// Runs the sweep on `full` (and the sat rows on `low`, the same fabric at a lower resolution, when
-// options.sat and low != nullptr). progress(done, total, label) is called before each row.
+// Runs the sweep on `data`. progress(done, total, label) is called before each row.
 std::vector<ReportRow> compression_sweep(
-    const DirectionalTexels& full, const DirectionalTexels* low, const ReportOptions& options,
+    const DirectionalTexels& data, const ReportOptions& options,
     const RawTablesBuilder& raw_builder = {},
     const std::function<void(int, int, const std::string&)>& progress = {});
+
+// What the rows of one data set are measured on: `samples` random square footprints per size class
+// of report_sides() (random positions and half vectors), and their reference F_c, the direct sums
+// of the uncompressed texel values (probes x clusters).
+struct ReportProbe {
+  reader::Footprint rect;
+  double h[3];
+  std::size_t side = 0;  // index into report_sides
+};
+struct ReportProbes {
+  std::vector<ReportProbe> probes;
+  std::vector<double> reference;
+};
+ReportProbes report_probes(const DirectionalTexels& data, int samples, uint64_t seed);
+
+// A layout's F_c of every cluster of `data` for one footprint and half vector; false on refusal.
+using QueryAll = std::function<bool(const reader::Footprint&, const double*, double*)>;
+
+// Fills row->footprint_error (per report_sides(); NaN when a query refuses) from `probes`, and
+// row->query_ns from `timing_queries` random footprints (1 to 16 texels) on one thread.
+void measure_queries(const DirectionalTexels& data, const ReportProbes& probes,
+                     const QueryAll& query, int timing_queries, uint64_t seed, ReportRow* row);
+
+// Runs `compress` and records its process CPU time and wall time in `row`.
+void time_compression(const std::function<void()>& compress, ReportRow* row);
+
+// Size of `data`'s tables as raw floats: stored clusters x bins x N^2 x 4 bytes.
+uint64_t raw_float_bytes(const DirectionalTexels& data);
+
+// One "texel" row: compresses `data` with `cpca`, opens the result through the reader, measures it
+// on `probes` (options: timing_queries, seed).
+ReportRow texel_row(const DirectionalTexels& data, const CpcaOptions& cpca,
+                    const ReportProbes& probes, const ReportOptions& options);
 
 // CSV: a header line, then one line per row (sides as columns "fp_<side>").
 std::string report_csv(const std::vector<ReportRow>& rows, const std::vector<double>& sides);

@@ -1,13 +1,16 @@
 #!/usr/bin/env python3
-"""Plots of `clothbake report compression` (docs/compression.md, "Report").
+"""Plots of `clothbake report compression` (docs/compression.md, "Report") and of the study
+sat_layout_study (the same CSV columns; "The paper's whole-SAT layout").
 
 Usage: plot_compression.py compression.csv OUTDIR
 
-Reads the CSV the report wrote (one row per compression setting) and writes, as PNG and SVG:
+Reads the CSV the report or the study wrote (one row per compression setting) and writes, as PNG
+and SVG:
   compression_size_error  stored size against footprint error (4^2 texels), log-log, per layout;
   compression_error_time  footprint error (4^2) against query time, with raw tables for reference;
   compression_classes     footprint error against footprint side for a few settings.
-The paper's operating point (whole-SAT layout, plane+unit normalisation, k=4, r=10) is marked.
+The paper's operating point (whole-SAT layout, plane+unit normalisation, k=4, r=10; the study's
+rows) is marked where the CSV has it.
 Needs python3-matplotlib (Debian); exits 1 with a message without it.
 """
 import csv

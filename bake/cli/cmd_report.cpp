@@ -1,17 +1,17 @@
-// clothbake report compression FABRIC.toml -o DIR [--resolution N] [--sat-resolution M]
-// [--clusters LIST] [--ranks LIST] [--targets LIST] [--samples N] [--no-sat] [--no-raw]
-// [--no-plots] [--json]
+// clothbake report compression FABRIC.toml -o DIR [--resolution N] [--clusters LIST]
+// [--ranks LIST] [--targets LIST] [--samples N] [--no-raw] [--no-plots] [--json]
 //
 // Sweeps the C-PCA compression of the fabric's specular Integral-Radiance tables over clusters,
-// ranks and target errors (clothbake's per-texel layout), and the paper's whole-SAT layout with
-// and without normalisation at a reduced resolution (compress/compression_report.hpp), and writes
+// ranks and target errors (clothbake's per-texel layout), against the raw tables
+// (compress/compression_report.hpp), and writes
 //   DIR/compression.csv   one row per setting (the primary output),
 //   DIR/compression.json  the same rows plus the inputs of the sweep,
-//   DIR/compression_*.png / .svg  size against footprint error and error against decode time, with
-//                         the paper's operating point marked (scripts/plot_compression.py,
-//                         python3-matplotlib, run as a subprocess on the CSV; a failure to plot
-//                         is a warning, the CSV stays).
-// Visibility clusters come from the bake's own stages (visibility, cluster).
+//   DIR/compression_*.png / .svg  size against footprint error and error against decode time
+//                         (scripts/plot_compression.py, python3-matplotlib, run as a subprocess on
+//                         the CSV; a failure to plot is a warning, the CSV stays).
+// Visibility clusters come from the bake's own stages (visibility, cluster;
+// bake/reports/compression_data.hpp). The paper's whole-SAT layout is a study outside the product
+// (benchmarks/compress/sat_layout_study.cpp, docs/compression.md).
 // Files are written to a temporary directory next to DIR and moved into place at the end.
 // Exit codes: 0, 1 usage, 2 bad fabric or unwritable output.
 //
@@ -37,13 +37,10 @@
 #include "bake/cli/command.hpp"
 #include "bake/cli/options.hpp"
 #include "bake/inputs/fabric_load.hpp"
-#include "bake/pipeline/driver.hpp"
-#include "bake/pipeline/stage.hpp"
+#include "bake/reports/compression_data.hpp"
 #include "bake/reports/report_error_time.hpp"
 #include "bake/reports/report_plan.hpp"
 #include "bake/reports/report_stability.hpp"
-#include "bake/stages/stages.hpp"
-#include "cluster/visibility_clusters.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "compress/compression_report.hpp"
@@ -59,10 +56,9 @@ namespace fs = std::filesystem;
 struct ReportCliOptions {
   std::string fabric, output;
   std::optional<int> resolution;
-  int sat_resolution = 64;
   std::string clusters = "1,2,4", ranks = "2,4,8,16,32", targets = "0.03,0.02,0.01,0.008,0.005";
   int samples = 300;
-  bool no_sat = false, no_raw = false, no_plots = false, json = false;
+  bool no_raw = false, no_plots = false, json = false;
 };
 
 // --clusters, --ranks (whole numbers) and --targets: positive numbers, comma-separated.
@@ -77,43 +73,6 @@ std::vector<T> positive_list(const std::string& text, const std::string& option)
                          .positive = true,
                          .max = integers ? double(std::numeric_limits<int>::max()) : 1e308});
   return std::vector<T>(values.begin(), values.end());
-}
-
-// Visibility labels of `fabric`: the bake's own visibility and cluster stages (without the
-// always-run fabric records and writer, which need an output).
-std::vector<uint8_t> visibility_labels(const Fabric& fabric, int* clusters, std::string* source) {
-  std::vector<pipeline::Stage> list;
-  for (auto& s : stages::bake_stages())
-    if (!s.always) list.push_back(std::move(s));
-  pipeline::Artifacts seeded;
-  seeded.put("fabric", fabric);
-  pipeline::RunOptions run;
-  pipeline::RunResult result = pipeline::run_pipeline({"cluster"}, std::move(seeded), run, list);
-  const auto& c = result.artifacts.get<cluster::VisibilityClusters>("clusters");
-  *clusters = c.clusters;
-  *source = "visibility clusters (bake stages)";
-  return c.labels;
-}
-
-struct KindData {
-  Fabric fabric;
-  std::vector<uint8_t> labels;
-  int clusters = 0;
-  std::string label_source;
-  tables::FabricRadianceInputs inputs;
-  compress::DirectionalTexels data;
-};
-
-std::unique_ptr<KindData> load_kind_data(const std::string& path, std::optional<int> resolution) {
-  auto k = std::make_unique<KindData>();
-  LoadOptions lo;
-  lo.resolution = resolution;
-  k->fabric = load_fabric_description(path, lo).fabric;
-  k->labels = visibility_labels(k->fabric, &k->clusters, &k->label_source);
-  k->inputs = tables::radiance_inputs(k->fabric, k->labels, k->clusters);
-  k->data = compress::directional_texels(reader::RadianceTableKind::Specular, k->inputs.view,
-                                         k->fabric.bake.radiance_dirs);
-  return k;
 }
 
 // Prints a report's JSON document (--json) or its summary; exit 0, or exit 5 with its failure
@@ -151,19 +110,14 @@ Action setup_report(CLI::App& app) {
   auto o = std::make_shared<ReportCliOptions>();
   auto* compression = app.add_subcommand(
       "compression",
-      "C-PCA compression of a fabric's specular tables over clusters, ranks and target errors, and "
-      "the paper's whole-SAT layout: size against error and decode time (docs/compression.md)");
+      "C-PCA compression of a fabric's specular tables over clusters, ranks and target errors "
+      "against the raw tables: size against error and decode time (docs/compression.md)");
   compression->add_option("FABRIC", o->fabric, "the fabric description (.toml)")->required();
   compression->add_option("-o,--output", o->output, "output directory (created; other files kept)")
       ->required();
   compression
       ->add_option("--resolution", o->resolution, "texels per tile side (default: the fabric's)")
       ->check(CLI::Range(kMinResolution, 1024));
-  compression
-      ->add_option("--sat-resolution", o->sat_resolution,
-                   "resolution of the paper's whole-SAT layout rows (default 64; it holds "
-                   "clusters x bins x N^2 floats)")
-      ->check(CLI::Range(8, 256));
   compression->add_option("--clusters", o->clusters,
                           "C-PCA clusters per visibility cluster (default 1,2,4)");
   compression->add_option("--ranks", o->ranks, "fixed ranks (default 2,4,8,16,32)");
@@ -171,7 +125,6 @@ Action setup_report(CLI::App& app) {
                           "target relative RMS texel errors (default 0.03,0.02,0.01,0.008,0.005)");
   compression->add_option("--samples", o->samples, "footprints per size (default 300)")
       ->check(CLI::Range(10, 100000));
-  compression->add_flag("--no-sat", o->no_sat, "skip the paper's whole-SAT layout");
   compression->add_flag("--no-raw", o->no_raw,
                         "skip the raw tables (built in memory: 2 GiB at 256^2)");
   compression->add_flag("--no-plots", o->no_plots, "write the CSV and JSON only");
@@ -263,16 +216,13 @@ int run_compression_report(const ReportCliOptions& o) {
   options.ranks = positive_list<int>(o.ranks, "--ranks");
   options.targets = positive_list<double>(o.targets, "--targets");
   options.samples = o.samples;
-  options.sat = !o.no_sat;
   options.raw = !o.no_raw;
   const fs::path out(o.output);
   if (fs::exists(out) && !fs::is_directory(out))
     throw_input_error(o.output + ": exists and is not a directory");
 
-  const auto full = load_kind_data(o.fabric, o.resolution);
+  const auto full = reports::load_compression_data(o.fabric, o.resolution);
   options.seed = full->fabric.bake.seed;
-  std::unique_ptr<KindData> low;
-  if (options.sat) low = load_kind_data(o.fabric, o.sat_resolution);
   compress::RawTablesBuilder raw_builder = [&]() {
     tables::RadianceOptions ro;
     ro.bins_per_side = full->data.bins_per_side;
@@ -282,11 +232,10 @@ int run_compression_report(const ReportCliOptions& o) {
         tables::radiance_sections(tables::build_specular_tables(full->inputs.view, ro));
     return formats::serialize_asset(sections);
   };
-  const auto rows =
-      compress::compression_sweep(full->data, low ? &low->data : nullptr, options, raw_builder,
-                                  [](int done, int total, const std::string& label) {
-                                    info(fmt::format("report: [{}/{}] {}", done, total, label));
-                                  });
+  const auto rows = compress::compression_sweep(
+      full->data, options, raw_builder, [](int done, int total, const std::string& label) {
+        info(fmt::format("report: [{}/{}] {}", done, total, label));
+      });
 
   // Write into a temporary directory, then move the files into place.
   const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
@@ -299,7 +248,6 @@ int run_compression_report(const ReportCliOptions& o) {
   nlohmann::json doc;
   doc["fabric"] = o.fabric;
   doc["resolution"] = full->data.resolution;
-  doc["sat_resolution"] = low ? low->data.resolution : 0;
   doc["bins_per_side"] = full->data.bins_per_side;
   doc["clusters"] = full->clusters;
   doc["cluster_source"] = full->label_source;

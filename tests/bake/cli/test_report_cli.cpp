@@ -1,6 +1,7 @@
 // `clothbake report` through the executable: `report stability` whole (its files, --json, every
-// row finite, a flat field's parallax exactly 0) and the exit codes of usage and output errors (the
-// reports' parts are tested in process: tests/bake/reports).
+// row finite, a flat field's parallax exactly 0), `report compression` on a small tile (texel and
+// raw rows only; the whole-SAT layout is a study, benchmarks/compress) and the exit codes of usage
+// and output errors (the reports' parts are tested in process: tests/bake/reports).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "tests/support/run_cli.hpp"
 
@@ -73,6 +75,53 @@ TEST(ReportCli, StabilityWritesFiniteRowsAndFlatParallaxIsExactlyZero) {
   while (std::getline(csv, line))
     ++lines;
   EXPECT_EQ(lines, int(doc["rows"].size()) + 1);
+}
+
+TEST(ReportCli, CompressionWritesTexelAndRawRowsOnly) {
+  const fs::path dir = scratch("compression");
+  const fs::path out = dir / "report";
+  const std::string fabric = std::string(CLOTHBAKE_SOURCE_DIR) + "/examples/fabrics/plain.toml";
+  const std::vector<std::string> args = {"report",     "compression",  fabric, "-o",
+                                         out.string(), "--resolution", "16",   "--clusters",
+                                         "1",          "--ranks",      "2",    "--targets",
+                                         "0.02",       "--samples",    "10",   "--no-plots"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> all = args;
+    all.insert(all.end(), extra.begin(), extra.end());
+    return all;
+  };
+  // The options of the whole-SAT rows are gone: unknown options, nothing written.
+  for (const auto& extra :
+       std::vector<std::vector<std::string>>{{"--no-sat"}, {"--sat-resolution", "16"}}) {
+    const auto refused = run_clothbake(with(extra));
+    EXPECT_EQ(refused.code, 1) << extra[0] << ": " << refused.err;
+    EXPECT_FALSE(fs::exists(out)) << extra[0];
+  }
+  const auto run = run_clothbake(with({"--json"}));
+  ASSERT_EQ(run.code, 0) << run.out << run.err;
+  const nlohmann::json doc = nlohmann::json::parse(run.out);
+  EXPECT_EQ(doc["resolution"], 16);
+  EXPECT_FALSE(doc.contains("sat_resolution"));
+  std::multiset<std::string> layouts;
+  for (const auto& r : doc["rows"]) {
+    layouts.insert(r["layout"].get<std::string>());
+    EXPECT_EQ(r["resolution"], 16);
+  }
+  // raw, texel k=1 r=2, texel target 0.02.
+  EXPECT_EQ(layouts, (std::multiset<std::string>{"raw", "texel", "texel"}));
+  // The CSV keeps its columns (the study's rows use the same ones) and has the same rows.
+  std::ifstream csv(out / "compression.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line,
+            "layout,normalisation,mode,resolution,clusters,rank,target,images,stored_bytes,"
+            "raw_float_bytes,ratio,decoded_bytes,texel_error,normalised_mse,fp_1,fp_2,fp_4,fp_8,"
+            "fp_16,fp_64,fp_tile,fp_3tiles,query_ns,compress_cpu_s,compress_wall_s,paper_point");
+  int rows = 0;
+  while (std::getline(csv, line))
+    ++rows;
+  EXPECT_EQ(rows, 3);
+  fs::remove_all(dir);
 }
 
 TEST(ReportCli, UsageAndOutputErrors) {

@@ -1,23 +1,24 @@
-// The paper's layout (Sec. 4.4), for comparison in `clothbake report compression`: every table
-// (stored visibility cluster c, half-vector bin b) is one vector, its summed-area table over the
-// N x N tile, optionally normalised (sat_normalise.hpp); C-PCA (cpca.hpp, one stratum) groups the
-// C x B vectors into k clusters, each a mean SAT plus a rank-r basis of SATs, and stores per table
-// its cluster, its r coefficients and its normalisation.
+// The paper's layout (Sec. 4.4), for comparison in the study sat_layout_study.cpp (study code, not
+// part of the product: clothbake stores the per-texel layout, compress/compressed_set.hpp): every
+// table (stored visibility cluster c, half-vector bin b) is one vector, its summed-area table over
+// the N x N tile, optionally normalised (sat_normalise.hpp); C-PCA (compress/cpca.hpp, one stratum)
+// groups the C x B vectors into k clusters, each a mean SAT plus a rank-r basis of SATs, and stores
+// per table its cluster, its r coefficients and its normalisation.
 //
 // Storage as counted here: every mean/basis image at 2 bytes per texel (IEEE half after division
 // by its largest magnitude, exactly what the model evaluates with), per table 4 bytes per
 // coefficient plus 3 doubles of normalisation. Queries bilinearly interpolate the reconstructed
 // SAT at the footprint's corners (the same formula as formats/reader/radiance_query.hpp).
 //
-// Memory: C x B x N^2 floats while fitting (2 GiB at 8 x 32^2 x 256^2), so the report runs this
+// Memory: C x B x N^2 floats while fitting (2 GiB at 8 x 32^2 x 256^2), so the study runs this
 // layout at a reduced resolution by default. C++20; deterministic for any thread count.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "benchmarks/compress/sat_normalise.hpp"
 #include "compress/directional_texels.hpp"
-#include "compress/sat_normalise.hpp"
 #include "formats/reader/radiance_query.hpp"
 
 namespace clothbake::compress {

@@ -1,9 +1,10 @@
-// The paper's SAT normalisation (compress/sat_normalise.hpp) and whole-SAT C-PCA layout
-// (compress/sat_pca.hpp).
+// The paper's SAT normalisation (benchmarks/compress/sat_normalise.hpp) and whole-SAT C-PCA layout
+// (benchmarks/compress/sat_pca.hpp): study code, tested beside the study (docs/compression.md,
+// "The paper's whole-SAT layout").
 #include <gtest/gtest.h>
 
-#include "compress/sat_pca.hpp"
-#include "compress_test_util.hpp"
+#include "benchmarks/compress/sat_pca.hpp"
+#include "tests/compress/compress_test_util.hpp"
 
 namespace clothbake::compress {
 namespace {

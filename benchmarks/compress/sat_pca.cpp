@@ -1,5 +1,5 @@
 // The paper's whole-SAT C-PCA layout, in memory (sat_pca.hpp).
-#include "compress/sat_pca.hpp"
+#include "benchmarks/compress/sat_pca.hpp"
 
 #include <tbb/parallel_for.h>
 

@@ -3,9 +3,10 @@
 // (y+1) for inclusive corner (x, y)), so that what is left is the deviation from the average,
 // then map that deviation to [0, 1] with a stored offset and scale.
 //
-// clothbake's stored layout compresses per-texel directional vectors instead (compressed_set.hpp;
-// docs/compression.md has the measurements that decided it); this normalisation serves the
-// paper's whole-SAT layout (sat_pca.hpp), which `clothbake report compression` compares against.
+// clothbake's stored layout compresses per-texel directional vectors instead
+// (compress/compressed_set.hpp; docs/compression.md has the measurements that decided it); this
+// normalisation serves the paper's whole-SAT layout (sat_pca.hpp), study code that
+// sat_layout_study.cpp compares against it.
 //
 // C++20, pure functions, safe for any finite input (a constant or all-zero table gets scale 1 and
 // maps to 0).

@@ -1,5 +1,5 @@
 // SAT normalisation (sat_normalise.hpp).
-#include "compress/sat_normalise.hpp"
+#include "benchmarks/compress/sat_normalise.hpp"
 
 #include <algorithm>
 
