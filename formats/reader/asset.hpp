@@ -1,7 +1,8 @@
 // The clothbake asset reader: opens a format-2 asset from a file (mmap on POSIX) or from a
 // caller's buffer and gives zero-copy, typed access to its sections.
 //
-// Contract (the whole reader library):
+// Contract (the reader core, clothbake_reader, and its opt-in libraries clothbake_reader_raw and
+// clothbake_reader_validate):
 //  - C++17, standard library only; no exceptions leave the API (every entry point is noexcept and
 //    returns a Status).
 //  - Heap allocation only where a coded section is decoded, always with new (std::nothrow), sized
@@ -9,7 +10,8 @@
 //    read_feature_maps (the decoded maps, CBK-E024), CompressedRadianceTables::open (SATs, basis,
 //    cell map and coefficients; ErrorCode::Unsupported) and ParallaxView on the compressed table
 //    (its block directory at open, each direction's decoded plane and SAT on first use).
-//    Everything else (Asset, the other views, raw-table queries, Status) allocates nothing:
+//    Everything else (Asset, the other views, the raw tables' queries, the checksums, Status)
+//    allocates nothing:
 //    open_file maps the file (mmap) and views point into it, so a hostile file cannot cause a
 //    huge allocation except as the decoded size of coded sections that passed every shape check
 //    (each bounded: docs/format.md).
