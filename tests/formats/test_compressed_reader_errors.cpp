@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <cstring>
 
-#include "compress_test_util.hpp"
+#include "tests/compress/compress_test_util.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 
 namespace clothbake::compress {
