@@ -303,7 +303,7 @@ Action setup_info(CLI::App& app) {
   return [path, json] {
     // The structure and the header checksum (which covers the table, hence every section's
     // checksum that info prints); not every payload, so that damaged assets can be described.
-    const Asset asset = formats::open_asset(*path, Verify::Structure);
+    const Asset asset = formats::open_asset(*path, formats::Verify::Structure);
     formats::throw_if_failed(reader::verify_header_checksum(asset), *path);
     const nlohmann::json doc = info_json(*path, asset);
     if (*json)

@@ -131,7 +131,7 @@ Action setup_verify(CLI::App& app) {
       ->check(CLI::Range(7, 1000000));
   app.add_flag("--no-parallax", o->no_parallax, "do not verify the compressed parallax table");
   return [o] {
-    const reader::Asset asset = formats::open_asset(o->asset, reader::Verify::Checksums);
+    const reader::Asset asset = formats::open_asset(o->asset, formats::Verify::Checksums);
     const bool raw = verify::has_raw_tables(asset);
     const bool compressed = verify::has_compressed_tables(asset);
     const bool parallax = !o->no_parallax && verify::has_compressed_parallax(asset);

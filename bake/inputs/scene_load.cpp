@@ -15,6 +15,7 @@
 #include "common/image_io/image_io.hpp"
 #include "formats/reader/asset.hpp"
 #include "formats/reader/fabric_sections.hpp"
+#include "formats/validate/checksums.hpp"
 #include "render/shapes.hpp"
 
 namespace clothbake::inputs {
@@ -144,7 +145,9 @@ double fabric_tile_mm(const TomlSection& o, const render::Object& obj, const std
   }
   reader::Asset asset;
   const reader::FabricInfoRecord* info = nullptr;
-  if (!asset.open_file(obj.asset.c_str()).ok() || !reader::read_fabric_info(asset, &info).ok())
+  // Every checksum, as every command checks an asset before it answers from it.
+  if (!asset.open_file(obj.asset.c_str()).ok() || !reader::verify_checksums(asset).ok() ||
+      !reader::read_fabric_info(asset, &info).ok())
     o.fail("asset", fmt::format("= {}: cannot read the asset's tile size (`clothbake validate` "
                                 "says why); give tile_mm or tiles_per_unit",
                                 obj.asset));

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "benchmarks/compress/sat_pca.hpp"
-#include "tests/compress/compress_test_util.hpp"
+#include "tests/support/compress_test_util.hpp"
 
 namespace clothbake::compress {
 namespace {

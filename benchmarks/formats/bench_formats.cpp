@@ -62,6 +62,22 @@ void BM_OpenStructure(benchmark::State& state) {
 }
 BENCHMARK(BM_OpenStructure)->Arg(256)->Arg(1024)->Arg(2048);
 
+// Open plus the header checksum: what open() did before the checksums became opt-in, and what
+// `clothbake info` does.
+void BM_OpenAndHeaderChecksum(benchmark::State& state) {
+  std::size_t size;
+  const auto& words = asset_words(int(state.range(0)), &size);
+  for (auto _ : state) {
+    reader::Asset asset;
+    auto status = asset.open_memory(words.data(), size);
+    if (status.ok()) status = reader::verify_header_checksum(asset);
+    if (!status.ok()) state.SkipWithError(status.message());
+    benchmark::DoNotOptimize(status);
+  }
+  state.counters["asset_MB"] = double(size) / 1e6;
+}
+BENCHMARK(BM_OpenAndHeaderChecksum)->Arg(256)->Arg(1024)->Arg(2048);
+
 void BM_OpenWithChecksums(benchmark::State& state) {
   std::size_t size;
   const auto& words = asset_words(int(state.range(0)), &size);

@@ -34,19 +34,6 @@ bool mul_overflows(uint64_t a, uint64_t b, uint64_t* out) noexcept {
   return false;
 }
 
-// "section #3 (height, instance 0)" into buf.
-const char* describe(char* buf, std::size_t cap, uint32_t index, uint32_t type,
-                     uint32_t instance) noexcept {
-  const char* name = section_type_name(SectionType(type));
-  if (name)
-    std::snprintf(buf, cap, "section #%" PRIu32 " (%s, instance %" PRIu32 ")", index, name,
-                  instance);
-  else
-    std::snprintf(buf, cap, "section #%" PRIu32 " (type 0x%04" PRIx32 ", instance %" PRIu32 ")",
-                  index, type, instance);
-  return buf;
-}
-
 bool known_element_type(uint16_t type) noexcept {
   return type <= uint16_t(ElementType::F64);
 }
@@ -243,7 +230,9 @@ Status Asset::open_memory(const void* data, std::size_t size) noexcept {
     SectionEntry e;
     std::memcpy(&e, bytes + sizeof(FileHeader) + uint64_t(i) * header.section_entry_size, sizeof e);
     // Formatted only on the error paths: open() must stay O(1) per entry and cheap.
-    auto what = [&] { return describe(what_buffer, sizeof what_buffer, i, e.type, e.instance); };
+    auto what = [&] {
+      return describe_section(what_buffer, sizeof what_buffer, i, e.type, e.instance);
+    };
     if (e.offset % kSectionAlignment != 0)
       return Status::error(ErrorCode::Malformed, Check::SectionAlignment,
                            "%s: offset %" PRIu64 " is not a multiple of 64", what(), e.offset);
@@ -384,14 +373,14 @@ Status Asset::typed_section(SectionType type, uint32_t instance, ElementType ele
 Status Asset::check_view(const SectionInfo& info, ElementType element) const noexcept {
   char what[96];
   if (info.codec != Codec::Raw) {
-    describe(what, sizeof what, info.index, uint32_t(info.type), info.instance);
+    describe_section(what, sizeof what, info.index, uint32_t(info.type), info.instance);
     const char* codec = codec_name(info.codec);
     return Status::error(ErrorCode::Unsupported, Check::UnsupportedCodec,
                          "%s: codec %s (%u) is not supported by this reader", what,
                          codec ? codec : "unknown", unsigned(info.codec));
   }
   if (info.element_type != element) {
-    describe(what, sizeof what, info.index, uint32_t(info.type), info.instance);
+    describe_section(what, sizeof what, info.index, uint32_t(info.type), info.instance);
     const char* have = element_type_name(info.element_type);
     return Status::error(ErrorCode::WrongType, Check::SectionLayout,
                          "%s: holds %s elements, %s were requested", what, have ? have : "unknown",

@@ -1,5 +1,6 @@
 // C-PCA compressed Integral-Radiance tables of an asset (layout: compressed_layout.hpp), with the
-// footprint queries of radiance_query.hpp: the same API as RawRadianceTables, so that a renderer
+// footprint queries of radiance_query.hpp: the same API as RawRadianceTables
+// (formats/reader_raw/radiance_tables.hpp), so that a renderer
 // does not care which one it has.
 //
 // Decoding. open() validates every section, then builds one exact integer summed-area table per

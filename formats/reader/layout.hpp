@@ -232,5 +232,9 @@ bool section_type_from_name(const char* name, SectionType* out) noexcept;
 const char* element_type_name(ElementType type) noexcept;
 // "raw", "zstd", or nullptr if unknown.
 const char* codec_name(Codec codec) noexcept;
+// "section #3 (height, instance 0)", or with "type 0x8001" for an unknown type, into buf (cap
+// bytes, truncated and NUL-terminated; cap > 0); returns buf. For messages.
+const char* describe_section(char* buf, std::size_t cap, uint32_t index, uint32_t type,
+                             uint32_t instance) noexcept;
 
 }  // namespace clothbake::reader

@@ -1,4 +1,6 @@
 // Names of section types, element types and codecs (layout.hpp).
+#include <cinttypes>
+#include <cstdio>
 #include <cstring>
 
 #include "formats/reader/layout.hpp"
@@ -91,6 +93,18 @@ const char* codec_name(Codec codec) noexcept {
       return "zstd";
   }
   return nullptr;
+}
+
+const char* describe_section(char* buf, std::size_t cap, uint32_t index, uint32_t type,
+                             uint32_t instance) noexcept {
+  const char* name = section_type_name(SectionType(type));
+  if (name)
+    std::snprintf(buf, cap, "section #%" PRIu32 " (%s, instance %" PRIu32 ")", index, name,
+                  instance);
+  else
+    std::snprintf(buf, cap, "section #%" PRIu32 " (type 0x%04" PRIx32 ", instance %" PRIu32 ")",
+                  index, type, instance);
+  return buf;
 }
 
 }  // namespace clothbake::reader

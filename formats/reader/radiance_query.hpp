@@ -1,5 +1,6 @@
 // Footprint queries on Integral-Radiance tables (paper Sec. 4.3, Eq. 8 and 11), independent of
-// how the tables are stored: raw fixed-point SATs (radiance_tables.hpp) or compressed ones
+// how the tables are stored: raw fixed-point SATs (formats/reader_raw/radiance_tables.hpp, the
+// opt-in clothbake_reader_raw) or compressed ones
 // (formats/reader/*compressed*) implement the same interface, so a renderer does not care which it
 // has.
 //

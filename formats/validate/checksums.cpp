@@ -2,7 +2,6 @@
 #include "formats/validate/checksums.hpp"
 
 #include <cinttypes>
-#include <cstdio>
 
 #include "formats/validate/xxh64.hpp"
 
@@ -31,17 +30,13 @@ Status verify_section(const Asset& asset, const SectionInfo& section) noexcept {
   if (!status.ok()) return status;
   const uint64_t sum = xxh64(fresh.data, std::size_t(fresh.stored_size), 0);
   if (sum == fresh.checksum) return {};
-  const char* name = section_type_name(fresh.type);
-  char what[64];
-  if (name)
-    std::snprintf(what, sizeof what, "%s, instance %" PRIu32, name, fresh.instance);
-  else
-    std::snprintf(what, sizeof what, "type 0x%04" PRIx32 ", instance %" PRIu32,
-                  uint32_t(fresh.type), fresh.instance);
-  return Status::error(ErrorCode::Corrupt, Check::SectionChecksum,
-                       "section #%" PRIu32 " (%s): checksum mismatch (stored %016" PRIx64
-                       ", computed %016" PRIx64 "): its payload is corrupt",
-                       fresh.index, what, fresh.checksum, sum);
+  char what[96];
+  return Status::error(
+      ErrorCode::Corrupt, Check::SectionChecksum,
+      "%s: checksum mismatch (stored %016" PRIx64 ", computed %016" PRIx64
+      "): its payload is corrupt",
+      describe_section(what, sizeof what, fresh.index, uint32_t(fresh.type), fresh.instance),
+      fresh.checksum, sum);
 }
 
 Status verify_checksums(const Asset& asset) noexcept {

@@ -15,10 +15,6 @@
 
 namespace clothbake::reader {
 
-// How much a tool verifies after open(): the structure only (what open() did), or also every
-// checksum (reads every byte once).
-enum class Verify : uint8_t { Structure, Checksums };
-
 // The header checksum. Corrupt (CBK-E004, Check::HeaderChecksum) when it differs, naming both
 // values; InvalidArgument when the asset is not open.
 Status verify_header_checksum(const Asset& asset) noexcept;

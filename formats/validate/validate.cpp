@@ -57,14 +57,7 @@ class Reporter {
 };
 
 const char* describe(char* buf, std::size_t cap, const SectionInfo& s) {
-  const char* name = section_type_name(s.type);
-  if (name)
-    std::snprintf(buf, cap, "section #%u (%s, instance %u)", unsigned(s.index), name,
-                  unsigned(s.instance));
-  else
-    std::snprintf(buf, cap, "section #%u (type 0x%04x, instance %u)", unsigned(s.index),
-                  unsigned(s.type), unsigned(s.instance));
-  return buf;
+  return describe_section(buf, cap, s.index, uint32_t(s.type), s.instance);
 }
 
 bool all_zero(const unsigned char* p, uint64_t n, uint64_t* first_nonzero) {

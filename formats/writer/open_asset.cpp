@@ -29,10 +29,10 @@ void throw_if_failed(const reader::Status& status, const std::string& context) {
   throw Error(code, context + ": " + describe(status));
 }
 
-reader::Asset open_asset(const std::string& path, reader::Verify verify) {
+reader::Asset open_asset(const std::string& path, Verify verify) {
   reader::Asset asset;
   reader::Status status = asset.open_file(path.c_str());
-  if (status.ok() && verify == reader::Verify::Checksums) {
+  if (status.ok() && verify == Verify::Checksums) {
     status = reader::verify_checksums(asset);
     if (!status.ok()) status.prefix(path.c_str());
   }

@@ -22,8 +22,12 @@ std::string describe(const reader::Status& status);
 // "CONTEXT: " + describe(). Returns when the status is Ok.
 void throw_if_failed(const reader::Status& status, const std::string& context);
 
+// How much open_asset verifies: the structure only (Asset::open), or also every checksum
+// (reader::verify_checksums: reads every byte once).
+enum class Verify { Structure, Checksums };
+
 // Opens an asset (structure, and with Verify::Checksums every checksum: checksums.hpp) or throws
 // clothbake::Error with exit_code_of() and describe(); the message starts with the path.
-reader::Asset open_asset(const std::string& path, reader::Verify verify);
+reader::Asset open_asset(const std::string& path, Verify verify);
 
 }  // namespace clothbake::formats

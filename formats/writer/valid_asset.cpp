@@ -25,7 +25,7 @@ void keep_first_error(void* user, reader::Check check, uint32_t, const char* mes
 }  // namespace
 
 reader::Asset open_valid_asset(const std::string& path) {
-  reader::Asset asset = open_asset(path, reader::Verify::Checksums);
+  reader::Asset asset = open_asset(path, Verify::Checksums);
   FirstError first;
   reader::validate_asset(asset, keep_first_error, &first);
   if (first.errors == 0) {

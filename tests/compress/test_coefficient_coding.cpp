@@ -12,8 +12,8 @@
 #include <fstream>
 
 #include "compress/coefficient_coding.hpp"
-#include "compress_test_util.hpp"
 #include "formats/reader/compressed_coefficients.hpp"
+#include "tests/support/compress_test_util.hpp"
 
 namespace clothbake::compress {
 namespace {

@@ -6,8 +6,8 @@
 #include <tbb/global_control.h>
 
 #include "common/error.hpp"
-#include "compress_test_util.hpp"
 #include "model/splitmix64.hpp"
+#include "tests/support/compress_test_util.hpp"
 
 namespace clothbake::compress {
 namespace {

@@ -4,8 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "bake/inputs/fabric_load.hpp"
-#include "compress_test_util.hpp"
 #include "tables/radiance_fill.hpp"
+#include "tests/support/compress_test_util.hpp"
 
 namespace clothbake::compress {
 namespace {

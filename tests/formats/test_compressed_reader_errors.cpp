@@ -5,8 +5,8 @@
 #include <cstddef>
 #include <cstring>
 
-#include "tests/compress/compress_test_util.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
+#include "tests/support/compress_test_util.hpp"
 
 namespace clothbake::compress {
 namespace {

@@ -1,7 +1,8 @@
 // Footprint queries on raw Integral-Radiance tables through the reader library
-// (formats/reader/radiance_query.hpp, formats/reader_raw/radiance_tables.hpp), on assets written with the writer:
-// exactness against direct sums over the same texels and bins, the precision target at 256^2 and
-// 2048^2 (far corner included), periodicity, bin interpolation, argument errors, hostile sections.
+// (formats/reader/radiance_query.hpp, formats/reader_raw/radiance_tables.hpp), on assets written
+// with the writer: exactness against direct sums over the same texels and bins, the precision
+// target at 256^2 and 2048^2 (far corner included), periodicity, bin interpolation, argument
+// errors, hostile sections.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,9 +14,9 @@
 #include "formats/reader_raw/radiance_tables.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/directions.hpp"
-#include "tests/tables/table_fixtures.hpp"
 #include "tables/radiance_fill.hpp"
 #include "tables/radiance_sections.hpp"
+#include "tests/support/table_fixtures.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

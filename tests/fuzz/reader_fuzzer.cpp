@@ -28,10 +28,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (reinterpret_cast<uintptr_t>(copy.get()) % 8 != 0) __builtin_trap();
   if (size) std::memcpy(copy.get(), data, size);
   const unsigned char* words = copy.get();
-  for (Verify verify : {Verify::Structure, Verify::Checksums}) {
+  // Once as opened (structure only), once only if every checksum holds.
+  for (bool checksums : {false, true}) {
     Asset asset;
     if (!asset.open_memory(words, size).ok()) continue;
-    if (verify == Verify::Checksums && !verify_checksums(asset).ok()) continue;
+    if (checksums && !verify_checksums(asset).ok()) continue;
     volatile uint64_t sink = 0;
     for (uint32_t i = 0; i < asset.section_count(); ++i) {
       SectionInfo info;

@@ -9,8 +9,8 @@
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "model/sggx.hpp"
-#include "table_fixtures.hpp"
 #include "tables/radiance_fill.hpp"
+#include "tests/support/table_fixtures.hpp"
 
 using namespace clothbake;
 using namespace clothbake::tables;

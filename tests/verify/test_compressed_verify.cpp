@@ -5,8 +5,8 @@
 
 #include "bake/inputs/fabric_load.hpp"
 #include "common/error.hpp"
-#include "tests/compress/compress_test_util.hpp"
 #include "tables/radiance_fill.hpp"
+#include "tests/support/compress_test_util.hpp"
 #include "verify/compressed_verify.hpp"
 
 namespace clothbake::compress {

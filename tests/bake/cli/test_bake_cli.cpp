@@ -364,6 +364,18 @@ TEST_F(Cli, DamagedAndForeignAssets) {
   EXPECT_IN("rebuild the reader", r.err);
   r = run({"validate", "@newer.cbk"});
   EXPECT_EQ(r.code, 3);
+  // A flipped header flag bit: the structure holds, the header checksum does not. info (which
+  // verifies it) and validate exit 3 with CBK-E004; the damaged payload above still describes.
+  std::string flagged = bytes;
+  flagged[20] ^= 0x01;
+  std::ofstream(dir_ / "flagged.cbk", std::ios::binary) << flagged;
+  r = run({"info", "@flagged.cbk"});
+  EXPECT_EQ(r.code, 3);
+  EXPECT_IN("CBK-E004", r.err);
+  r = run({"validate", "@flagged.cbk"});
+  EXPECT_EQ(r.code, 3);
+  EXPECT_IN("CBK-E004", r.out);
+  EXPECT_EQ(run({"info", "@damaged.cbk"}).code, 0);
   // Not an asset at all.
   std::ofstream(dir_ / "text.cbk") << std::string(200, 'x');
   r = run({"validate", "@text.cbk"});

@@ -1,4 +1,5 @@
-// Shared helpers of the compress tests: synthetic directional data, direct footprint sums.
+// Shared helpers of the compress, reader and verify tests: synthetic directional data, direct
+// footprint sums.
 #pragma once
 
 #include <cmath>

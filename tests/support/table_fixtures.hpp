@@ -1,5 +1,5 @@
-// Synthetic inputs for the table tests: a small periodic "weave" of tangents, roughness per yarn,
-// gaps and a label map, with no dependency on the fabric loader.
+// Synthetic inputs for the table, raw-reader and verify tests: a small periodic "weave" of
+// tangents, roughness per yarn, gaps and a label map, with no dependency on the fabric loader.
 #pragma once
 
 #include <cmath>
