@@ -50,46 +50,38 @@ const std::vector<uint64_t>& asset_words(int n, std::size_t* size) {
   return it->second.first;
 }
 
-void BM_OpenStructure(benchmark::State& state) {
+// Opens the asset of state.range(0) each iteration, then runs `verify` (null: nothing more);
+// returns the asset's size in bytes.
+std::size_t open_loop(benchmark::State& state,
+                      reader::Status (*verify)(const reader::Asset&) noexcept) {
   std::size_t size;
   const auto& words = asset_words(int(state.range(0)), &size);
   for (auto _ : state) {
     reader::Asset asset;
     auto status = asset.open_memory(words.data(), size);
+    if (status.ok() && verify != nullptr) status = verify(asset);
+    if (!status.ok()) state.SkipWithError(status.message());
     benchmark::DoNotOptimize(status);
   }
   state.counters["asset_MB"] = double(size) / 1e6;
+  return size;
+}
+
+void BM_OpenStructure(benchmark::State& state) {
+  open_loop(state, nullptr);
 }
 BENCHMARK(BM_OpenStructure)->Arg(256)->Arg(1024)->Arg(2048);
 
 // Open plus the header checksum: what open() did before the checksums became opt-in, and what
 // `clothbake info` does.
 void BM_OpenAndHeaderChecksum(benchmark::State& state) {
-  std::size_t size;
-  const auto& words = asset_words(int(state.range(0)), &size);
-  for (auto _ : state) {
-    reader::Asset asset;
-    auto status = asset.open_memory(words.data(), size);
-    if (status.ok()) status = reader::verify_header_checksum(asset);
-    if (!status.ok()) state.SkipWithError(status.message());
-    benchmark::DoNotOptimize(status);
-  }
-  state.counters["asset_MB"] = double(size) / 1e6;
+  open_loop(state, reader::verify_header_checksum);
 }
 BENCHMARK(BM_OpenAndHeaderChecksum)->Arg(256)->Arg(1024)->Arg(2048);
 
 void BM_OpenWithChecksums(benchmark::State& state) {
-  std::size_t size;
-  const auto& words = asset_words(int(state.range(0)), &size);
-  for (auto _ : state) {
-    reader::Asset asset;
-    auto status = asset.open_memory(words.data(), size);
-    if (status.ok()) status = reader::verify_checksums(asset);
-    if (!status.ok()) state.SkipWithError(status.message());
-    benchmark::DoNotOptimize(status);
-  }
+  const std::size_t size = open_loop(state, reader::verify_checksums);
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(size));
-  state.counters["asset_MB"] = double(size) / 1e6;
 }
 BENCHMARK(BM_OpenWithChecksums)->Arg(256)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond);
 
