@@ -1,0 +1,136 @@
+// The batch engine (bake/cli/batch_run.hpp) called directly, without baking: which fabrics a
+// folder or a list names and where their outputs go, the failures it reports as jobs rather than
+// errors, the stamp check of fabrics never baked, and the Slurm array of the pending ones.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "bake/cli/batch_run.hpp"
+#include "common/error.hpp"
+
+namespace fs = std::filesystem;
+
+namespace clothbake::cli {
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class BatchRun : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("clothbake_batch_run_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "lib");
+    for (const char* name : {"b.toml", "a.toml"})
+      std::ofstream(dir_ / "lib" / name) << "[weave]\nname = \"plain\"\n";
+    std::ofstream(dir_ / "lib" / "notes.txt") << "not a fabric\n";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  BatchOptions options(const fs::path& source) const {
+    BatchOptions o;
+    o.source = source.string();
+    o.output_dir = (dir_ / "out").string();
+    return o;
+  }
+  fs::path dir_;
+};
+
+TEST_F(BatchRun, AFolderGivesItsFabricsSortedWithOneOutputEach) {
+  const auto jobs = list_batch_jobs(options(dir_ / "lib"));
+  ASSERT_EQ(jobs.size(), 2u);
+  EXPECT_EQ(jobs[0].name, "a");
+  EXPECT_EQ(jobs[1].name, "b");
+  EXPECT_EQ(jobs[0].output, (dir_ / "out" / "a.cbk").string());
+  for (const auto& j : jobs)
+    EXPECT_EQ(j.status, "pending") << j.note;
+}
+
+TEST_F(BatchRun, AListResolvesAgainstItsFolderAndReportsBadEntriesAsFailedJobs) {
+  fs::create_directories(dir_ / "lists");
+  std::ofstream(dir_ / "lists" / "fabrics.txt")
+      << "# a comment\n\n  ../lib/a.toml  \n"
+      << (dir_ / "lib" / "b.toml").string() << "\nmissing.toml\n../lib\n";
+  const auto jobs = list_batch_jobs(options(dir_ / "lists" / "fabrics.txt"));
+  ASSERT_EQ(jobs.size(), 4u);
+  EXPECT_EQ(fs::path(jobs[0].fabric), dir_ / "lists" / ".." / "lib" / "a.toml");
+  EXPECT_EQ(jobs[0].status, "pending") << jobs[0].note;
+  EXPECT_EQ(jobs[1].status, "pending") << jobs[1].note;
+  EXPECT_EQ(jobs[2].status, "failed");
+  EXPECT_NE(jobs[2].note.find("missing.toml"), std::string::npos) << jobs[2].note;
+  EXPECT_EQ(jobs[3].status, "failed");  // a folder, named as one
+  EXPECT_NE(jobs[3].note.find("directory"), std::string::npos) << jobs[3].note;
+}
+
+TEST_F(BatchRun, TwoFabricsOfOneStemBothFailNamingEachOther) {
+  fs::create_directories(dir_ / "other");
+  std::ofstream(dir_ / "other" / "a.toml") << "[weave]\nname = \"twill2/1\"\n";
+  std::ofstream(dir_ / "list.txt") << "lib/a.toml\nother/a.toml\nlib/b.toml\n";
+  const auto jobs = list_batch_jobs(options(dir_ / "list.txt"));
+  ASSERT_EQ(jobs.size(), 3u);
+  EXPECT_EQ(jobs[0].status, "failed");
+  EXPECT_EQ(jobs[1].status, "failed");
+  EXPECT_NE(jobs[0].note.find("other/a.toml"), std::string::npos) << jobs[0].note;
+  EXPECT_NE(jobs[1].note.find("lib/a.toml"), std::string::npos) << jobs[1].note;
+  EXPECT_EQ(jobs[2].status, "pending");
+}
+
+TEST_F(BatchRun, ASourceWithoutFabricsIsAnInputErrorAndCreatesNothing) {
+  fs::create_directories(dir_ / "empty");
+  try {
+    (void)list_batch_jobs(options(dir_ / "empty"));
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ExitCode::Input);
+    EXPECT_NE(std::string(e.what()).find("names no fabric"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(BatchRun, FabricsNeverBakedStayPendingWithTheUnknownPeak) {
+  const BatchOptions o = options(dir_ / "lib");
+  auto jobs = list_batch_jobs(o);
+  EXPECT_EQ(check_batch_stamps(o, jobs), kUnknownPeakBytes);
+  EXPECT_TRUE(fs::is_directory(dir_ / "out" / ".clothbake-batch"));
+  for (const auto& j : jobs) {
+    EXPECT_EQ(j.status, "pending");
+    EXPECT_EQ(j.note, "never baked");
+  }
+}
+
+TEST_F(BatchRun, TheSlurmArrayHasOneTaskPerPendingFabric) {
+  BatchOptions o = options(dir_ / "lib");
+  o.scene = (dir_ / "it's a scene.toml").string();  // quoted for the shell
+  auto jobs = list_batch_jobs(o);
+  jobs.push_back(jobs[0]);
+  jobs.back().status = "failed";  // not a task
+  fs::create_directories(o.output_dir);
+  const SlurmScript s = write_slurm_script(o, jobs, uint64_t(1) << 30);
+  EXPECT_EQ(s.tasks, 2u);
+  EXPECT_EQ(s.mem_mb, 1280u + 64u);  // 1 GiB + 25 % + 64 MiB
+  const std::string list = slurp(s.list);
+  EXPECT_EQ(list, fs::absolute(jobs[0].fabric).string() + "\n" +
+                      fs::absolute(jobs[1].fabric).string() + "\n");
+  const std::string script = slurp(s.script);
+  EXPECT_NE(script.find("#SBATCH --array=0-1\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("--scene '" + (dir_ / "it'\\''s a scene.toml").string() + "'"),
+            std::string::npos)
+      << script;
+  struct stat st {};
+  ASSERT_EQ(::stat(s.script.c_str(), &st), 0);
+  EXPECT_TRUE(st.st_mode & S_IXUSR);
+}
+
+}  // namespace
+}  // namespace clothbake::cli
