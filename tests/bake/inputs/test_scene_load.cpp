@@ -3,10 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <string>
 
 #include "bake/inputs/fabric_load.hpp"
 #include "bake/inputs/scene_load.hpp"
+#include "fabric/fabric_sections.hpp"
+#include "formats/reader/asset.hpp"
+#include "formats/reader/layout.hpp"
+#include "formats/writer/asset_writer.hpp"
 #include "tests/bake/inputs/test_support.hpp"
 
 namespace {
@@ -60,6 +66,36 @@ TEST(SceneUnits, TheFabricsOwnTileSideSetsTheTilesPerUnit) {
   // A diffuse object ignores the units.
   const auto diffuse = load(dir, scene_with("units = \"m\"", "color = 0.5\n"));
   EXPECT_DOUBLE_EQ(diffuse.scene.objects[0].tiles_per_unit, 1.0);
+}
+
+TEST(SceneUnits, AnAssetsTileSideIsReadOnlyWhenItsChecksumsHold) {
+  ScratchDir dir;
+  write_text(dir / "plain.toml", kWovenFabric);
+  const Fabric fabric = clothbake::load_fabric_description(dir / "plain.toml").fabric;
+  std::vector<formats::Section> sections = fabric_record_sections(fabric);
+  sections.push_back(formats::make_metadata_section({{"format", "clothbake-asset"}}));
+  const std::vector<std::byte> bytes = formats::serialize_asset(sections);
+  auto write_asset = [&](const std::vector<std::byte>& b) {
+    write_text(dir / "a.cbk", std::string(reinterpret_cast<const char*>(b.data()), b.size()));
+  };
+  write_asset(bytes);
+  const auto metres = load(dir, scene_with("units = \"m\"", "asset = \"a.cbk\"\n"));
+  EXPECT_NEAR(metres.scene.objects[0].tiles_per_unit, 1000.0 / fabric.tile_size_mm, 1e-9);
+  // The tile side's top byte changed (a 1 000 times larger side), checksums not recomputed: the
+  // scene refuses the asset instead of scaling the cloth by it.
+  std::vector<std::byte> damaged = bytes;
+  std::vector<uint64_t> words((bytes.size() + 7) / 8);
+  std::memcpy(words.data(), bytes.data(), bytes.size());
+  reader::Asset asset;
+  ASSERT_TRUE(asset.open_memory(words.data(), bytes.size()).ok());
+  reader::SectionInfo info;
+  ASSERT_TRUE(asset.find(reader::SectionType::FabricInfo, 0, &info).ok());
+  damaged[info.offset + offsetof(reader::FabricInfoRecord, tile_size_mm) + 7] ^= std::byte{0x01};
+  write_asset(damaged);
+  write_text(dir / "scene.toml", scene_with("units = \"m\"", "asset = \"a.cbk\"\n"));
+  const std::string message = error_message([&] { inputs::load_scene(dir / "scene.toml"); });
+  EXPECT_NE(message.find("object[0].asset"), std::string::npos) << message;
+  EXPECT_NE(message.find("tile size"), std::string::npos) << message;
 }
 
 TEST(SceneUnits, MissingOrContradictoryScalesNameTheKey) {
