@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -42,12 +43,16 @@ std::string options_key(const BatchOptions& o) {
   return o.scene.empty() ? "bake defaults" : "bake --scene " + fs::absolute(o.scene).string();
 }
 
+std::string executable(const BatchOptions& o) {
+  return o.executable.empty() ? current_executable() : o.executable;
+}
+
 std::string stamp_file(const BatchOptions& o, const BatchJob& j) {
   return (fs::path(state_dir(o)) / (j.name + ".stamp.json")).string();
 }
 
 StampKey stamp_key(const BatchOptions& o, const BatchJob& j) {
-  return {CLOTHBAKE_VERSION_STRING, current_executable(), options_key(o), j.fabric, j.output};
+  return {CLOTHBAKE_VERSION_STRING, executable(o), options_key(o), j.fabric, j.output};
 }
 
 // Up to date: the fabric's stamp holds (batch_stamp.hpp). Fills j.peak and j.size.
@@ -98,8 +103,8 @@ std::string last_line(const std::string& path) {
   return last.empty() ? "failed without a message" : last;
 }
 
-pid_t spawn_bake(const std::vector<std::string>& args, const std::string& log) {
-  const std::string exe = current_executable();
+pid_t spawn_bake(const std::string& exe, const std::vector<std::string>& args,
+                 const std::string& log) {
   std::vector<char*> argv;
   argv.push_back(const_cast<char*>(exe.c_str()));
   for (const auto& a : args)
@@ -222,7 +227,7 @@ SlurmScript write_slurm_script(const BatchOptions& o, const std::vector<BatchJob
     << "#SBATCH --mem=" << mem_mb << "M\n"
     << "#SBATCH --output=" << (dir / ".clothbake-batch" / "slurm-%A_%a.log").string() << "\n"
     << "set -euo pipefail\n"
-    << "CLOTHBAKE=" << sh_quote(current_executable()) << "\n"
+    << "CLOTHBAKE=" << sh_quote(executable(o)) << "\n"
     << "LIST=" << sh_quote(list) << "\n"
     << "OUTDIR=" << sh_quote(dir.string()) << "\n"
     << "FABRIC=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" \"$LIST\")\n"
@@ -231,6 +236,7 @@ SlurmScript write_slurm_script(const BatchOptions& o, const std::vector<BatchJob
     << "  --threads \"${SLURM_CPUS_PER_TASK:-1}\" --report "
        "\"$OUTDIR/.clothbake-batch/$NAME.report.json\"";
   if (!cache.empty()) s << " \\\n  --cache " << sh_quote(fs::absolute(cache).string());
+  if (!o.cache_max_size.empty()) s << " \\\n  --cache-max-size " << sh_quote(o.cache_max_size);
   if (!o.scene.empty()) s << " \\\n  --scene " << sh_quote(fs::absolute(o.scene).string());
   s << "\n";
   formats::write_text_atomically(list, list_text);
@@ -267,7 +273,8 @@ BatchRun run_batch(
       if (j.status != "pending") continue;
       if (!running.empty() && reserved + estimate(j) > max_memory) continue;
       const std::string base = (fs::path(state_dir(o)) / j.name).string();
-      j.pid = spawn_bake(bake_arguments(o, j, threads, base + ".report.json"), base + ".log");
+      j.pid = spawn_bake(executable(o), bake_arguments(o, j, threads, base + ".report.json"),
+                         base + ".log");
       j.start = std::chrono::steady_clock::now();
       if (j.pid < 0) {
         j.status = "failed";
@@ -283,6 +290,12 @@ BatchRun run_batch(
     const pid_t pid = ::waitpid(-1, &status, 0);
     if (pid < 0) {
       if (errno == EINTR) continue;
+      // Not expected while our children run (ECHILD would mean someone else reaped them).
+      const std::string why = std::strerror(errno);
+      for (auto& [child, index] : running) {
+        jobs[index].status = "failed";
+        jobs[index].note = "lost track of the bake (waitpid: " + why + ")";
+      }
       break;
     }
     auto it = running.find(pid);

@@ -29,6 +29,9 @@ struct BatchOptions {
   std::string cache_max_size;
   std::string scene;   // every bake bakes its plan for this scene (`bake --scene`)
   bool force = false;  // bake up-to-date fabrics too
+  // The clothbake executable the bakes run (empty: the running one, current_executable()); tests
+  // set a stand-in.
+  std::string executable;
 };
 
 struct BatchJob {
@@ -50,9 +53,10 @@ struct BatchJob {
 std::vector<BatchJob> list_batch_jobs(const BatchOptions& o);
 
 // Creates OUTDIR/.clothbake-batch, then marks each pending job whose stamp holds "up-to-date"
-// (unless o.force), filling its measured peak and size; the others keep a note saying why they
-// bake ("never baked", "PATH changed", ...). Returns the peak to assume for a job never measured:
-// the largest measured peak of the list, or kUnknownPeakBytes.
+// (unless o.force), filling its measured peak and size; the others get the stamp check's reason as
+// their note ("never baked", "PATH changed", ...; empty for an up-to-date fabric that o.force
+// bakes again). Returns the peak to assume for a job never measured: the largest measured peak of
+// the list, or kUnknownPeakBytes. Error(Input) when the folder cannot be created.
 uint64_t check_batch_stamps(const BatchOptions& o, std::vector<BatchJob>& jobs);
 
 struct SlurmScript {
@@ -63,9 +67,11 @@ struct SlurmScript {
   int cpus_per_task = 0;
 };
 
-// Writes the sbatch job array of the pending jobs (one task each, the same `clothbake bake` of the
-// running executable as a local batch) and its list, both atomically. Error(Output) when they
-// cannot be written.
+// Writes the sbatch job array of the pending jobs and its list, both atomically: one task per job,
+// running the `clothbake bake` a local batch runs (same executable, cache, cache bound and scene),
+// except that a task names its output after the fabric's file name without a final ".toml" (a
+// local batch: without its last extension, the same for *.toml). Error(Input) when they cannot be
+// written.
 SlurmScript write_slurm_script(const BatchOptions& o, const std::vector<BatchJob>& jobs,
                                uint64_t peak_estimate);
 
@@ -76,11 +82,15 @@ struct BatchRun {
 };
 
 // Bakes the pending jobs: in list order, first fit by memory (the running bakes' peaks plus 10 %,
-// or unknown_peak, never above max_memory, except that one bake always may run), at most
-// o.jobs at once. Each job ends "baked" (its stamp written) or "failed" with the last line of its
-// log. on_start(to_bake, at_once) is called once before, on_end(job, ended, to_bake) as each ends.
-// The children are the running executable (depfile.hpp's current_executable) with `bake ...`:
-// call it from the clothbake executable.
+// or unknown_peak, never above max_memory, except that one bake always may run), at most o.jobs at
+// once (0: one per core), each a child process `EXECUTABLE bake FABRIC -o OUTPUT --quiet
+// --threads T --report R [--cache ...] [--scene ...]` with stdout to /dev/null and stderr to
+// OUTDIR/.clothbake-batch/<name>.log. Each pending job ends "baked" (its report read, its stamp
+// written) or "failed" with a note: the last line of its log, "killed by signal N", "cannot start
+// clothbake", "baked, but the report or stamp failed: ..." or, should waiting for children fail,
+// "lost track of the bake". on_start(to_bake, at_once) is called once before; on_end(job, ended,
+// to_bake) as each started bake ends (not for one that could not start). Waits for any child of
+// the process (waitpid(-1)): the caller must have no other children of its own.
 BatchRun run_batch(const BatchOptions& o, std::vector<BatchJob>& jobs, uint64_t max_memory,
                    uint64_t unknown_peak,
                    const std::function<void(std::size_t to_bake, int at_once)>& on_start = {},

@@ -7,6 +7,7 @@
 // and never more than fit in --max-memory by their measured peaks. Exit 0 when every fabric is
 // baked or up to date, 2 when any failed (after all ran), 1 for a bad command line.
 #include <algorithm>
+#include <cstdio>
 #include <iomanip>
 #include <iostream>
 #include <memory>

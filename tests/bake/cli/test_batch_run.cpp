@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "bake/cli/batch_run.hpp"
 #include "common/error.hpp"
@@ -24,7 +25,7 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-class BatchRun : public ::testing::Test {
+class BatchRunTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
@@ -42,12 +43,13 @@ class BatchRun : public ::testing::Test {
     BatchOptions o;
     o.source = source.string();
     o.output_dir = (dir_ / "out").string();
+    o.cache = (dir_ / "cache").string();  // not $CLOTHBAKE_CACHE of whoever runs the tests
     return o;
   }
   fs::path dir_;
 };
 
-TEST_F(BatchRun, AFolderGivesItsFabricsSortedWithOneOutputEach) {
+TEST_F(BatchRunTest, AFolderGivesItsFabricsSortedWithOneOutputEach) {
   const auto jobs = list_batch_jobs(options(dir_ / "lib"));
   ASSERT_EQ(jobs.size(), 2u);
   EXPECT_EQ(jobs[0].name, "a");
@@ -57,7 +59,7 @@ TEST_F(BatchRun, AFolderGivesItsFabricsSortedWithOneOutputEach) {
     EXPECT_EQ(j.status, "pending") << j.note;
 }
 
-TEST_F(BatchRun, AListResolvesAgainstItsFolderAndReportsBadEntriesAsFailedJobs) {
+TEST_F(BatchRunTest, AListResolvesAgainstItsFolderAndReportsBadEntriesAsFailedJobs) {
   fs::create_directories(dir_ / "lists");
   std::ofstream(dir_ / "lists" / "fabrics.txt")
       << "# a comment\n\n  ../lib/a.toml  \n"
@@ -73,7 +75,7 @@ TEST_F(BatchRun, AListResolvesAgainstItsFolderAndReportsBadEntriesAsFailedJobs) 
   EXPECT_NE(jobs[3].note.find("directory"), std::string::npos) << jobs[3].note;
 }
 
-TEST_F(BatchRun, TwoFabricsOfOneStemBothFailNamingEachOther) {
+TEST_F(BatchRunTest, TwoFabricsOfOneStemBothFailNamingEachOther) {
   fs::create_directories(dir_ / "other");
   std::ofstream(dir_ / "other" / "a.toml") << "[weave]\nname = \"twill2/1\"\n";
   std::ofstream(dir_ / "list.txt") << "lib/a.toml\nother/a.toml\nlib/b.toml\n";
@@ -86,7 +88,7 @@ TEST_F(BatchRun, TwoFabricsOfOneStemBothFailNamingEachOther) {
   EXPECT_EQ(jobs[2].status, "pending");
 }
 
-TEST_F(BatchRun, ASourceWithoutFabricsIsAnInputErrorAndCreatesNothing) {
+TEST_F(BatchRunTest, ASourceWithoutFabricsIsAnInputError) {
   fs::create_directories(dir_ / "empty");
   try {
     (void)list_batch_jobs(options(dir_ / "empty"));
@@ -95,10 +97,9 @@ TEST_F(BatchRun, ASourceWithoutFabricsIsAnInputErrorAndCreatesNothing) {
     EXPECT_EQ(e.code(), ExitCode::Input);
     EXPECT_NE(std::string(e.what()).find("names no fabric"), std::string::npos) << e.what();
   }
-  EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
-TEST_F(BatchRun, FabricsNeverBakedStayPendingWithTheUnknownPeak) {
+TEST_F(BatchRunTest, FabricsNeverBakedStayPendingWithTheUnknownPeak) {
   const BatchOptions o = options(dir_ / "lib");
   auto jobs = list_batch_jobs(o);
   EXPECT_EQ(check_batch_stamps(o, jobs), kUnknownPeakBytes);
@@ -109,7 +110,7 @@ TEST_F(BatchRun, FabricsNeverBakedStayPendingWithTheUnknownPeak) {
   }
 }
 
-TEST_F(BatchRun, TheSlurmArrayHasOneTaskPerPendingFabric) {
+TEST_F(BatchRunTest, TheSlurmArrayHasOneTaskPerPendingFabric) {
   BatchOptions o = options(dir_ / "lib");
   o.scene = (dir_ / "it's a scene.toml").string();  // quoted for the shell
   auto jobs = list_batch_jobs(o);
@@ -124,12 +125,71 @@ TEST_F(BatchRun, TheSlurmArrayHasOneTaskPerPendingFabric) {
                       fs::absolute(jobs[1].fabric).string() + "\n");
   const std::string script = slurp(s.script);
   EXPECT_NE(script.find("#SBATCH --array=0-1\n"), std::string::npos) << script;
-  EXPECT_NE(script.find("--scene '" + (dir_ / "it'\\''s a scene.toml").string() + "'"),
-            std::string::npos)
-      << script;
+  auto quoted = [](const std::string& text) {  // the shell's single quotes, ' as '\''
+    std::string out = "'";
+    for (char c : text)
+      out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+  };
+  EXPECT_NE(script.find("--scene " + quoted(o.scene)), std::string::npos) << script;
+  EXPECT_NE(script.find("--cache " + quoted(o.cache)), std::string::npos) << script;
   struct stat st {};
   ASSERT_EQ(::stat(s.script.c_str(), &st), 0);
   EXPECT_TRUE(st.st_mode & S_IXUSR);
+}
+
+// The scheduler with a stand-in for clothbake: a shell script that "bakes" (writes the output and
+// a report naming the fabric as input) or fails with a message, as the real bake does.
+TEST_F(BatchRunTest, TheSchedulerBakesWhatIsPendingAndReportsEachEnd) {
+  std::ofstream(dir_ / "lib" / "fail.toml") << "[weave]\nname = \"plain\"\n";
+  const fs::path stand_in = dir_ / "stand-in.sh";
+  std::ofstream(stand_in)
+      << "#!/bin/sh\n"
+         "# bake FABRIC -o OUTPUT --quiet --threads T --report REPORT ...\n"
+         "case \"$2\" in *fail.toml) echo \"clothbake: cannot bake $2\" >&2; exit 3;; esac\n"
+         "printf 'asset' > \"$4\"\n"
+         "printf '{\"total\": {\"peak_rss_bytes\": 1000, \"wall_seconds\": 0.5}, "
+         "\"asset\": {\"size_bytes\": 5}, \"inputs\": [{\"role\": \"fabric\", \"path\": "
+         "\"%s\", \"xxh64\": \"0\"}]}' \"$2\" > \"$9\"\n";
+  fs::permissions(stand_in, fs::perms::owner_all);
+  BatchOptions o = options(dir_ / "lib");
+  o.executable = stand_in.string();
+  o.jobs = 2;
+  auto jobs = list_batch_jobs(o);
+  ASSERT_EQ(jobs.size(), 3u);  // a, b, fail
+  EXPECT_EQ(check_batch_stamps(o, jobs), kUnknownPeakBytes);
+  std::size_t started = 0;
+  std::vector<std::string> ended;
+  const cli::BatchRun run = run_batch(
+      o, jobs, uint64_t(1) << 40, kUnknownPeakBytes,
+      [&](std::size_t to_bake, int at_once) {
+        started = to_bake;
+        EXPECT_EQ(at_once, 2);
+      },
+      [&](const BatchJob& j, std::size_t count, std::size_t to_bake) {
+        ended.push_back(j.name);
+        EXPECT_EQ(count, ended.size());
+        EXPECT_EQ(to_bake, 3u);
+      });
+  EXPECT_EQ(started, 3u);
+  EXPECT_EQ(ended.size(), 3u);
+  EXPECT_EQ(run.at_once, 2);
+  for (const char* name : {"a", "b"}) {
+    const BatchJob& j = jobs[name[0] == 'a' ? 0 : 1];
+    EXPECT_EQ(j.status, "baked") << name << ": " << j.note;
+    EXPECT_EQ(j.peak, 1000u);
+    EXPECT_EQ(j.size, 5u);
+    EXPECT_EQ(slurp(j.output), "asset");
+  }
+  EXPECT_EQ(jobs[2].status, "failed");
+  EXPECT_EQ(jobs[2].note, "cannot bake " + jobs[2].fabric);  // the log's last line, unprefixed
+  // The stamps written for the baked ones hold: the next check finds them up to date, with the
+  // measured peak as the estimate for the rest; the failed one bakes again.
+  auto again = list_batch_jobs(o);
+  EXPECT_EQ(check_batch_stamps(o, again), 1000u);
+  EXPECT_EQ(again[0].status, "up-to-date") << again[0].note;
+  EXPECT_EQ(again[1].status, "up-to-date") << again[1].note;
+  EXPECT_EQ(again[2].status, "pending");
 }
 
 }  // namespace

@@ -81,7 +81,7 @@ TEST(SceneUnits, AnAssetsTileSideIsReadOnlyWhenItsChecksumsHold) {
   write_asset(bytes);
   const auto metres = load(dir, scene_with("units = \"m\"", "asset = \"a.cbk\"\n"));
   EXPECT_NEAR(metres.scene.objects[0].tiles_per_unit, 1000.0 / fabric.tile_size_mm, 1e-9);
-  // The tile side's top byte changed (a 1 000 times larger side), checksums not recomputed: the
+  // The tile side's top byte changed (a side 65 536 times smaller), checksums not recomputed: the
   // scene refuses the asset instead of scaling the cloth by it.
   std::vector<std::byte> damaged = bytes;
   std::vector<uint64_t> words((bytes.size() + 7) / 8);
