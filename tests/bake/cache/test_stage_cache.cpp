@@ -26,6 +26,7 @@
 #include "bake/pipeline/driver.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
+#include "tests/support/files.hpp"
 
 namespace {
 
@@ -102,12 +103,7 @@ Artifacts with_text(const std::string& text) {
   return a;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using clothbake::test_support::slurp;
 
 void spit(const fs::path& p, const std::string& bytes) {
   std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes;

@@ -20,6 +20,7 @@
 
 #include "common/image_io/image_io.hpp"
 #include "formats/reader/layout.hpp"
+#include "tests/support/files.hpp"
 
 namespace {
 
@@ -36,10 +37,7 @@ struct SpawnOptions {
   long file_size_limit = -1;     // RLIMIT_FSIZE in bytes (SIGXFSZ ignored)
 };
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using clothbake::test_support::slurp;
 
 pid_t spawn(const fs::path& dir, const std::vector<std::string>& args,
             const SpawnOptions& options) {

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "tests/support/files.hpp"
 #include "tests/support/run_cli.hpp"
 
 namespace fs = std::filesystem;
@@ -29,12 +30,7 @@ std::string fabric(const std::string& weave, int resolution = 16) {
          "\nparallax_dirs = 4\nvisibility_dirs = 4\nradiance_dirs = 6\nclusters = 2\n";
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using clothbake::test_support::slurp;
 
 class Batch : public ::testing::Test {
  protected:

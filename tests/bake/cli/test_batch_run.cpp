@@ -12,33 +12,24 @@
 
 #include "bake/cli/batch_run.hpp"
 #include "common/error.hpp"
+#include "tests/support/files.hpp"
+#include "tests/support/scratch_dir.hpp"
 
 namespace fs = std::filesystem;
 
 namespace clothbake::cli {
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using clothbake::test_support::slurp;
 
 class BatchRunTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("clothbake_batch_run_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
     fs::create_directories(dir_ / "lib");
     for (const char* name : {"b.toml", "a.toml"})
       std::ofstream(dir_ / "lib" / name) << "[weave]\nname = \"plain\"\n";
     std::ofstream(dir_ / "lib" / "notes.txt") << "not a fabric\n";
   }
-  void TearDown() override { fs::remove_all(dir_); }
   BatchOptions options(const fs::path& source) const {
     BatchOptions o;
     o.source = source.string();
@@ -46,7 +37,8 @@ class BatchRunTest : public ::testing::Test {
     o.cache = (dir_ / "cache").string();  // not $CLOTHBAKE_CACHE of whoever runs the tests
     return o;
   }
-  fs::path dir_;
+  test_support::ScratchDir scratch_;  // removed when the test ends
+  const fs::path dir_ = scratch_.path();
 };
 
 TEST_F(BatchRunTest, AFolderGivesItsFabricsSortedWithOneOutputEach) {

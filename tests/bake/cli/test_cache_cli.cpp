@@ -30,6 +30,7 @@
 #include "cluster/visibility_clusters.hpp"
 #include "formats/writer/asset_writer.hpp"
 #include "model/asg.hpp"
+#include "tests/support/files.hpp"
 #include "tests/support/run_cli.hpp"
 
 namespace fs = std::filesystem;
@@ -55,12 +56,7 @@ radiance_dirs = 6
 clusters = 2
 )";
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using clothbake::test_support::slurp;
 
 class Cache : public ::testing::Test {
  protected:

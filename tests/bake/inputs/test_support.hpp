@@ -11,34 +11,12 @@
 
 #include "common/error.hpp"
 #include "common/image_io/image_io.hpp"
+#include "tests/support/scratch_dir.hpp"
 
 namespace clothbake::testing {
 
-// A fresh directory under the system temp dir, removed when the test ends.
-class ScratchDir {
- public:
-  ScratchDir() {
-    static std::atomic<int> counter{0};
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "scratch";
-    for (char& c : name)
-      if (c == '/') c = '_';
-    path_ =
-        std::filesystem::temp_directory_path() / ("clothbake-inputs-" + std::to_string(::getpid()) +
-                                                  "-" + std::to_string(counter++) + "-" + name);
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+// A fresh directory per test (tests/support/scratch_dir.hpp).
+using ScratchDir = clothbake::test_support::ScratchDir;
 
 inline void write_text(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
