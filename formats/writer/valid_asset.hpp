@@ -9,8 +9,8 @@
 
 namespace clothbake::formats {
 
-// Opens `path` with every section checksum verified, then runs reader::validate_asset and the
-// metadata checks (check_metadata). Throws clothbake::Error: Input (2) when the file cannot be
+// Opens `path` (structure), then runs reader::validate_asset (the header and every section
+// checksum, then the rest) and the metadata checks (check_metadata). Throws clothbake::Error: Input (2) when the file cannot be
 // read, InvalidAsset (3) with "CBK-E0nn: MESSAGE (N errors; clothbake validate lists them)" for
 // the first error found. Warnings are allowed. Cost: one pass over the asset plus opening every
 // baked view (what validate costs).
