@@ -10,6 +10,7 @@
 #include "eval/evaluator.hpp"
 #include "eval/footprint_sums.hpp"
 #include "eval/pushforward_sums.hpp"
+#include "eval/subperiod_sums.hpp"
 #include "formats/reader/cluster_sections.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/fabric_sections.hpp"
@@ -73,7 +74,13 @@ struct EvalData {
   // tables store them cluster by cluster); C + 1 entries.
   std::vector<uint32_t> cluster_image_begin;
   PushforwardSums pushforward;     // the unbiased form's whole-tile sums (pushforward_sums.hpp)
+  SubperiodSums subperiod;         // its block sums (subperiod_sums.hpp; not open: no block form)
   ControlVariateTexels cv_texels;  // the unbiased form's per-texel records of g (cv_texels.hpp)
+  // The weave's float length: the mean length in texels of a run of one yarn along the tile's rows
+  // and columns, 2 N^2 / (changes of yarn id between neighbours, wrapping, along both axes); N
+  // when the tile has one yarn. The scale below which a footprint holds too little of the weave
+  // for the control variate to pay (EvalOptions::min_control_variate_floats).
+  double yarn_run = 0;
   uint32_t visibility_rank() const { return basis.is_open() ? basis.rank() : 0; }
   // e_0 = 1 and the texel's visibility basis coefficients e_1..e_M into e[0..M].
   void visibility_coefficients(uint64_t t, double* e) const {

@@ -95,6 +95,17 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   if (!(options.max_remainder_fraction >= 0.0) || !std::isfinite(options.max_remainder_fraction))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "max_remainder_fraction must be finite and >= 0");
+  if (!(options.max_block_sum_bytes >= 0.0) || std::isnan(options.max_block_sum_bytes))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "max_block_sum_bytes must be >= 0");
+  if (unsigned(options.footprint_base) > unsigned(FootprintBase::None))
+    return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown footprint_base");
+  if (!(options.min_control_variate_tiles >= 0.0) ||
+      !std::isfinite(options.min_control_variate_tiles) ||
+      !(options.min_control_variate_floats >= 0.0) ||
+      !std::isfinite(options.min_control_variate_floats))
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "min_control_variate_tiles and _floats must be finite and >= 0");
   if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "direct_max_side must be finite and >= 0");
@@ -135,6 +146,17 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                            "texel (%u, %u) has yarn id %u but the asset has %u yarn records",
                            unsigned(t % d->n), unsigned(t / d->n), unsigned(d->maps.yarn_id[t]),
                            unsigned(yarns.size));
+  {
+    uint64_t changes = 0;
+    const uint32_t n = d->n;
+    for (uint32_t y = 0; y < n; ++y)
+      for (uint32_t x = 0; x < n; ++x) {
+        const uint16_t here = d->maps.yarn_id[uint64_t(y) * n + x];
+        changes += here != d->maps.yarn_id[uint64_t(y) * n + (x + 1) % n];
+        changes += here != d->maps.yarn_id[uint64_t((y + 1) % n) * n + x];
+      }
+    d->yarn_run = changes > 0 ? 2.0 * double(n) * n / double(changes) : double(n);
+  }
   d->sheen_color = Rgb(fabric->sheen_color[0], fabric->sheen_color[1], fabric->sheen_color[2]);
   d->sheen_roughness = fabric->sheen_roughness;
 
@@ -301,6 +323,20 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
       if (!d->cv_texels.build(*d))
         return Status::error(ErrorCode::Unsupported, Check::None,
                              "cannot allocate the control variate's texel records");
+      // The block form's sums: the finest grid of at most 16 x 16 blocks (a divisor of N) whose
+      // sums over every view bin stay within max_block_sum_bytes; none when even 2 x 2 does not.
+      PushforwardChannels block_layout = layout;
+      block_layout.rank = std::min(d->options.block_sum_rank, layout.rank);
+      const double bins = double(d->parallax.dirs()) * double(d->parallax.dirs());
+      for (uint32_t blocks = 16; blocks >= 2; blocks /= 2) {
+        const double bytes =
+            double(blocks + 1) * (blocks + 1) * block_layout.count() * sizeof(float) * bins;
+        if (d->n % blocks != 0 || !(bytes <= d->options.max_block_sum_bytes)) continue;
+        if (!d->subperiod.init(d.get(), uint32_t(bins), block_layout, blocks))
+          return Status::error(ErrorCode::Unsupported, Check::None,
+                               "cannot allocate the block sums' bookkeeping");
+        break;
+      }
     }
   } catch (const std::bad_alloc&) {
     return Status::error(ErrorCode::Unsupported, Check::None,
@@ -311,6 +347,10 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
 }
 
 namespace {
+
+double square(double v) {
+  return v * v;
+}
 
 Status check_arguments(const EvalData* data, const Footprint& footprint, LobeMask lobes,
                        const Estimate* out) {
@@ -372,11 +412,17 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
                          "method multiscale needs compressed Integral-Radiance tables (the raw "
                          "ones have no images to integrate under the parallax); use "
                          "multiscale-paper, brute or reference with raw tables");
-  // The block of whole periods, once per estimate: it decides the branch and the estimator uses it.
-  const PeriodBlock block =
-      method == Method::Multiscale && !direct ? period_block(data_->n, footprint) : PeriodBlock{};
-  const bool without_cv = method == Method::Multiscale && !direct &&
-                          block.remainder > data_->options.max_remainder_fraction;
+  // Too small a footprint for the control variate to pay is brute force's without further ado;
+  // otherwise its cover, once per estimate, decides the branch and the estimator uses it.
+  const bool unbiased_multiscale = method == Method::Multiscale && !direct;
+  const bool too_small =
+      unbiased_multiscale &&
+      w * h < square(std::max(data_->options.min_control_variate_tiles * double(data_->n),
+                              data_->options.min_control_variate_floats * data_->yarn_run));
+  const FootprintCover cover =
+      unbiased_multiscale && !too_small ? cover_footprint(*data_, footprint) : FootprintCover{};
+  const bool without_cv =
+      too_small || (unbiased_multiscale && cover.remainder > data_->options.max_remainder_fraction);
   if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
                                                // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
@@ -399,7 +445,7 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   } else if (method == Method::MultiscalePaper) {
     s = paper_control_variates(*data_, frame, footprint, spp, rng, out);
   } else {
-    s = pushforward_control_variates(*data_, frame, footprint, block, spp, rng, out);
+    s = pushforward_control_variates(*data_, frame, footprint, cover, spp, rng, out);
   }
   if (!s.ok()) return s;
   sum_value(out);

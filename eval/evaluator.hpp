@@ -14,10 +14,11 @@
 //
 // Methods (Method):
 //   Multiscale      clustered control variates with each texel's low-rank visibility, at each
-//                   sample's own destination, whose mean over a block of whole periods is exact
-//                   (per-view-bin push-forward sums) and over the rest of the footprint sampled
-//                   cheaply: unbiased (docs/evaluator.md, "Unbiased multi-scale"); footprints far
-//                   from a block of whole periods are sampled as brute force.
+//                   sample's own destination, whose mean over a block of whole periods or of whole
+//                   source blocks is exact (per-view-bin push-forward sums) and over the rest of
+//                   the footprint sampled cheaply: unbiased at every footprint size
+//                   (docs/evaluator.md, "Unbiased multi-scale", "Footprints below a period");
+//                   footprints below a tenth of a tile a side are sampled as brute force.
 //   MultiscalePaper Eq. 8-10 as printed: one parallax shift per footprint, k-bar and G-bar at the
 //                   footprint, residual D (V - v_c) (biased where those approximations fail).
 //   Brute           the paper's "w/o multi-scale": stratified samples p in P, per-sample parallax,
@@ -32,8 +33,9 @@
 // derived footprint sums (docs/evaluator.md, "Memory") and never throws: allocation failure is a
 // Status. estimate() allocates only on first use or for large footprints (docs/evaluator.md,
 // "Allocation in estimate()"): the Reference method's dense weight map of N x N doubles for
-// footprints of more than 64 source texels, the unbiased form's push-forward sums of a view bin on
-// its first use, and in the reader a compressed parallax table's per-direction SAT
+// footprints of more than 64 source texels, the unbiased form's push-forward sums and block prefix
+// sums of a view bin on its first use (together at most EvalOptions::max_block_sum_bytes plus
+// about 20 KB a bin), and in the reader a compressed parallax table's per-direction SAT
 // (MultiscalePaper's footprint mean) or an entropy-coded direction's decoded plane; a failed map,
 // sum or SAT is Unsupported. It is noexcept, thread-safe (const), and safe for any argument values
 // (bad ones give InvalidArgument). The Asset must outlive the Evaluator.
@@ -77,6 +79,14 @@ enum class TableChoice : uint8_t {
   Compressed,  // the C-PCA compressed tables (NotFound if absent)
 };
 
+// The base region of the unbiased multi-scale form (EvalOptions::footprint_base).
+enum class FootprintBase : uint8_t {
+  Auto,          // per footprint, the form below that leaves the smaller remainder
+  WholePeriods,  // whole tiles at the footprint's corner: exact for the full control variate
+  Blocks,        // the rectangle of whole source blocks nearest to the footprint
+  None,          // no base: the integral of g over the footprint by cheap samples alone
+};
+
 struct EvalOptions {
   TableChoice tables = TableChoice::Auto;
   // Footprints with both sides below this many texels skip the tables and are summed exactly
@@ -91,11 +101,35 @@ struct EvalOptions {
   // |P|) sqrt(spp (spp + 2))) of them, at least 1 when B is not empty, at most 65536. Any value > 0
   // keeps the estimate unbiased; this one balances their cost against their variance.
   double remainder_sample_scale = 32.0;
-  // The unbiased multi-scale form uses its control variate on a footprint P when the part B of P
-  // that its whole-period block A leaves to cheap samples (the symmetric difference, signed) is at
-  // most this fraction of |P| (eval/methods.hpp, period_block); otherwise P is sampled as brute
-  // force. Any value keeps the estimate unbiased; docs/evaluator.md gives the measured choice.
+  // The unbiased multi-scale form uses its control variate on a footprint P when the effective
+  // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
+  // the exactly integrated base, weighted by its integrand's spread) is at most this fraction of
+  // |P|; otherwise P is sampled as brute force. Any value keeps the estimate unbiased;
+  // docs/evaluator.md gives the measured choice.
   double max_remainder_fraction = 1.0;
+  // Footprints whose geometric mean side (the square root of their area) is below this fraction
+  // of the tile, or below min_control_variate_floats float lengths of the weave (the mean run of
+  // one yarn along the tile's rows and columns), are sampled as brute force by the unbiased
+  // multi-scale form: over so little of the weave the integrand varies too little for the control
+  // variate's per-estimate cost to pay (docs/evaluator.md, "Footprints the control variate does not
+  // pay for", gives the measured crossovers). 0: no bound.
+  double min_control_variate_tiles = 0.1;
+  double min_control_variate_floats = 1.0;
+  // The base region of the unbiased multi-scale form (eval/footprint_cover.hpp): Auto takes, per
+  // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder;
+  // the others force one form (for studies: docs/evaluator.md, "Footprints below a period").
+  FootprintBase footprint_base = FootprintBase::Auto;
+  // The block form's per-bin sums (eval/subperiod_sums.hpp) over every view bin of the parallax
+  // table together stay within this many bytes: the evaluator takes the finest block grid (at most
+  // 16 x 16 blocks a tile) that fits, and none (no block form) when even 2 x 2 does not. 0
+  // disables the block form. Memory is allocated only for the view bins a render meets; larger
+  // grids measured slower, their sums missing the caches (docs/evaluator.md).
+  double max_block_sum_bytes = double(uint64_t(256) << 20);
+  // The visibility rank r of the block sums (the asset's basis rank M when above it, the
+  // default): the interior of a block-form footprint samples g - g_r, which is 0 at r = M; a lower
+  // rank holds fewer channels per block, (images + 8 C)(r + 1), hence finer blocks within
+  // max_block_sum_bytes, for more cheap samples (docs/evaluator.md gives the measured choice).
+  uint32_t block_sum_rank = UINT32_MAX;
   // The sheen table of every texel's BSDF (model/sheen.hpp, docs/sheen.md): the published one of
   // Zeltner et al. by default, as renderers ship it; Converged for the layer's exact albedo. The
   // asset stores only the sheen colour and roughness, so this is the evaluator's choice.
@@ -111,10 +145,11 @@ struct Counters {
   uint32_t samples = 0;            // Monte Carlo samples drawn over the footprint
   uint32_t texel_evals = 0;        // per-texel BSDF evaluations (f^ V at one texel)
   uint32_t table_queries = 0;      // footprint queries on SATs (radiance, parallax, footprint sums)
-  uint32_t remainder_samples = 0;  // multiscale: cheap samples of g over B (period_block)
+  uint32_t remainder_samples = 0;  // multiscale: cheap samples of g outside its exact base
   bool direct = false;             // answered by the exact sum (footprint below direct_max_side)
-  bool without_control_variate = false;  // multiscale: sampled as brute force (|B| / |P| above
-                                         // EvalOptions::max_remainder_fraction)
+  bool without_control_variate = false;  // multiscale: sampled as brute force (a footprint below
+                                         // EvalOptions::min_control_variate_tiles / _floats, or
+                                         // its remainder above max_remainder_fraction)
 };
 
 struct Estimate {

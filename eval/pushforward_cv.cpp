@@ -1,6 +1,7 @@
 // The unbiased multi-scale estimate: a clustered control variate at each sample's own destination,
-// integrated exactly under the parallax push-forward of the footprint's whole periods
-// (methods.hpp; docs/evaluator.md, "Unbiased multi-scale").
+// integrated exactly under the parallax push-forward over the footprint's whole periods or whole
+// source blocks, the rest by cheap samples (methods.hpp, footprint_cover.hpp; docs/evaluator.md,
+// "Unbiased multi-scale").
 #include <algorithm>
 #include <cmath>
 #include <new>
@@ -37,17 +38,25 @@ struct Constants : ActiveLobes {
   const double* image_at_h = nullptr;
 };
 
-// g of every lobe asked for at texel index t (< N^2), added to g[]: one packed record
-// (cv_texels.hpp) and the per-estimate constants.
-void control_variate(const EvalData& data, const Constants& k, uint64_t t,
-                     Rgb g[model::kLobeCount]) {
+// g of every lobe asked for at texel index t (< N^2), added to g[], and when `low` is not null
+// g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]: one packed
+// record (cv_texels.hpp) and the per-estimate constants.
+void control_variate(const EvalData& data, const Constants& k, uint64_t t, Rgb g[model::kLobeCount],
+                     uint32_t low_rank = 0, Rgb* low = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
-  double v = b[0];
+  double v = b[0], v_low = b[0];
   const float* e = records.coefficients(t);
-  for (uint32_t j = 0; j < k.rank; ++j)
+  for (uint32_t j = 0; j < k.rank; ++j) {
     v += b[j + 1] * double(e[j]);
+    if (j + 1 == low_rank) v_low = v;
+  }
+  // Each lobe's factor and scalar without the visibility, then times v (and v_low).
+  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar) {
+    g[int(lobe)] += factor * (scalar * v);
+    if (low) low[int(lobe)] += factor * (scalar * v_low);
+  };
   const double gap = texel.gap;
   if (k.specular && texel.count > 0) {
     // The table value at h: image `first` (the cell mean) has weight 1, the others their stored
@@ -57,18 +66,17 @@ void control_variate(const EvalData& data, const Constants& k, uint64_t t,
     double value = at_h[0];
     for (uint32_t j = 1; j < texel.count; ++j)
       value += double(q[j - 1]) * at_h[j];
-    g[int(k.specular_lobe)] +=
-        k.specular_scale[data.image_cluster[texel.first_image]] * (value * v);
+    add(k.specular_lobe, k.specular_scale[data.image_cluster[texel.first_image]], value);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
                                                                   : yarn.diffuse_transmittance) *
                        Rgb(texel.colour[0], texel.colour[1], texel.colour[2]);
-    g[int(k.diffuse_lobe)] += k.diffuse_scale * albedo * (gap * v);
+    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap);
   }
-  if (k.sheen) g[int(Lobe::Sheen)] += k.sheen_scale * v;
-  if (k.delta) g[int(Lobe::DeltaTransmission)] += k.delta_scale * ((1.0 - gap) * v);
+  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0);
+  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap);
 }
 
 inline void prefetch(const void* address) noexcept {
@@ -123,11 +131,11 @@ inline void prefetch_lines(const void* begin, std::size_t bytes) noexcept {
     prefetch(p + offset);
 }
 
-// Calls visit(t) with the destination texel index t (< N^2) of each of `count` stratified points of
-// `rect` (stratified_points' order and draws) in the bin of `shift`. The points go in chunks: their
-// source texels' codes are prefetched as they are drawn, then the destinations' records, then
-// visit runs, so that a chunk's cache misses overlap instead of queueing one sample at a time
-// (the samples land at random texels of planes and records of megabytes).
+// Calls visit(t, x, y) with the destination texel index t (< N^2) of each of `count` stratified
+// points (x, y) of `rect` (stratified_points' order and draws) in the bin of `shift`. The points go
+// in chunks: their source texels' codes are prefetched as they are drawn, then the destinations'
+// records, then visit runs, so that a chunk's cache misses overlap instead of queueing one sample
+// at a time (the samples land at random texels of planes and records of megabytes).
 template <class Visit>
 void visit_destinations(const EvalData& data, const BinShift& shift, const Footprint& rect,
                         uint32_t count, Rng& rng, Visit visit) {
@@ -135,7 +143,7 @@ void visit_destinations(const EvalData& data, const BinShift& shift, const Footp
   auto flush = [&] {
     chunk.resolve(data, shift);
     for (uint32_t i = 0; i < chunk.count; ++i)
-      visit(chunk.destination[i]);
+      visit(chunk.destination[i], chunk.points[i].x, chunk.points[i].y);
     chunk.count = 0;
   };
   stratified_points(rect, count, rng, [&](double x, double y) {
@@ -164,13 +172,16 @@ CLOTHBAKE_VECTOR_CLONES void images_at_h(const float* const rows[4], const doubl
              weights[2] * double(rows[2][i]) + weights[3] * double(rows[3][i]);
 }
 
-// Per cluster c (< clusters): sum_j vis[c][j] sum_{images i of c} image_at_h[i] sums[i r1 + j],
-// into out[c]. A cluster's images are one range (begin[c] .. begin[c + 1]); they are summed in two
-// interleaved partial sums per component (no chain of dependent additions through the images).
-// kR: r1 known at compile time (0: read `r1`).
-template <uint32_t kR>
+// Per cluster c (< clusters): sum_j vis[c][j] sum_{images i of c} image_at_h[i] s[i r1 + j], into
+// out[c], where s = sum_q weight[q] sums[q] over `points` vectors of sums (the whole-tile sums, or
+// the signed prefix points of a block rectangle), combined as they are read. A cluster's images are
+// one range (begin[c] .. begin[c + 1]); they are summed in two interleaved partial sums per
+// component (no chain of dependent additions through the images). kR: r1 known at compile time
+// (0: read `r1`).
+template <uint32_t kR, typename S>
 CLOTHBAKE_VECTOR_CLONES void cluster_specular_sums(const uint32_t* begin, uint32_t clusters,
-                                                   const double* image_at_h, const double* sums,
+                                                   const double* image_at_h, const S* const* sums,
+                                                   const double* weight, uint32_t points,
                                                    uint32_t r1_runtime,
                                                    const double (*vis)[kMaxRank + 1],
                                                    double* out) noexcept {
@@ -181,18 +192,23 @@ CLOTHBAKE_VECTOR_CLONES void cluster_specular_sums(const uint32_t* begin, uint32
     const uint32_t end = begin[c + 1];
     for (; i + 1 < end; i += 2) {
       const double b0 = image_at_h[i], b1 = image_at_h[i + 1];
-      const double* s0 = sums + uint64_t(i) * r1;
-      const double* s1 = s0 + r1;
-      for (uint32_t j = 0; j < r1; ++j) {
-        even[j] += b0 * s0[j];
-        odd[j] += b1 * s1[j];
+      for (uint32_t q = 0; q < points; ++q) {
+        const S* s0 = sums[q] + uint64_t(i) * r1;
+        const S* s1 = s0 + r1;
+        const double w0 = b0 * weight[q], w1 = b1 * weight[q];
+        for (uint32_t j = 0; j < r1; ++j) {
+          even[j] += w0 * s0[j];
+          odd[j] += w1 * s1[j];
+        }
       }
     }
     if (i < end) {
-      const double b0 = image_at_h[i];
-      const double* s0 = sums + uint64_t(i) * r1;
-      for (uint32_t j = 0; j < r1; ++j)
-        even[j] += b0 * s0[j];
+      for (uint32_t q = 0; q < points; ++q) {
+        const S* s0 = sums[q] + uint64_t(i) * r1;
+        const double w0 = image_at_h[i] * weight[q];
+        for (uint32_t j = 0; j < r1; ++j)
+          even[j] += w0 * s0[j];
+      }
     }
     double v = 0.0;
     for (uint32_t j = 0; j < r1; ++j)
@@ -219,73 +235,148 @@ double attenuation(model::TexelParams<double> params, const ShadingFrame& frame,
   return f / d;
 }
 
+// The per-lobe integral of the control variate at rank layout.rank that the combination
+// sum_q weight[q] sums[q] of `points` vectors of push-forward sums (layout's channels) holds,
+// added to base[].
+template <typename S>
+void add_base(const EvalData& data, const Constants& k, const PushforwardChannels& layout,
+              const S* const* sums, const double* weight, uint32_t points,
+              Rgb base[model::kLobeCount]) {
+  const uint32_t clusters = data.cluster_count();
+  const uint32_t r1 = layout.rank + 1;
+  if (k.specular) {
+    double per_cluster[reader::kMaxVisibilityClusters];
+    const uint32_t* begin = data.cluster_image_begin.data();
+    if (r1 == 5)  // the default rank 4: the component loops unrolled
+      cluster_specular_sums<5>(begin, clusters, k.image_at_h, sums, weight, points, r1, k.vis,
+                               per_cluster);
+    else
+      cluster_specular_sums<0>(begin, clusters, k.image_at_h, sums, weight, points, r1, k.vis,
+                               per_cluster);
+    Rgb sum;
+    for (uint32_t c = 0; c < clusters; ++c)
+      sum += k.specular_scale[c] * per_cluster[c];
+    base[int(k.specular_lobe)] += sum;
+  }
+  const uint32_t diffuse_offset = k.diffuse_lobe == Lobe::DiffuseReflection ? 0 : 3;
+  Rgb diffuse;
+  double sheen = 0.0, delta = 0.0;
+  for (uint32_t c = 0; c < clusters; ++c)
+    for (uint32_t j = 0; j < r1; ++j) {
+      const double b = k.vis[c][j];
+      double d[3] = {0.0, 0.0, 0.0}, sh = 0.0, de = 0.0;
+      for (uint32_t q = 0; q < points; ++q) {
+        const S* s = sums[q] + layout.lobe(c, j);
+        const double w = weight[q];
+        if (k.diffuse)
+          for (int ch = 0; ch < 3; ++ch)
+            d[ch] += w * double(s[diffuse_offset + ch]);
+        sh += w * double(s[6]);
+        de += w * double(s[7]);
+      }
+      if (k.diffuse) diffuse += Rgb(d[0], d[1], d[2]) * b;
+      sheen += sh * b;
+      delta += de * b;
+    }
+  if (k.diffuse) base[int(k.diffuse_lobe)] += k.diffuse_scale * diffuse;
+  if (k.sheen) base[int(Lobe::Sheen)] += k.sheen_scale * sheen;
+  if (k.delta) base[int(Lobe::DeltaTransmission)] += k.delta_scale * delta;
+}
+
+// out[ch] = sum_q weight[q] points[q][ch], ch < count.
+CLOTHBAKE_VECTOR_CLONES void combine_points(const float* const* points, const double* weight,
+                                            uint32_t count_points, uint32_t count,
+                                            double* out) noexcept {
+  for (uint32_t ch = 0; ch < count; ++ch)
+    out[ch] = 0.0;
+  for (uint32_t q = 0; q < count_points; ++q) {
+    const float* p = points[q];
+    const double w = weight[q];
+    for (uint32_t ch = 0; ch < count; ++ch)
+      out[ch] += w * double(p[ch]);
+  }
+}
+
+// The prefix points of a block-aligned rectangle (block units) and their weights: the integral
+// over it is sum_i weight[i] prefix(point[i]) (reader::FootprintPlan in block units, whose
+// corners are grid points). Returns the number of points (at most 9).
+struct BlockPoints {
+  uint32_t count = 0;
+  uint32_t i[9], j[9];
+  double weight[9];
+};
+BlockPoints block_points(const Footprint& units, uint32_t blocks) {
+  BlockPoints out;
+  reader::FootprintPlan plan;
+  if (!reader::make_footprint_plan(units, blocks, &plan)) return out;
+  // Points on the grid's first row or column are 0 (exclusive prefix sums); a point named twice
+  // gets the sum of its weights.
+  auto add = [&](double x, double y, double w) {
+    const uint32_t i = uint32_t(x), j = uint32_t(y);
+    if (w == 0.0 || i == 0 || j == 0) return;
+    for (uint32_t q = 0; q < out.count; ++q)
+      if (out.i[q] == i && out.j[q] == j) {
+        out.weight[q] += w;
+        return;
+      }
+    out.i[out.count] = i;
+    out.j[out.count] = j;
+    out.weight[out.count++] = w;
+  };
+  const double nb = double(blocks);
+  // F = [I(rx1, ry1) - I(x0, ry1) - I(rx1, y0) + I(x0, y0)] + qx [I(N, ry1) - I(N, y0)]
+  //   + qy [I(rx1, N) - I(x0, N)] + qx qy I(N, N)
+  add(plan.rx1, plan.ry1, 1.0);
+  add(plan.x0, plan.ry1, -1.0);
+  add(plan.rx1, plan.y0, -1.0);
+  add(plan.x0, plan.y0, 1.0);
+  add(nb, plan.ry1, plan.qx);
+  add(nb, plan.y0, -plan.qx);
+  add(plan.rx1, nb, plan.qy);
+  add(plan.x0, nb, -plan.qy);
+  add(nb, nb, plan.qx * plan.qy);
+  uint32_t kept = 0;  // weights that cancelled
+  for (uint32_t q = 0; q < out.count; ++q)
+    if (out.weight[q] != 0.0) {
+      out.i[kept] = out.i[q];
+      out.j[kept] = out.j[q];
+      out.weight[kept++] = out.weight[q];
+    }
+  out.count = kept;
+  return out;
+}
+
 }  // namespace
 
-PeriodBlock period_block(uint32_t n, const Footprint& p) noexcept {
-  const double t = double(n);
-  const double w = p.x1 - p.x0, h = p.y1 - p.y0;
-  PeriodBlock best;
-  double best_difference = INFINITY;
-  for (const double kx : {std::max(1.0, std::floor(w / t)), std::max(1.0, std::ceil(w / t))})
-    for (const double ky : {std::max(1.0, std::floor(h / t)), std::max(1.0, std::ceil(h / t))}) {
-      // |A Δ P| = |A| + |P| − 2 |A ∩ P|, both anchored at the corner; ties keep the first pair.
-      const double ax = kx * t, ay = ky * t;
-      const double difference = ax * ay + w * h - 2.0 * std::min(ax, w) * std::min(ay, h);
-      if (!(difference < best_difference)) continue;
-      best_difference = difference;
-      best.kx = kx;
-      best.ky = ky;
-    }
-  const double ax = best.kx * t, ay = best.ky * t;
-  const double inner_x = std::min(w, ax), inner_y = std::min(h, ay);
-  // The column: P's part right of A (full height h) or A's part right of P (height ky N).
-  const double column_height = w > ax ? h : ay;
-  best.rects[0] = {p.x0 + inner_x, p.y0, p.x0 + std::max(w, ax), p.y0 + column_height};
-  best.areas[0] = std::abs(w - ax) * column_height;
-  best.signs[0] = w > ax ? 1.0 : -1.0;
-  // The row: above the shorter of the two, over the narrower width.
-  best.rects[1] = {p.x0, p.y0 + inner_y, p.x0 + inner_x, p.y0 + std::max(h, ay)};
-  best.areas[1] = inner_x * std::abs(h - ay);
-  best.signs[1] = h > ay ? 1.0 : -1.0;
-  best.remainder = (best.areas[0] + best.areas[1]) / (w * h);
-  return best;
-}
-
-uint32_t remainder_samples(const EvalData& data, const PeriodBlock& block, uint32_t spp) noexcept {
-  if (!(block.remainder > 0.0)) return 0;
-  // Cost-optimal: with a cost c0 per estimate, a per sample and c1 per cheap sample, the product of
-  // the cost c0 + a spp + c1 m and the variance var(f - g) / spp + (|B|/|P|)^2 var(g) / m is least
-  // at m = (|B|/|P|) sqrt(spp (c0 + a spp) var(g) / (c1 var(f - g))): linear in spp at high spp
-  // (so the estimate converges at the Monte Carlo rate), about sqrt(spp) at low spp. c0 is about
-  // two samples' cost (docs/evaluator.md, "Unbiased multi-scale").
-  const double s = double(spp);
-  const double m =
-      std::ceil(data.options.remainder_sample_scale * block.remainder * std::sqrt(s * (s + 2.0)));
-  // At least one sample in each of B's rectangles that has an area: a rectangle without a sample
-  // would drop its integral of g.
-  const double pieces = double(block.areas[0] > 0.0) + double(block.areas[1] > 0.0);
-  return uint32_t(std::clamp(m, std::max(1.0, pieces), double(kMaxRemainderSamples)));
-}
-
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
-                                    const Footprint& p, const PeriodBlock& block, uint32_t spp,
+                                    const Footprint& p, const FootprintCover& cover, uint32_t spp,
                                     Rng& rng, Estimate* out) noexcept {
   const uint32_t clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
-  // One view bin for the estimate; `block` is the whole-period block A at P's corner: any N-long
-  // window covers every texel column once, so A's push-forward is kx ky times the tile's.
+  // One view bin for the estimate.
   const int bin = draw_view_bin(frame, rng.uniform());
   // The view's four bins are built together, whichever is drawn: a view's first estimate (a
   // renderer's first frame, a report's warm-up pass) then prepares everything that view will read,
-  // and later estimates never pay a build (6-9 ms per bin at N = 256, docs/evaluator.md).
+  // and later estimates never pay a build (docs/evaluator.md).
+  const bool whole_periods = cover.base == FootprintCover::Base::WholePeriods;
+  const bool with_blocks = cover.base == FootprintCover::Base::Blocks;
   for (int other = 0; other < 4; ++other)
-    if (other != bin && frame.parallax_bins.weight[other] > 0.0)
-      (void)data.pushforward.bin_sums(uint32_t(frame.parallax_bins.index[other]));
-  const double* sums = data.pushforward.bin_sums(uint32_t(frame.parallax_bins.index[bin]));
-  if (sums == nullptr)
+    if (other != bin && frame.parallax_bins.weight[other] > 0.0) {
+      const uint32_t index = uint32_t(frame.parallax_bins.index[other]);
+      if (whole_periods) (void)data.pushforward.bin_sums(index);
+      if (with_blocks) (void)data.subperiod.bin_prefix(index);
+    }
+  const uint32_t bin_index = uint32_t(frame.parallax_bins.index[bin]);
+  // The tables of the base: the whole-tile sums of the whole-period form (any N-long window
+  // covers every texel column once, so A's push-forward is kx ky times the tile's), or the block
+  // prefix sums of the block form; none without a base.
+  const double* sums = whole_periods ? data.pushforward.bin_sums(bin_index) : nullptr;
+  const float* prefix = with_blocks ? data.subperiod.bin_prefix(bin_index) : nullptr;
+  if ((whole_periods && sums == nullptr) || (with_blocks && prefix == nullptr))
     return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
                          "cannot allocate the push-forward sums of a view bin");
-  const PushforwardChannels& layout = data.pushforward.layout();
+  const PushforwardChannels& layout =
+      with_blocks ? data.subperiod.layout() : data.pushforward.layout();
   const BinShift shift = bin_shift(data, frame, bin);
 
   // Each image's value at h, once per estimate (on the stack up to kStackImages images, which every
@@ -304,36 +395,34 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     image_at_h = heap_images.data();
   }
 
-  // The cheap samples of g over B's two rectangles, split in proportion to their areas.
-  const uint32_t m = remainder_samples(data, block, spp);
-  uint32_t counts[2] = {0, 0};
-  if (m > 0) {
-    const double* areas = block.areas;
-    const double total = areas[0] + areas[1];
-    uint32_t first = areas[1] > 0.0 ? uint32_t(std::lround(double(m) * areas[0] / total)) : m;
-    if (areas[0] > 0.0 && first == 0) first = 1;
-    if (areas[1] > 0.0 && first == m) first = m > 1 ? m - 1 : m;
-    counts[0] = areas[0] > 0.0 ? first : 0;
-    counts[1] = areas[1] > 0.0 ? m - first : 0;
-  }
+  // The cheap samples of g over the cover's regions.
+  const uint32_t m = remainder_samples(data, cover, spp);
+  uint32_t counts[5];
+  split_remainder_samples(cover, m, counts);
   // An estimate with few samples (2 spp and a remainder of a few dozen) draws all its points now,
-  // in the generator's order (the residual's, then each rectangle's), and asks for their parallax
+  // in the generator's order (the residual's, then each region's), and asks for their parallax
   // codes: they arrive while the constants and the base are computed.
   constexpr uint32_t kEarlyPoints = 64;
   PointBatch<kEarlyPoints> early;
-  const bool drawn_early = uint64_t(spp) + counts[0] + counts[1] <= kEarlyPoints;
+  uint64_t points = spp;
+  for (uint32_t r = 0; r < cover.region_count; ++r)
+    points += counts[r];
+  const bool drawn_early = points <= kEarlyPoints;
   if (drawn_early) {
     auto draw = [&](double x, double y) { early.add(data, shift, x, y); };
     stratified_points(p, spp, rng, draw);
-    for (int r = 0; r < 2; ++r)
-      if (counts[r] > 0) stratified_points(block.rects[r], counts[r], rng, draw);
+    for (uint32_t r = 0; r < cover.region_count; ++r)
+      if (counts[r] > 0) stratified_points(cover.regions[r].rect, counts[r], rng, draw);
   }
 
   Constants k;
   static_cast<ActiveLobes&>(k) = active_lobes(data, frame);
-  // The base reads the bin's sums and four rows of the tables' basis, kilobytes each at addresses
-  // that change with the view and h: asked for now, they arrive while the constants are computed.
-  prefetch_lines(sums, sizeof(double) * layout.count());
+  // The base reads the bin's sums (the block form: its prefix points) and four rows of the tables'
+  // basis, kilobytes each at addresses that change with the view and h: asked for now, they
+  // arrive while the constants are computed.
+  const uint32_t blocks = data.subperiod.blocks();
+  const BlockPoints corners = with_blocks ? block_points(cover.blocks, blocks) : BlockPoints{};
+  if (whole_periods) prefetch_lines(sums, sizeof(double) * layout.count());
   if (k.specular)
     for (uint32_t q = 0; q < k.h_bins.count; ++q)
       prefetch_lines(data.specular.compressed.image_basis_row(k.h_bins.bin[q]),
@@ -394,49 +483,42 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       weights[q] = used ? k.h_bins.weight[q] : 0.0;
     }
     images_at_h(rows, weights, layout.images, image_at_h);
-    k.image_at_h = image_at_h;
   }
+  k.image_at_h = image_at_h;
 
-  // The base over A: the per-estimate coefficients dotted with the bin's whole-tile sums.
+  // The base over A: the per-estimate coefficients dotted with the bin's whole-tile sums (kx ky
+  // tiles) or with the block prefix points of A.
   Rgb base[model::kLobeCount];
-  const uint32_t r1 = k.rank + 1;
-  if (k.specular) {
-    double per_cluster[reader::kMaxVisibilityClusters];
-    if (r1 == 5)  // the default rank 4: the component loops unrolled
-      cluster_specular_sums<5>(data.cluster_image_begin.data(), clusters, image_at_h, sums, r1,
-                               k.vis, per_cluster);
-    else
-      cluster_specular_sums<0>(data.cluster_image_begin.data(), clusters, image_at_h, sums, r1,
-                               k.vis, per_cluster);
-    Rgb sum;
-    for (uint32_t c = 0; c < clusters; ++c)
-      sum += k.specular_scale[c] * per_cluster[c];
-    base[int(k.specular_lobe)] = sum;
+  if (whole_periods) {
+    const double one = 1.0;
+    add_base(data, k, layout, &sums, &one, 1, base);
+    for (Rgb& b : base)
+      b = b * (cover.periods.kx * cover.periods.ky);
   }
-  const uint32_t diffuse_offset = k.diffuse_lobe == Lobe::DiffuseReflection ? 0 : 3;
-  Rgb diffuse;
-  double sheen = 0.0, delta = 0.0;
-  for (uint32_t c = 0; c < clusters; ++c)
-    for (uint32_t j = 0; j < r1; ++j) {
-      const double* s = sums + layout.lobe(c, j);
-      const double b = k.vis[c][j];
-      if (k.diffuse)
-        diffuse += Rgb(s[diffuse_offset], s[diffuse_offset + 1], s[diffuse_offset + 2]) * b;
-      sheen += s[6] * b;
-      delta += s[7] * b;
+  if (with_blocks) {
+    const float* points[9];
+    for (uint32_t c = 0; c < corners.count; ++c)
+      points[c] = prefix + (uint64_t(corners.j[c]) * (blocks + 1) + corners.i[c]) * layout.count();
+    // The signed points combined first, channel by channel in double (a loop the compiler
+    // vectorises), then one dot product; beyond kCombined channels, combined as they are read.
+    constexpr uint32_t kCombined = 4096;
+    if (layout.count() <= kCombined) {
+      double combined[kCombined];
+      combine_points(points, corners.weight, corners.count, layout.count(), combined);
+      const double* one_vector = combined;
+      const double one = 1.0;
+      add_base(data, k, layout, &one_vector, &one, 1, base);
+    } else {
+      add_base(data, k, layout, points, corners.weight, corners.count, base);
     }
-  if (k.diffuse) base[int(k.diffuse_lobe)] = k.diffuse_scale * diffuse;
-  if (k.sheen) base[int(Lobe::Sheen)] = k.sheen_scale * sheen;
-  if (k.delta) base[int(Lobe::DeltaTransmission)] = k.delta_scale * delta;
-  for (Rgb& b : base)
-    b = b * (block.kx * block.ky);
-  out->counters.table_queries += 1;
+  }
+  if (whole_periods || with_blocks) out->counters.table_queries += 1;
 
   // The residual f - g at spp stratified points over P, both at the sample's destination.
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   const int64_t n = int64_t(data.n);
-  auto residual_sample = [&](uint64_t t) {
+  auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount];
     control_variate(data, k, t, g);
@@ -445,24 +527,57 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
-      residual_sample(early.destination[i]);
+      residual_sample(early.destination[i], 0.0, 0.0);
   else
     visit_destinations(data, shift, p, spp, rng, residual_sample);
-  // The integral of g over the rest B by cheap samples, stratified over B's two rectangles, each
-  // rectangle's mean times its area and its sign (period_block).
+  // The rest of the integral of g by cheap samples, stratified over each region, each region's
+  // mean times its area (footprint_cover.hpp): sign g over the whole-period form's rectangles (and
+  // over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
+  // strips.
+  const uint32_t low_rank = with_blocks ? layout.rank : k.rank;
+  const double side = with_blocks ? double(data.n / blocks) : 0.0;
+  const Footprint a{cover.blocks.x0 * side, cover.blocks.y0 * side, cover.blocks.x1 * side,
+                    cover.blocks.y1 * side};
+  auto inside = [](const Footprint& r, double x, double y) {
+    return x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1;
+  };
   Rgb remainder[model::kLobeCount];
-  uint32_t next = spp;  // the early points of the rectangles follow the residual's
-  for (int r = 0; r < 2; ++r) {
+  uint32_t next = spp;  // the early points of the regions follow the residual's
+  for (uint32_t r = 0; r < cover.region_count; ++r) {
     if (counts[r] == 0) continue;
+    const CheapRegion& region = cover.regions[r];
     Rgb piece[model::kLobeCount];
-    auto cheap_sample = [&](uint64_t t) { control_variate(data, k, t, piece); };
+    auto cheap_sample = [&](uint64_t t, double x, double y) {
+      if (region.kind == CheapRegion::Kind::Signed) {
+        control_variate(data, k, t, piece);
+        return;
+      }
+      const bool in_p = region.kind == CheapRegion::Kind::Difference || inside(p, x, y);
+      const bool in_a = region.kind == CheapRegion::Kind::Difference || inside(a, x, y);
+      if (low_rank >= k.rank) {  // g_r is g: 1_P g - 1_A g, one evaluation or none
+        if (in_p == in_a) return;
+        Rgb g[model::kLobeCount];
+        control_variate(data, k, t, g);
+        for (int l = 0; l < model::kLobeCount; ++l)
+          piece[l] += in_p ? g[l] : g[l] * -1.0;
+        return;
+      }
+      Rgb g[model::kLobeCount], g_low[model::kLobeCount];
+      control_variate(data, k, t, g, low_rank, g_low);
+      for (int l = 0; l < model::kLobeCount; ++l) {
+        if (in_p) piece[l] += g[l];
+        if (in_a) piece[l] += g_low[l] * -1.0;
+      }
+    };
     if (drawn_early)
-      for (uint32_t i = 0; i < counts[r]; ++i)
-        cheap_sample(early.destination[next++]);
+      for (uint32_t i = 0; i < counts[r]; ++i, ++next)
+        cheap_sample(early.destination[next], early.points[next].x, early.points[next].y);
     else
-      visit_destinations(data, shift, block.rects[r], counts[r], rng, cheap_sample);
+      visit_destinations(data, shift, region.rect, counts[r], rng, cheap_sample);
+    const double scale = (region.kind == CheapRegion::Kind::Signed ? region.sign : 1.0) *
+                         region.area / double(counts[r]);
     for (int l = 0; l < model::kLobeCount; ++l)
-      remainder[l] += piece[l] * (block.signs[r] * block.areas[r] / double(counts[r]));
+      remainder[l] += piece[l] * scale;
   }
   for (int l = 0; l < model::kLobeCount; ++l)
     out->lobes[l] += (base[l] + remainder[l]) / area + residual[l] / double(spp);

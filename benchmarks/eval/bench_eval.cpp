@@ -82,8 +82,8 @@ void run(benchmark::State& state, Method method, uint32_t spp) {
   Estimate e;
   for (const auto& d : s.directions)
     for (int k = 0; k < 16; ++k)  // every view bin an estimate may draw
-      (void)s.evaluator.estimate(footprints[0], d.data(), d.data() + 3, method, spp, rng,
-                                 kAllLobes, &e);
+      (void)s.evaluator.estimate(footprints[0], d.data(), d.data() + 3, method, spp, rng, kAllLobes,
+                                 &e);
   size_t k = 0;
   for (auto _ : state) {
     const auto& d = s.directions[k % s.directions.size()];
@@ -158,8 +158,17 @@ BENCHMARK(BM_MultiscalePaper)->Arg(1)->Arg(32)->Arg(256)->Arg(4096);
 BENCHMARK(BM_Brute2spp)->Arg(32)->Arg(256)->Arg(640);
 BENCHMARK(BM_BrutePerSample)->Arg(32);
 BENCHMARK(BM_ReferencePerTexel)->Arg(4)->Arg(32);
-BENCHMARK(BM_MultiscaleScanlines)->Arg(1)->Arg(32)->Arg(256)->Arg(400)->Arg(640)->Arg(4096);
-BENCHMARK(BM_Brute2sppScanlines)->Arg(32)->Arg(256)->Arg(640);
+BENCHMARK(BM_MultiscaleScanlines)
+    ->Arg(1)
+    ->Arg(32)
+    ->Arg(64)
+    ->Arg(128)
+    ->Arg(180)
+    ->Arg(256)
+    ->Arg(400)
+    ->Arg(640)
+    ->Arg(4096);
+BENCHMARK(BM_Brute2sppScanlines)->Arg(32)->Arg(128)->Arg(256)->Arg(640);
 
 }  // namespace
 }  // namespace clothbake::eval

@@ -148,7 +148,22 @@ int main(int argc, char** argv) {
       options.remainder_sample_scale = number(v, "--remainder-scale");
     else if (opt == "--max-remainder")
       options.max_remainder_fraction = number(v, "--max-remainder");
-    else if (opt == "--tables") {
+    else if (opt == "--block-rank")
+      options.block_sum_rank = uint32_t(std::atoi(v));
+    else if (opt == "--block-bytes")
+      options.max_block_sum_bytes = std::strtod(v, nullptr);
+    else if (opt == "--base") {
+      if (std::strcmp(v, "auto") == 0)
+        options.footprint_base = FootprintBase::Auto;
+      else if (std::strcmp(v, "periods") == 0)
+        options.footprint_base = FootprintBase::WholePeriods;
+      else if (std::strcmp(v, "blocks") == 0)
+        options.footprint_base = FootprintBase::Blocks;
+      else if (std::strcmp(v, "none") == 0)
+        options.footprint_base = FootprintBase::None;
+      else
+        usage("--base is auto, periods, blocks or none");
+    } else if (opt == "--tables") {
       if (std::strcmp(v, "raw") == 0)
         options.tables = TableChoice::Raw;
       else if (std::strcmp(v, "compressed") == 0)

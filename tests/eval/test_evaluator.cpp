@@ -16,94 +16,14 @@
 #include "eval/texel_shading.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "tests/eval/eval_fixtures.hpp"
+#include "tests/eval/eval_stats.hpp"
 
 namespace clothbake::eval {
 namespace {
 
-using eval_test::assets;
+using namespace eval_test;
 using model::Lobe;
 
-// An open asset and its evaluator (the evaluator keeps views into the asset).
-struct Opened {
-  reader::Asset asset;
-  Evaluator evaluator;
-};
-
-std::unique_ptr<Opened> open(const std::string& path, TableChoice tables = TableChoice::Auto) {
-  auto o = std::make_unique<Opened>();
-  const Status s = o->asset.open_file(path.c_str());
-  EXPECT_TRUE(s.ok()) << s.message();
-  EvalOptions options;
-  options.tables = tables;
-  const Status e = o->evaluator.open(o->asset, options);
-  EXPECT_TRUE(e.ok()) << e.message();
-  return o;
-}
-
-struct Stats {
-  Rgb mean, se;         // mean of K estimates and its standard error
-  double sd_green = 0;  // standard deviation of one estimate (green)
-};
-
-Stats repeat(const Evaluator& ev, const Footprint& p, const double wi[3], const double wo[3],
-             Method method, uint32_t spp, int k, uint64_t seed, LobeMask mask = kAllLobes) {
-  Rng rng(seed);
-  Rgb sum, sum2;
-  for (int i = 0; i < k; ++i) {
-    Estimate e;
-    const Status s = ev.estimate(p, wi, wo, method, spp, rng, mask, &e);
-    EXPECT_TRUE(s.ok()) << s.message();
-    sum += e.value;
-    sum2 += e.value * e.value;
-  }
-  Stats st;
-  st.mean = sum / double(k);
-  for (int c = 0; c < 3; ++c) {
-    const double var = std::max(0.0, sum2[c] / k - st.mean[c] * st.mean[c]) * k / (k - 1.0);
-    (c == 0 ? st.se.r : c == 1 ? st.se.g : st.se.b) = std::sqrt(var / k);
-    if (c == 1) st.sd_green = std::sqrt(var);
-  }
-  return st;
-}
-
-Rgb reference(const Evaluator& ev, const Footprint& p, const double wi[3], const double wo[3],
-              LobeMask mask = kAllLobes) {
-  Rng rng(0);
-  Estimate e;
-  const Status s = ev.estimate(p, wi, wo, Method::Reference, 1, rng, mask, &e);
-  EXPECT_TRUE(s.ok()) << s.message();
-  return e.value;
-}
-
-// |mean - ref| within 3 standard errors per channel, plus `slack` relative to ref (table and float
-// rounding that no number of samples removes).
-void expect_within_3se(const Stats& st, const Rgb& ref, double slack, const std::string& what) {
-  for (int c = 0; c < 3; ++c)
-    EXPECT_LE(std::abs(st.mean[c] - ref[c]), 3.0 * st.se[c] + slack * std::abs(ref[c]) + 1e-15)
-        << what << " channel " << c << ": mean " << st.mean[c] << " reference " << ref[c] << " se "
-        << st.se[c];
-}
-
-// The same for the channel mean: one comparison per case, so that a test of many cases at 3
-// standard errors is not a test of the largest of many z-scores (48 channel comparisons would
-// exceed 3 by chance with probability 12 %). The standard error of the channel mean is bounded by
-// the mean of the channels' standard errors.
-void expect_mean_within_3se(const Stats& st, const Rgb& ref, double slack,
-                            const std::string& what) {
-  const double mean = st.mean.mean(), want = ref.mean(), se = st.se.mean();
-  EXPECT_LE(std::abs(mean - want), 3.0 * se + slack * std::abs(want) + 1e-15)
-      << what << ": mean " << mean << " reference " << want << " se <= " << se;
-}
-
-const double kReflectWi[3] = {0.3, 0.2, 0.9};
-const double kReflectWo[3] = {-0.4, 0.1, 0.85};
-const double kTransmitWi[3] = {0.2, -0.3, -0.8};  // light behind the cloth
-const double kTransmitWo[3] = {-0.3, 0.1, 0.9};
-struct Directions {
-  const double* wi;
-  const double* wo;
-};
-const Directions kConfigurations[] = {{kReflectWi, kReflectWo}, {kTransmitWi, kTransmitWo}};
 // The smallest variance ratio the far-field test accepts (measured values in the test's output
 // and docs/evaluator.md).
 constexpr double kVarianceRatioFloor = 20.0;
@@ -384,7 +304,9 @@ TEST(Multiscale, IsUnbiasedWithAThinRemainder) {
     const Stats st = repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 1, 8000, 13);
     expect_mean_within_3se(st, reference(o->evaluator, p, dirs.wi, dirs.wo), 1e-6, "multiscale");
   }
-  EXPECT_EQ(eval::remainder_samples(*o->evaluator.data(), eval::period_block(64, p), 1), 2u);
+  const eval::FootprintCover cover = eval::cover_footprint(*o->evaluator.data(), p);
+  EXPECT_EQ(cover.base, eval::FootprintCover::Base::WholePeriods);
+  EXPECT_EQ(eval::remainder_samples(*o->evaluator.data(), cover, 1), 2u);
 }
 
 // The block of whole periods and its two signed rectangles add up to the footprint, point by
@@ -455,50 +377,57 @@ TEST(Multiscale, SmallFootprintsAreSummedExactly) {
   }
 }
 
-// A footprint that no block of whole periods covers up to max_remainder_fraction (1) of its area
-// is sampled exactly as brute force (bit for bit with the same generator); otherwise the control
-// variate is used and the remainder gets its cheap samples, also below a tile; the paper form
+// A footprint below min_control_variate_tiles (a tenth of the tile, 6.4 texels) a side, or one
+// whose cover leaves more than max_remainder_fraction of it to cheap samples, is sampled exactly as
+// brute force (bit for bit with the same generator); otherwise the control variate is used, below
+// a tile too (whole blocks or no base), and the remainder gets its cheap samples; the paper form
 // always has its control variate.
-TEST(Multiscale, FootprintsFarFromWholePeriodsAreSampledAsBruteForce) {
+TEST(Multiscale, FootprintsTheControlVariateDoesNotPayForAreSampledAsBruteForce) {
   auto o = open(assets().twill);
+  EvalOptions strict;
+  strict.max_remainder_fraction = 0.0;  // any remainder: brute force
+  Evaluator exact_only;
+  ASSERT_TRUE(exact_only.open(o->asset, strict).ok());
   const double wo[3] = {-0.4, 0.1, 0.85};
-  const Footprint narrow{3.5, 9.25, 30.0, 300.0},  // tall, under half the tile wide: |B|/|P| 1.4
-      whole{-10.0, 5.0, 118.0, 69.0},              // two tiles by one: no remainder
-      ragged{-10.0, 5.0, 120.5, 90.0},             // whole periods and a remainder
-      near_tile{-3.0, 2.0, 49.0, 54.0};            // 0.81 x 0.81 tiles: |B|/|P| 0.51
-  for (int k = 0; k < 20; ++k) {
-    Rng a(100 + k), b(100 + k);
+  const Footprint small{3.5, 9.25, 8.5, 15.25},  // 5 x 6: below 6.4 texels a side
+      narrow{3.5, 9.25, 30.0, 300.0},            // tall, under half the tile wide
+      whole{-10.0, 5.0, 118.0, 69.0},            // two tiles by one: no remainder
+      ragged{-10.0, 5.0, 120.5, 90.0},           // whole periods and a remainder
+      near_tile{-3.0, 2.0, 49.0, 54.0};          // 0.81 x 0.81 tiles
+  auto same_as_brute = [&](const Evaluator& ev, const Footprint& p, uint64_t seed) {
+    Rng a(seed), b(seed);
     Estimate ms, brute;
-    ASSERT_TRUE(
-        o->evaluator.estimate(narrow, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
-            .ok());
-    ASSERT_TRUE(
-        o->evaluator.estimate(narrow, kReflectWi, wo, Method::Brute, 2, b, kAllLobes, &brute).ok());
-    EXPECT_TRUE(ms.counters.without_control_variate);
+    ASSERT_TRUE(ev.estimate(p, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms).ok());
+    ASSERT_TRUE(ev.estimate(p, kReflectWi, wo, Method::Brute, 2, b, kAllLobes, &brute).ok());
+    EXPECT_TRUE(ms.counters.without_control_variate) << p.x0 << ", " << p.y0;
     EXPECT_FALSE(brute.counters.without_control_variate);
     for (int c = 0; c < 3; ++c)
-      EXPECT_EQ(ms.value[c], brute.value[c]);
+      EXPECT_EQ(ms.value[c], brute.value[c]) << p.x0 << ", " << p.y0;
+  };
+  for (int k = 0; k < 20; ++k) {
+    same_as_brute(o->evaluator, small, 100 + k);
+    same_as_brute(exact_only, narrow, 200 + k);
+    same_as_brute(exact_only, near_tile, 300 + k);
+    Rng a(100 + k);
+    Estimate ms;
+    for (const Footprint& p : {narrow, near_tile, ragged}) {
+      ASSERT_TRUE(
+          o->evaluator.estimate(p, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms).ok());
+      EXPECT_FALSE(ms.counters.without_control_variate);
+      EXPECT_GT(ms.counters.remainder_samples, 0u);
+    }
     ASSERT_TRUE(
         o->evaluator.estimate(whole, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
             .ok());
     EXPECT_FALSE(ms.counters.without_control_variate);
     EXPECT_EQ(ms.counters.remainder_samples, 0u);
     EXPECT_GT(ms.counters.table_queries, 0u);
-    ASSERT_TRUE(
-        o->evaluator.estimate(ragged, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
-            .ok());
-    EXPECT_GT(ms.counters.remainder_samples, 0u);
-    ASSERT_TRUE(
-        o->evaluator.estimate(near_tile, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
-            .ok());
-    EXPECT_FALSE(ms.counters.without_control_variate);
-    EXPECT_GT(ms.counters.remainder_samples, 0u);
   }
   Rng rng(1);
   Estimate paper;
   ASSERT_TRUE(
       o->evaluator
-          .estimate(narrow, kReflectWi, wo, Method::MultiscalePaper, 2, rng, kAllLobes, &paper)
+          .estimate(small, kReflectWi, wo, Method::MultiscalePaper, 2, rng, kAllLobes, &paper)
           .ok());
   EXPECT_FALSE(paper.counters.without_control_variate);
   EXPECT_GT(paper.counters.table_queries, 0u);
