@@ -1,4 +1,4 @@
-// Assets the evaluator tests share, baked once per test process through the bake library:
+// Assets the evaluator tests share, baked once per test executable through the bake library:
 //   twill: the demo twill at 64^2 with raw and compressed tables (--keep-raw), its clusters split
 //          by yarn and a rank-4 visibility basis (the bake's defaults)
 //   flat:  a flat 16^2 fabric where every approximation of the paper is exact: constant height
@@ -140,31 +140,82 @@ inline void bake(const std::string& toml, const std::string& out, bool keep_raw 
   set_quiet(false);
 }
 
-// Bakes the four assets into a fresh temporary folder (once per process).
+// The folder the fixture assets are baked into, shared by every process of this test executable
+// (the shards of one binary run side by side, docs/performance.md "The suite's time"): under the
+// build folder, named after the executable and its size and modification time, so that a rebuilt
+// binary bakes afresh (and removes the folders of its earlier builds).
+inline std::filesystem::path shared_fixture_dir() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  const std::string stem = exe.filename().string();
+  const std::string key = stem + "-" + std::to_string(fs::file_size(exe, ec)) + "-" +
+                          std::to_string(fs::last_write_time(exe, ec).time_since_epoch().count());
+  const fs::path root = fs::path(CLOTHBAKE_BINARY_DIR) / "test-fixtures";
+  const fs::path dir = root / key;
+  if (!fs::exists(dir, ec))
+    for (const auto& entry : fs::directory_iterator(root, ec))
+      if (entry.path().filename().string().rfind(stem + "-", 0) == 0)
+        fs::remove_all(entry.path(), ec);
+  fs::create_directories(dir, ec);
+  return dir;
+}
+
+// Writes `text` to `path` through a temporary file renamed into place (processes may race).
+inline void write_text_atomically(const std::filesystem::path& path, const char* text) {
+  const std::filesystem::path temp = path.string() + ".tmp" + std::to_string(::getpid());
+  write_text(temp, text);
+  std::filesystem::rename(temp, path);
+}
+
+// The flat fabric's three maps into `dir` (oiiotool; through temporary names).
+inline void write_flat_maps(const std::filesystem::path& dir) {
+  const std::string pid = std::to_string(::getpid());
+  const auto make = [&](const char* name, std::vector<std::string> pattern) {
+    const std::filesystem::path temp = dir / (pid + "_" + name);
+    std::vector<std::string> argv = {"/usr/bin/oiiotool"};
+    argv.insert(argv.end(), pattern.begin(), pattern.end());
+    argv.insert(argv.end(), {"-d", "float", "-o", temp.string()});
+    run_or_fail(argv);
+    std::filesystem::rename(temp, dir / name);
+  };
+  make("flat_height.exr", {"--pattern", "constant:color=0.25", "16x16", "1"});
+  make("flat_tangent.exr", {"--pattern", "constant:color=0.6,0.8,0", "16x16", "3"});
+  make("flat_gap.exr", {"--pattern", "checker:width=4:height=4:color1=1:color2=0", "16x16", "1"});
+}
+
+// The four assets, baked once per test executable into shared_fixture_dir() (each missing one by
+// the first process that needs it: two that race bake the same bytes, and the writer renames a
+// finished file into place), and a fresh temporary folder of this process (dir) with the fabric
+// descriptions and maps, where the tests write their own files.
 inline const Assets& assets() {
   static const Assets baked = [] {
     Assets a;
     a.dir =
         std::filesystem::temp_directory_path() / ("clothbake_eval_" + std::to_string(::getpid()));
     std::filesystem::create_directories(a.dir);
-    const auto path = [&](const char* name) { return (a.dir / name).string(); };
     write_text(a.dir / "twill.toml", kTwillToml);
     write_text(a.dir / "flat.toml", kFlatToml);
     write_text(a.dir / "satin.toml", kSatinToml);
-    run_or_fail({"/usr/bin/oiiotool", "--pattern", "constant:color=0.25", "16x16", "1", "-d",
-                 "float", "-o", path("flat_height.exr")});
-    run_or_fail({"/usr/bin/oiiotool", "--pattern", "constant:color=0.6,0.8,0", "16x16", "3", "-d",
-                 "float", "-o", path("flat_tangent.exr")});
-    run_or_fail({"/usr/bin/oiiotool", "--pattern", "checker:width=4:height=4:color1=1:color2=0",
-                 "16x16", "1", "-d", "float", "-o", path("flat_gap.exr")});
+    write_flat_maps(a.dir);
+    const std::filesystem::path shared = shared_fixture_dir();
+    const auto path = [&](const char* name) { return (shared / name).string(); };
     a.twill = path("twill.cbk");
     a.flat = path("flat.cbk");
     a.bare = path("bare.cbk");
     a.satin = path("satin.cbk");
-    bake(path("twill.toml"), a.twill, true);
-    bake(path("flat.toml"), a.flat);
-    bake(path("satin.toml"), a.satin);
-    bake(path("twill.toml"), a.bare, false, {"feature_maps", "parallax", "cluster"});
+    if (!std::filesystem::exists(a.twill) || !std::filesystem::exists(a.flat) ||
+        !std::filesystem::exists(a.bare) || !std::filesystem::exists(a.satin)) {
+      write_text_atomically(shared / "twill.toml", kTwillToml);
+      write_text_atomically(shared / "flat.toml", kFlatToml);
+      write_text_atomically(shared / "satin.toml", kSatinToml);
+      write_flat_maps(shared);
+      if (!std::filesystem::exists(a.twill)) bake(path("twill.toml"), a.twill, true);
+      if (!std::filesystem::exists(a.flat)) bake(path("flat.toml"), a.flat);
+      if (!std::filesystem::exists(a.satin)) bake(path("satin.toml"), a.satin);
+      if (!std::filesystem::exists(a.bare))
+        bake(path("twill.toml"), a.bare, false, {"feature_maps", "parallax", "cluster"});
+    }
     return a;
   }();
   return baked;
