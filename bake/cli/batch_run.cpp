@@ -1,14 +1,9 @@
 // The engine of `clothbake batch` (batch_run.hpp).
 #include "bake/cli/batch_run.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -20,11 +15,10 @@
 #include "bake/cli/batch_stamp.hpp"
 #include "bake/cli/depfile.hpp"
 #include "bake/inputs/fabric_files.hpp"
+#include "common/child_process.hpp"
 #include "common/error.hpp"
 #include "common/version.hpp"
 #include "formats/writer/atomic_file.hpp"
-
-extern char** environ;
 
 namespace clothbake::cli {
 namespace {
@@ -101,23 +95,6 @@ std::string last_line(const std::string& path) {
   const std::string prefix = "clothbake: ";
   if (last.rfind(prefix, 0) == 0) last = last.substr(prefix.size());
   return last.empty() ? "failed without a message" : last;
-}
-
-pid_t spawn_bake(const std::string& exe, const std::vector<std::string>& args,
-                 const std::string& log) {
-  std::vector<char*> argv;
-  argv.push_back(const_cast<char*>(exe.c_str()));
-  for (const auto& a : args)
-    argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  return rc == 0 ? pid : -1;
 }
 
 std::string sh_quote(const std::string& s) {
@@ -273,8 +250,10 @@ BatchRun run_batch(
       if (j.status != "pending") continue;
       if (!running.empty() && reserved + estimate(j) > max_memory) continue;
       const std::string base = (fs::path(state_dir(o)) / j.name).string();
-      j.pid = spawn_bake(executable(o), bake_arguments(o, j, threads, base + ".report.json"),
-                         base + ".log");
+      // stdout to /dev/null, stderr to the log (common/child_process.hpp).
+      j.pid = spawn_program(executable(o), bake_arguments(o, j, threads, base + ".report.json"),
+                            "/dev/null", base + ".log")
+                  .pid;
       j.start = std::chrono::steady_clock::now();
       if (j.pid < 0) {
         j.status = "failed";
@@ -286,12 +265,12 @@ BatchRun run_batch(
       reserved += estimate(j);
     }
     if (running.empty()) break;
-    int status = 0;
-    const pid_t pid = ::waitpid(-1, &status, 0);
+    const ChildEnd reaped = wait_any_child();  // EINTR retried
+    const pid_t pid = reaped.pid;
+    const int status = reaped.status;
     if (pid < 0) {
-      if (errno == EINTR) continue;
       // Not expected while our children run (ECHILD would mean someone else reaped them).
-      const std::string why = std::strerror(errno);
+      const std::string why = std::strerror(reaped.error);
       for (auto& [child, index] : running) {
         jobs[index].status = "failed";
         jobs[index].note = "lost track of the bake (waitpid: " + why + ")";
@@ -305,7 +284,7 @@ BatchRun run_batch(
     reserved -= estimate(j);
     j.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - j.start).count();
     const std::string base = (fs::path(state_dir(o)) / j.name).string();
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+    if (child_succeeded(status)) {
       try {
         std::ifstream in(base + ".report.json");
         const nlohmann::json report = nlohmann::json::parse(in);
@@ -320,8 +299,8 @@ BatchRun run_batch(
       }
     } else {
       j.status = "failed";
-      j.note = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
-                                   : last_line(base + ".log");
+      j.note = child_signal(status) != 0 ? describe_wait_status(status)  // "killed by signal N"
+                                         : last_line(base + ".log");
     }
     ++ended;
     if (on_end) on_end(j, ended, to_bake);
