@@ -92,7 +92,13 @@ uint64_t CompressedTableSet::payload_bytes() const {
               : (coded_coefficients.empty() ? code_compressed_coefficients(*this).size()
                                             : coded_coefficients.size());
   return sizeof(info) + cells.size() * sizeof(reader::CompressedCell) + cell_map.size() +
-         scales.size() * 4 + basis.size() * 2 + coded;
+         scales.size() * 4 + scales.size() * stored_columns() * 2 + coded;
+}
+
+uint64_t CompressedTableSet::stored_columns() const {
+  const uint64_t bins = uint64_t(info.bins_per_side) * info.bins_per_side;
+  if ((info.flags & reader::kCompressedPlannedFlag) == 0 || covered.size() != bins) return bins;
+  return uint64_t(std::count(covered.begin(), covered.end(), uint8_t(1)));
 }
 
 CompressedTableSet compress_tables(const DirectionalTexels& data, const CpcaOptions& options,
@@ -274,9 +280,22 @@ std::vector<formats::Section> compressed_sections(const CompressedTableSet& set)
   out.push_back(formats::make_array_section<float>(SectionType::RadianceCompressedTables,
                                                    instance(CompressedPart::Scales), set.scales,
                                                    {images}));
-  out.push_back(formats::make_array_section<reader::Half>(SectionType::RadianceCompressedTables,
-                                                          instance(CompressedPart::Basis),
-                                                          set.basis, {images, bins}));
+  // A planned kind: the covered bins' columns only (stored_columns()), image by image.
+  const uint64_t columns = set.stored_columns();
+  if (columns == bins) {
+    out.push_back(formats::make_array_section<reader::Half>(SectionType::RadianceCompressedTables,
+                                                            instance(CompressedPart::Basis),
+                                                            set.basis, {images, bins}));
+  } else {
+    std::vector<reader::Half> compact;
+    compact.reserve(uint64_t(images) * columns);
+    for (uint64_t i = 0; i < images; ++i)
+      for (uint32_t b = 0; b < bins; ++b)
+        if (set.covered[b] == 1) compact.push_back(set.basis[i * bins + b]);
+    out.push_back(formats::make_array_section<reader::Half>(SectionType::RadianceCompressedTables,
+                                                            instance(CompressedPart::Basis),
+                                                            compact, {images, uint32_t(columns)}));
+  }
   const std::vector<uint8_t> coded =
       set.coded_coefficients.empty() ? code_compressed_coefficients(set) : set.coded_coefficients;
   out.push_back(formats::make_array_section<uint8_t>(SectionType::RadianceCompressedTables,

@@ -39,8 +39,14 @@ struct CompressedTableSet {
   // Part 5 as stored: the coefficients entropy-coded (coefficient_coding.hpp); compress_tables
   // fills it, compressed_sections codes the coefficients when it is empty.
   std::vector<uint8_t> coded_coefficients;
+  // A scene-planned kind (info.flags kCompressedPlannedFlag): one entry per bin, 1 = covered
+  // (bin_map instance 0). Part 4 then stores the covered bins' columns only, in bin order
+  // (docs/format.md §6.13); `basis` above keeps every bin (zero where not covered).
+  std::vector<uint8_t> covered;
 
   bool empty() const { return cells.empty(); }
+  // Columns of part 4 as stored: the covered bins of a planned kind, else every bin.
+  uint64_t stored_columns() const;
   // Bytes of the six payloads as stored (part 5: coded_coefficients, coded now if empty).
   uint64_t payload_bytes() const;
 };

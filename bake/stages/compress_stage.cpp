@@ -78,7 +78,11 @@ void run_compress(pipeline::StageContext& ctx) {
     ctx.progress(0.5 * i + 0.1);
     CompressionStats stats;
     CompressedTableSet set = compress_tables(data, settings.cpca(), &stats);
-    if (reduce) set.info.flags |= reader::kCompressedPlannedFlag;  // bins of bin_map 0 only
+    if (reduce) {  // bins of bin_map 0 only; part 4 stores their columns alone
+      set.info.flags |= reader::kCompressedPlannedFlag;
+      set.covered = plan->half_vector_bins;
+      stats.compressed_bytes = set.payload_bytes();
+    }
     for (auto& s : compressed_sections(set))
       out.push_back(std::move(s));
     ctx.progress(0.5 * (i + 1));

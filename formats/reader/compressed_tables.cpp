@@ -224,17 +224,31 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
       return Status::error(ErrorCode::Malformed, Check::ValueRange,
                            "compressed_tables %s: scale of image %u is not finite and >= 0",
                            kind_name(kind), unsigned(i));
+  // A planned kind stores the columns of its covered bins only, in bin order (K of them); one
+  // written before that rule stored all bins, the left-out ones zero: both are read.
+  const bool planned_kind = bin_map.present() && kind != RadianceTableKind::Gap;
+  uint32_t covered_bins = bins;
+  if (planned_kind) {
+    covered_bins = 0;
+    for (uint32_t b = 0; b < bins; ++b)
+      covered_bins += bin_map.mask[b] ? 1u : 0u;
+  }
   ArrayView<Half> basis;
   s = asset.view_of(parts[4], &basis);
   if (!s.ok()) return s;
-  if (basis.rank != 2 || basis.dims[0] != images || basis.dims[1] != bins)
-    return layout_error(kind, "basis", "must be f16 {image_count, bins}");
+  if (basis.rank != 2 || basis.dims[0] != images ||
+      (basis.dims[1] != bins && basis.dims[1] != covered_bins))
+    return layout_error(kind, "basis",
+                        planned_kind ? "must be f16 {image_count, covered bins of bin_map 0} (or "
+                                       "{image_count, bins})"
+                                     : "must be f16 {image_count, bins}");
+  const uint64_t columns = basis.dims[1];
   for (uint64_t t = 0; t < basis.size; ++t) {
     if (!half_is_finite(basis[t]) || !(std::fabs(half_to_float(basis[t])) <= 1.0f))
       return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "compressed_tables %s: basis value of image %" PRIu64 " bin %" PRIu64
+                           "compressed_tables %s: basis value of image %" PRIu64 " column %" PRIu64
                            " is not in [-1, 1]",
-                           kind_name(kind), t / bins, t % bins);
+                           kind_name(kind), t / columns, t % columns);
   }
 
   // The decoded size is known from the shapes: refuse a huge one before decoding anything.
@@ -315,9 +329,15 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     else
       build_sats(n, images, map.data, cells.get(), coefficients.data, sat32.get(), row.get());
   }
-  for (uint32_t i = 0; i < images; ++i)
-    for (uint32_t b = 0; b < bins; ++b)
-      scaled[uint64_t(b) * images + i] = scales[i] * half_to_float(basis[uint64_t(i) * bins + b]);
+  for (uint32_t i = 0; i < images; ++i) {
+    uint64_t column = 0;  // the stored column of bin b (compact planned form: covered bins only)
+    for (uint32_t b = 0; b < bins; ++b) {
+      const bool stored = columns == bins || bin_map.mask[b] != 0;
+      scaled[uint64_t(b) * images + i] =
+          stored ? scales[i] * half_to_float(basis[uint64_t(i) * columns + column]) : 0.0f;
+      column += stored ? 1 : 0;
+    }
+  }
   std::memcpy(map_copy.get(), map.data, uint64_t(n) * n);
   for (uint32_t g = 0; g < cells_n; ++g) {
     cell_cluster[g] = cells[g].cluster;
