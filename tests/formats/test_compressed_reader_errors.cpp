@@ -171,6 +171,75 @@ TEST(CompressedReaderErrors, PlannedFlagNeedsItsBinMap) {
   EXPECT_STREQ(open(wrong).check_id(), "CBK-E015");
 }
 
+// A planned kind's basis (part 4) holds the columns of its covered bins only, {images, K}, in bin
+// order; the all-columns form {images, B} (left-out columns zero, written before that rule) reads
+// the same, value for value; any other column count is CBK-E015.
+TEST(CompressedReaderErrors, PlannedBasisStoresTheCoveredColumnsOnly) {
+  auto planned = [](const std::vector<uint8_t>& keep, uint32_t n, bool compact, int extra = 0) {
+    auto s = good_sections();
+    const uint32_t flags = reader::kCompressedPlannedFlag;
+    std::memcpy(part(s, CompressedPart::Info).payload.data() +
+                    offsetof(reader::CompressedTableInfoRecord, flags),
+                &flags, 4);
+    formats::Section& basis = part(s, CompressedPart::Basis);
+    const uint32_t images = basis.dims[0], bins = basis.dims[1];
+    std::vector<uint16_t> all(std::size_t(images) * bins);
+    std::memcpy(all.data(), basis.payload.data(), all.size() * 2);
+    std::vector<uint16_t> stored;
+    for (uint32_t i = 0; i < images; ++i)
+      for (uint32_t b = 0; b < bins; ++b)
+        if (keep[b])
+          stored.push_back(all[std::size_t(i) * bins + b]);
+        else if (!compact)
+          stored.push_back(0);  // +0 in f16
+    const uint32_t columns = uint32_t(stored.size() / images);
+    for (int k = 0; k < extra * int(images); ++k)
+      stored.push_back(0);
+    basis.payload.resize(stored.size() * 2);
+    std::memcpy(basis.payload.data(), stored.data(), stored.size() * 2);
+    basis.dims = {images, columns + uint32_t(extra)};
+    s.push_back(formats::make_array_section<uint8_t>(reader::SectionType::BinMap,
+                                                     reader::kHalfVectorBinMap, keep, {n, n}));
+    return s;
+  };
+  uint32_t n = 0;
+  {
+    const auto s = good_sections();
+    reader::CompressedTableInfoRecord info;
+    std::memcpy(&info, s[0].payload.data(), sizeof info);
+    n = info.bins_per_side;
+  }
+  // The first and the last bin kept (n >= 2): the corner (-1, -1) is answered from bin 0 alone.
+  ASSERT_GE(n, 2u);
+  std::vector<uint8_t> keep(std::size_t(n) * n, 0);
+  keep[0] = keep.back() = 1;
+  const auto compact = test::memory_asset(planned(keep, n, true));
+  const auto wide = test::memory_asset(planned(keep, n, false));
+  reader::CompressedRadianceTables a, b;
+  ASSERT_TRUE(a.open(compact->asset, reader::RadianceTableKind::Specular).ok());
+  ASSERT_TRUE(b.open(wide->asset, reader::RadianceTableKind::Specular).ok());
+  for (uint32_t bin = 0; bin < n * n; ++bin)
+    for (uint32_t image = 0; image < a.image_count(); ++image)
+      ASSERT_EQ(a.image_basis(image, bin), b.image_basis(image, bin)) << bin << " " << image;
+  const double corner[3] = {-1, -1, 0.01};
+  double va[3] = {}, vb[3] = {};
+  ASSERT_TRUE(a.query_all({0, 0, 1, 1}, corner, va).ok());
+  ASSERT_TRUE(b.query_all({0, 0, 1, 1}, corner, vb).ok());
+  EXPECT_EQ(va[0], vb[0]);
+  // A left-out bin's column is zero; a kept one's is the full table's.
+  const auto full = test::memory_asset(good_sections());
+  reader::CompressedRadianceTables f;
+  ASSERT_TRUE(f.open(full->asset, reader::RadianceTableKind::Specular).ok());
+  for (uint32_t image = 0; image < a.image_count(); ++image) {
+    EXPECT_EQ(a.image_basis(image, n * n - 1), f.image_basis(image, n * n - 1));
+    EXPECT_EQ(a.image_basis(image, 0), f.image_basis(image, 0));
+    EXPECT_EQ(a.image_basis(image, 1), 0.0f);
+  }
+  // Neither K nor B columns.
+  reader::Status st = open(planned(keep, n, true, 1));
+  EXPECT_STREQ(st.check_id(), "CBK-E015") << st.message();
+}
+
 TEST(CompressedReaderErrors, BadQueryArguments) {
   const auto asset = test::memory_asset(good_sections());
   reader::CompressedRadianceTables t;
