@@ -47,7 +47,8 @@ int run_plan(const PlanCliOptions& o) {
                   terminal_safe(d.reason).c_str());
     std::printf(
         "  estimate: %.3g MB and %.3g s baked with the plan, %.3g MB and %.3g s without "
-        "(%.1fx smaller, %.1fx faster; sizes before entropy coding, measured stage rates)\n",
+        "(%.1fx smaller, %.1fx faster; sizes after entropy coding, modelled; measured stage "
+        "rates)\n",
         1e-6 * double(p.estimate.planned_bytes), p.estimate.planned_seconds,
         1e-6 * double(p.estimate.full_bytes), p.estimate.full_seconds,
         double(p.estimate.full_bytes) / double(std::max<uint64_t>(p.estimate.planned_bytes, 1)),

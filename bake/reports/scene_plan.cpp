@@ -11,6 +11,7 @@
 #include "bake/stages/stages.hpp"
 #include "common/error.hpp"
 #include "compress/compress_settings.hpp"
+#include "compress/map_entropy.hpp"
 #include "formats/reader/parallax_hierarchy.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "formats/writer/asset_writer.hpp"
@@ -29,18 +30,31 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
   return buf;
 }
 
-// Estimates. Sizes: the sections' shapes (docs/format.md), sizes before coding where the bake
-// entropy-codes (the feature maps at their 16-bit codes, 20 bytes per texel, an upper bound; the
-// parallax at one byte per texel and direction, well above its coded size: that depends on the
-// pattern, docs/scene-plans.md, "Estimates"); the
-// compressed Integral-Radiance tables from a mean C-PCA rank of kMeanRank per texel (the 256^2
-// twill measured 15.1: 991149 coefficients over 65536 texels) capped at the kept bins, plus one
-// basis image per rank and cluster. Times: per-stage rates of the 256^2 twill (format 1.5, whose
-// forms 2.0 kept), fitted to its full bake and its far-swatch plan (2 threads, idle machine;
-// docs/scene-plans.md, "Estimates"): a fixed part per texel plus a part per texel and direction.
-constexpr double kMeanRank = 15.1;
+// Estimates (docs/scene-plans.md, "Estimates"). Sizes after entropy coding, section by section
+// (docs/format.md): exact where the size follows from the shapes (visibility, clusters, labels,
+// the tables' per-texel maps and basis columns), the feature maps coded here as the bake codes
+// them, and modelled where it depends on what the stages find:
+//  - the parallax stream at kParallaxBytesPerTexelDirection per texel and stored direction (the
+//    256^2 twill's 0.035; the codes depend on the relief: the satin's 0.013, the goose-eye's
+//    0.097);
+//  - the C-PCA ranks: kRankAtReference images per cell for a fabric whose narrowest roughness is
+//    kReferenceRoughness at all bins, growing as 1/sqrt(roughness) (the 256^2 twill 9.6 at
+//    sigma 0.4, the satin 26 at 0.06) and falling as (kept bins / bins)^kRankBinExponent (the far
+//    swatch's 21 of 1024 bins: 2.8) and as (N / 256)^kRankResolutionExponent (the 64^2 test
+//    twill's 5.7), never above the kept bins; coded coefficients at
+//    kBytesPerCoefficient;
+//  - one C-PCA cell per visibility cluster, clusters x yarns clusters when split by yarn.
+// Times: per-stage rates of the 256^2 twill (format 1.5, whose forms 2.0 kept), fitted to its full
+// bake and its far-swatch plan (2 threads, idle machine; docs/scene-plans.md, "Estimates"): a
+// fixed part per texel plus a part per texel and direction.
+constexpr double kParallaxBytesPerTexelDirection = 0.035;
+constexpr double kRankAtReference = 9.6, kReferenceRoughness = 0.4, kRankBinExponent = 0.32;
+constexpr double kRankResolutionExponent = 0.38;          // fewer texels, fewer distinct vectors
+constexpr double kParallaxTableBytes = 2 * 23 * 256 * 2;  // u16 {groups, 23, 256}: 1-3 groups
+constexpr double kBytesPerCoefficient = 0.25;
+constexpr double kMetadataBytes = 10500, kPlanMetadataBytes = 3500;
 constexpr double kParallaxPerTexel = 4.2e-6, kParallaxPerRay = 5.8e-8;
-constexpr double kVisibilityPerSample = 4.8e-8;  // per texel and visibility direction
+constexpr double kVisibilitySample = 4.8e-8;  // per texel and visibility direction
 constexpr double kClusterPerTexel = 4.9e-6;
 constexpr double kCompressPerTexel = 1.6e-5, kCompressPerTexelBin = 1.8e-8;
 constexpr double kWritePerByte = 6.6e-9;
@@ -62,31 +76,76 @@ int planned_visibility_dirs(int fabric_dirs, double footprint_min) {
                                                      : fabric_dirs;
 }
 
-PlanEstimate estimate_bake(const Fabric& fabric, double view_dirs, double bins, bool gap_kind,
-                           int visibility_dirs) {
+// What the estimate needs of a bake: the kept view directions and half-vector bins, the gap
+// kind, the visibility directions sampled, whether it is a plan.
+struct EstimateShape {
+  double view_dirs = 0, bins = 0;
+  bool gap_kind = false, planned = false;
+  int visibility_dirs = 0;
+};
+
+// The feature maps as the bake stores them (coded), in bytes; 0 when they cannot be coded (the
+// bake reports that error).
+double feature_map_bytes(const Fabric& fabric) {
+  try {
+    double bytes = 0;
+    for (const formats::Section& section : compress::feature_map_sections(fabric.maps))
+      bytes += double(section.payload.size());
+    return bytes;
+  } catch (const Error&) {
+    return 0;
+  }
+}
+
+PlanEstimate estimate_bake(const Fabric& fabric, const EstimateShape& shape, double map_bytes,
+                           double narrowest_roughness) {
   const double n2 = double(fabric.maps.resolution) * fabric.maps.resolution;
-  const double vis = double(visibility_dirs) * visibility_dirs;  // sampled (the plan's)
-  // The clusters' mean-visibility grid keeps the fabric's directions (cluster stage).
+  const double vis = double(shape.visibility_dirs) * shape.visibility_dirs;  // sampled
+  // The clusters' grids keep the fabric's directions (cluster stage).
   const double cluster_vis = double(fabric.bake.visibility_dirs) * fabric.bake.visibility_dirs;
-  const double clusters = fabric.bake.clusters;
-  const double rank = std::min(kMeanRank, bins);
-  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + n2 * 20  // records, maps
-                       + 64 + n2 * 12                                      // visibility
-                       + n2 + clusters * cluster_vis * 4                   // clusters
-                       + 10000;                                            // metadata
-  const double parallax = 64 + 8 * view_dirs + n2 * view_dirs;
-  const double tables = 64 + 32 * clusters + n2 + n2 * rank * 2 +
-                        clusters * (1 + rank) * (bins * 2 + 4) + (gap_kind ? 64 + 16 + n2 + 8 : 0);
+  std::vector<char> in_use(fabric.yarns.size(), 0);
+  for (uint16_t id : fabric.maps.yarn_id)
+    if (id < in_use.size()) in_use[id] = 1;
+  const double yarns = std::max(1.0, double(std::count(in_use.begin(), in_use.end(), 1)));
+  const double clusters =
+      std::min(255.0, fabric.bake.clusters * (fabric.bake.clusters_by_yarn ? yarns : 1.0));
+  const double m = fabric.bake.visibility_rank;
+  const double all_bins = double(fabric.bake.radiance_dirs) * fabric.bake.radiance_dirs;
+  const double rank = std::min(
+      shape.bins, kRankAtReference *
+                      std::sqrt(kReferenceRoughness / std::max(narrowest_roughness, 1e-3)) *
+                      std::pow(std::min(1.0, shape.bins / all_bins), kRankBinExponent) *
+                      std::pow(double(fabric.maps.resolution) / 256, kRankResolutionExponent));
+  const double images = clusters * (1 + rank);
+  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + map_bytes  // records, maps
+                       + 64 + n2 * 12                                        // visibility
+                       + n2 + clusters * cluster_vis * 4                     // clusters
+                       + clusters * (m + 1) * cluster_vis * 4 + n2 * m * 4   // basis
+                       + kMetadataBytes + (shape.planned ? kPlanMetadataBytes : 0);
+  const double all_dirs = double(fabric.bake.parallax_dirs) * fabric.bake.parallax_dirs;
+  const double parallax = 64 + all_dirs * (8 + 8 + 4) + kParallaxTableBytes +
+                          n2 * shape.view_dirs * kParallaxBytesPerTexelDirection;
+  const double tables = 64 + 16 * clusters + n2 + 4 * images + 2 * images * shape.bins +
+                        n2 * rank * kBytesPerCoefficient +
+                        (shape.gap_kind ? 64 + 16 + n2 + 4 + 2 + 2064 : 0);
   PlanEstimate e;
   e.planned_bytes = uint64_t(fixed + parallax + tables);
-  e.planned_seconds = n2 * (kParallaxPerTexel + kParallaxPerRay * view_dirs) +
-                      n2 * vis * kVisibilityPerSample + n2 * kClusterPerTexel +
-                      n2 * (kCompressPerTexel + kCompressPerTexelBin * bins) +
+  e.planned_seconds = n2 * (kParallaxPerTexel + kParallaxPerRay * shape.view_dirs) +
+                      n2 * vis * kVisibilitySample + n2 * kClusterPerTexel +
+                      n2 * (kCompressPerTexel + kCompressPerTexelBin * shape.bins) +
                       double(e.planned_bytes) * kWritePerByte;
   return e;
 }
 
 }  // namespace
+
+double planned_compression_target(double default_target, double budget) {
+  // relMSE(planned, full) <= (e_planned + e_full)^2 (the two tables' relative RMS errors, at worst
+  // adding up texel by texel); half the budget is kept for what else the plan changes.
+  const double loosest = std::sqrt(budget / 2) - default_target;
+  if (loosest >= default_target) return default_target;
+  return std::max(loosest, default_target / 4);
+}
 
 FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, double max_error) {
   FabricPlan p;
@@ -219,20 +278,41 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
       gaps = gaps || g < 1.0f;
     const double dirs = double(fabric.bake.parallax_dirs) * fabric.bake.parallax_dirs;
     const double bins = double(p.half_vector_bins_total);
-    const PlanEstimate full = estimate_bake(fabric, dirs, bins, gaps, p.fabric_visibility_dirs);
+    const double maps = feature_map_bytes(fabric);
+    const PlanEstimate full =
+        estimate_bake(fabric, {dirs, bins, gaps, false, p.fabric_visibility_dirs}, maps, sigma);
     const PlanEstimate planned = estimate_bake(
         fabric,
-        p.usage.view_bins.empty() ? dirs : double(std::max<uint64_t>(p.usage.view_bins_used(), 1)),
-        double(std::max<uint64_t>(u.half_vector_bins_used(), 1)), gaps && u.back_lit(),
-        p.visibility_dirs);
+        {p.usage.view_bins.empty() ? dirs : double(std::max<uint64_t>(p.usage.view_bins_used(), 1)),
+         double(std::max<uint64_t>(u.half_vector_bins_used(), 1)), gaps && u.back_lit(), true,
+         p.visibility_dirs},
+        maps, sigma);
     p.estimate = {full.planned_bytes, planned.planned_bytes, full.planned_seconds,
                   planned.planned_seconds};
   }
-  p.decisions.push_back(
-      {"compression target", "kept",
-       fmt("the scene's error budget [render] max_error = %.3g %%: compressed tables at "
-           "max_error = %.3g",
-           100 * max_error, max_error)});
+  {
+    const compress::CompressSettings defaults = compress::settings_from_bake(fabric.bake);
+    if (defaults.fixed)
+      p.decisions.push_back(
+          {"compression target", "kept",
+           fmt("the fabric's fixed C-PCA shape (compress_rank = %.0f): the default bake's, on "
+               "the kept bins",
+               defaults.rank)});
+    else {
+      const double target = planned_compression_target(defaults.max_error, max_error);
+      p.compression_target = target;
+      p.decisions.push_back(
+          {"compression target", target < defaults.max_error ? "tightened" : "kept",
+           target < defaults.max_error
+               ? fmt("the budget %.3g is below 8 e^2 for the default bake's target e = %.3g %%: "
+                     "compressed tables at max_error = %.3g",
+                     max_error, 100 * defaults.max_error, target)
+               : fmt("the default bake's max_error = %.3g %%: the planned and full renders then "
+                     "differ by at most (2 x %.3g %%)^2 = %.2g relMSE, within half the budget "
+                     "%.3g; a looser target would add noise, not change the picture",
+                     100 * target, 100 * target, 4 * target * target, max_error)});
+    }
+  }
   return p;
 }
 
@@ -297,9 +377,10 @@ nlohmann::json plan_json(const ScenePlan& plan) {
                          {"full_bake_seconds", p.estimate.full_seconds},
                          {"planned_bake_seconds", p.estimate.planned_seconds},
                          {"how",
-                          "sizes from the format's section shapes (compressed tables at a mean "
-                          "rank of 15.1 per texel, capped at the kept bins); times from per-stage "
-                          "rates measured on the 256^2 twill (docs/scene-plans.md)"}}},
+                          "sizes after entropy coding: the section shapes, the feature maps "
+                          "coded, the parallax codes and the C-PCA ranks modelled on the example "
+                          "fabrics; times from per-stage rates measured on the 256^2 twill "
+                          "(docs/scene-plans.md, \"Estimates\")"}}},
                        {"warnings", p.warnings}});
   }
   return {{"scene", plan.scene}, {"max_error", plan.max_error}, {"fabrics", fabrics}};
@@ -437,14 +518,15 @@ ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::str
                   {"visibility_dirs_total", out.visibility_dirs_total},
                   {"transmission", back_lit},
                   {"objects", objects}};
-  // The planned tables are compressed to a quarter of the budget (unless the command line set a
-  // target): the full asset's own compression error may reach the budget, and the planned
-  // render must stay within it of the full one. Few kept bins make the tighter target cheap.
-  if (!request->seeds.contains(stages::kCompressSettingsArtifact)) {
+  // The planned tables' target (planned_compression_target; unless the command line set one, or
+  // the fabric asks for a fixed C-PCA shape, which the plan keeps): never tighter than the
+  // default bake's unless the budget needs it, so a plan never adds bytes to the tables.
+  const FabricPlan& first = *mine.front();
+  if (!request->seeds.contains(stages::kCompressSettingsArtifact) && first.compression_target > 0) {
     compress::CompressRequest compression;
-    compression.max_error = plan.max_error / 4;
+    compression.max_error = first.compression_target;
     request->seeds.put(stages::kCompressSettingsArtifact, compression);
-    out.metadata["compression_target"] = plan.max_error / 4;
+    out.metadata["compression_target"] = *compression.max_error;
   }
   request->seeds.put(stages::kScenePlanArtifact, std::move(bake));
   request->seeds.put("section/scene_plan", std::move(sections));

@@ -39,6 +39,9 @@ struct FabricPlan {
   // where every footprint is wide; docs/scene-plans.md, "Visibility directions").
   int fabric_visibility_dirs = 0, visibility_dirs = 0;
   double max_parallax_offset = 0;  // texels, over the scene's views
+  // The planned tables' target (relative RMS per texel, planned_compression_target); 0 when the
+  // fabric asks for a fixed C-PCA shape, which the plan keeps.
+  double compression_target = 0;
   std::vector<PlanDecision> decisions;
   std::vector<std::string> warnings;
   PlanEstimate estimate;
@@ -49,6 +52,14 @@ struct ScenePlan {
   double max_error = 0;
   std::vector<FabricPlan> fabrics;  // one per object with `fabric =`
 };
+
+// The compressed tables' target of a plan (relative RMS error per texel, docs/scene-plans.md,
+// "Compression target"): the default bake's target `default_target` when the budget (the scene's
+// [render] max_error, a relMSE) allows it, i.e. when (e + default_target)^2 <= budget / 2 holds
+// for e = default_target; below that budget the loosest e that satisfies it, but no tighter than
+// default_target / 4. Looser than the default is never chosen: the unbiased estimate's expected
+// picture does not depend on the tables, its noise does. Pure.
+double planned_compression_target(double default_target, double budget);
 
 // The rules on one fabric's usage (pure; documented in docs/scene-format.md).
 FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& usage, double max_error);

@@ -13,6 +13,7 @@
 #include <regex>
 #include <sstream>
 
+#include "bake/reports/scene_plan.hpp"
 #include "formats/reader/compressed_tables.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "tests/eval/eval_fixtures.hpp"
@@ -70,6 +71,19 @@ nlohmann::json info_of(const std::string& asset) {
 
 // Far camera, many tiles per unit: footprints of hundreds of texels against offsets of a fraction
 // of a texel, so the footprint means alone are within the budget; near and oblique, they are not.
+// The planned tables' target: the default bake's wherever (2 e)^2 <= budget / 2, which holds for
+// the scene's default budget (the satin sphere's case: a plan once compressed to a quarter of the
+// budget and grew the asset 1.54x); below that the loosest e with (e + e_full)^2 = budget / 2, and
+// never below a quarter of the default.
+TEST(ScenePlanRules, TheCompressionTargetIsTheDefaultBakesUnlessTheBudgetNeedsATighterOne) {
+  const double e = 0.008;
+  EXPECT_EQ(reports::planned_compression_target(e, 0.008), e);
+  EXPECT_EQ(reports::planned_compression_target(e, 1.0), e);                 // never looser
+  EXPECT_NEAR(reports::planned_compression_target(e, 8 * e * e), e, 1e-15);  // 2e = sqrt(b / 2)
+  EXPECT_NEAR(reports::planned_compression_target(e, 4 * e * e), (std::sqrt(2.0) - 1) * e, 1e-15);
+  EXPECT_EQ(reports::planned_compression_target(e, 1e-8), e / 4);  // the floor
+}
+
 TEST(ScenePlanRules, AFarCameraNeedsNoPerTexelParallaxANearOneDoes) {
   const auto far =
       plan_of(write_scene("far.toml", plane_scene("[0, 0, 50]", kFrontLight, 100, 1.2)));
@@ -189,6 +203,27 @@ TEST(ScenePlanBake, AFixedCameraAndLightKeepOnlyTheReachableBins) {
   const auto in_plan =
       run_clothbake({"eval", out, "--rect", rect, "--wi", wi, "--wo", "0,0,1", "--json"});
   EXPECT_EQ(in_plan.code, 0) << in_plan.err;
+  // The planned tables store the basis columns of the kept bins only (part 4 {images, kept bins},
+  // docs/format.md §6.13), and the reader puts each back at its bin: a kept bin answers as the
+  // full asset's raw tables do, within the compression target (a column at the wrong bin would
+  // answer another half vector's value).
+  int basis_parts = 0;
+  for (const auto& s : info["sections"])
+    if (s["name"] == "radiance_compressed" && s["instance"] == 4) {
+      EXPECT_EQ(s["dims"][1].get<int>(), used);
+      ++basis_parts;
+    }
+  EXPECT_EQ(basis_parts, 1);
+  auto radiance_total = [&](const std::string& asset, const char* tables) {
+    const auto q =
+        run_clothbake({"query", asset, "radiance", "--lobe", "specular_reflection",
+                       "--h=-0.1,-0.05,1", "--rect", rect, "--tables", tables, "--json"});
+    EXPECT_EQ(q.code, 0) << q.err;
+    return q.code == 0 ? nlohmann::json::parse(q.out)["total"].get<double>() : -1.0;
+  };
+  const double raw = radiance_total(assets().twill, "raw");
+  EXPECT_GT(raw, 0.0);
+  EXPECT_NEAR(radiance_total(out, "compressed"), raw, 0.02 * raw);
   // Outside: a grazing half vector, an unseen view, transmission: exit 2 and the reason, no value.
   for (const auto& [wi_out, wo_out, words] :
        std::vector<std::tuple<std::string, std::string, std::string>>{
@@ -305,6 +340,10 @@ TEST_P(ExampleScenePlan, IsWithinItsBudget) {
                               "fabric = \"" + twill_toml() + "\"");
     text = std::regex_replace(text, std::regex("\nmap = \"([^\"]*)\""),
                               "\nmap = \"" + examples.string() + "/$1\"");
+    // The image size of the proof (12^2), so that `plan` below sees the usage the report's bake
+    // is planned for.
+    text = std::regex_replace(text, std::regex("\nresolution = \\[[0-9]+, *[0-9]+\\]"),
+                              "\nresolution = [12, 12]");
     const std::string name = GetParam();
     const fs::path scene = write_scene("example-" + name + ".toml", text);
     const fs::path dir = assets().dir / ("report-" + name);
@@ -314,15 +353,29 @@ TEST_P(ExampleScenePlan, IsWithinItsBudget) {
                                   "--image-size", "12,12", "--spp", "8", "--json"});
     ASSERT_TRUE(r.code == 0 || r.code == 5) << name << ": " << r.err;
     const nlohmann::json j = nlohmann::json::parse(r.out);
+    // `plan` estimates the asset after entropy coding within 25 % of what the bake writes (one
+    // object per fabric: with several, each object's estimate is for its own usage, while the
+    // bake merges them).
+    {
+      const auto planned = run_clothbake({"plan", scene.string(), "--json"});
+      ASSERT_EQ(planned.code, 0) << planned.err;
+      const nlohmann::json p = nlohmann::json::parse(planned.out);
+      if (p["fabrics"].size() == 1 && j["fabrics"].size() == 1) {
+        const double estimate = p["fabrics"][0]["estimate"]["planned_bytes"].get<double>();
+        const double baked = j["fabrics"][0]["planned_bytes"].get<double>();
+        EXPECT_NEAR(estimate, baked, 0.25 * baked) << name;
+      }
+    }
     for (const auto& f : j["fabrics"]) {
       for (const char* key :
            {"full_bytes", "planned_bytes", "full_bake_seconds", "planned_bake_seconds", "budget"})
         EXPECT_TRUE(f.contains(key)) << name << ": " << key;
-      // The planned parallax holds the views' directions (and those they are predicted from) with
-      // the full bake's codes, the rest as empty blocks, so its stream is never larger. The whole
-      // asset may be on this 64^2 fixture: the planned radiance tables are compressed to a quarter
-      // of the budget, which here can cost more than the left-out bins save (docs/scene-plans.md).
+      // A plan never adds bytes: its tables are compressed to the default bake's target (the
+      // scene's budget allows it), and the planned parallax holds the views' directions (and
+      // those they are predicted from) with the full bake's codes, the rest as empty blocks, so
+      // neither the asset nor its parallax stream is larger than the full bake's.
       EXPECT_GT(f["planned_bytes"].get<double>(), 0.0) << name;
+      EXPECT_LE(f["planned_bytes"].get<double>(), f["full_bytes"].get<double>()) << name;
       auto stream_bytes = [](const std::string& asset) {
         const nlohmann::json info = info_of(asset);
         for (const auto& s : info["sections"])
@@ -339,21 +392,23 @@ TEST_P(ExampleScenePlan, IsWithinItsBudget) {
       EXPECT_LT(f["relmse"]["planned_vs_full_std_error"].get<double>(),
                 f["budget"].get<double>() / 4)
           << name << ": " << f.dump();
-      // The plan does not make the picture worse: the planned render is as far from the reference
-      // as the full one, within the budget (relative), where the per-texel visibility is the
-      // full asset's (the two renders then share their noise). With fewer visibility directions
-      // the expected picture is the same (above) but the noise is not shared and differs: the
-      // ASGs fitted on 12^2 directions are less low-rank, so the multi-scale control variate's
-      // residual grows (2.3 times the variance on this test's far swatch, docs/scene-plans.md),
-      // and over this test's ~100 pixels the two relMSE estimates scatter by tens of per cent, so
-      // only a gross loss is an error here.
+      // The plan does not make the picture worse: the planned render is about as far from the
+      // reference as the full one. The two renders share their random numbers, but not all of
+      // their noise: the planned tables are another C-PCA fit (the kept bins only, at the same
+      // target), so the control variate g and the residual f V - g of each sample differ by up
+      // to the target per texel (the cylinder: planned 1.3 % above full); with fewer visibility
+      // directions every texel's ASG changes, the ASGs fitted on 12^2 directions are less
+      // low-rank and the residual grows (2.3 times the variance on this test's far swatch,
+      // docs/scene-plans.md). Over this test's ~100 pixels the two relMSE estimates then scatter
+      // by tens of per cent, so only a gross loss is an error here; the expected pictures are
+      // compared above, within the budget.
       bool fewer_visibility_directions = false;
       for (const auto& what : f["left_out"])
         fewer_visibility_directions |=
             what.get<std::string>().find("visibility light directions") != std::string::npos;
       EXPECT_LE(f["relmse"]["planned_vs_reference"].get<double>(),
                 f["relmse"]["full_vs_reference"].get<double>() *
-                    (fewer_visibility_directions ? 3.0 : 1 + f["budget"].get<double>()))
+                    (fewer_visibility_directions ? 3.0 : 1.1))
           << name << ": " << f.dump();
       EXPECT_TRUE(f["relmse"].contains("full_vs_reference"));
       EXPECT_TRUE(f["relmse"].contains("planned_vs_reference"));
