@@ -39,6 +39,9 @@ inline uint64_t mul_high_u64(uint64_t a, uint64_t b) noexcept {
 class SplitMix64 {
  public:
   explicit SplitMix64(uint64_t seed) : state_(seed) {}
+  // The state: SplitMix64(g.state()) continues g's sequence (for callers that keep the state in a
+  // plain integer, such as the C interface).
+  uint64_t state() const { return state_; }
 
   // The next 64 random bits.
   uint64_t next() { return splitmix64_next(state_); }
