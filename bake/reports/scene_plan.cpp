@@ -34,22 +34,31 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
 // (docs/format.md): exact where the size follows from the shapes (visibility, clusters, labels,
 // the tables' per-texel maps and basis columns), the feature maps coded here as the bake codes
 // them, and modelled where it depends on what the stages find:
-//  - the parallax stream at kParallaxBytesPerTexelDirection per texel and stored direction (the
-//    256^2 twill's 0.035; the codes depend on the relief: the satin's 0.013, the goose-eye's
-//    0.097);
-//  - the C-PCA ranks: kRankAtReference images per cell for a fabric whose narrowest roughness is
-//    kReferenceRoughness at all bins, growing as 1/sqrt(roughness) (the 256^2 twill 9.6 at
-//    sigma 0.4, the satin 26 at 0.06) and falling as (kept bins / bins)^kRankBinExponent (the far
-//    swatch's 21 of 1024 bins: 2.8) and as (N / 256)^kRankResolutionExponent (the 64^2 test
-//    twill's 5.7), never above the kept bins; coded coefficients at
-//    kBytesPerCoefficient;
-//  - one C-PCA cell per visibility cluster, clusters x yarns clusters when split by yarn.
+//  - the parallax stream: kParallaxRateScale h^kParallaxRateExponent bytes per texel and stored
+//    direction, h the coded height map's bytes per texel at its 256^2 equivalent (the relief's
+//    detail, which the parallax codes follow), fitted by least squares in log-log to the six
+//    example fabrics at their own resolutions (the satin's 0.013 at h = 0.091 to the argyle's
+//    0.120 at 0.609; each within -40 % .. +35 %, the sheer voile lowest);
+//  - the C-PCA: kCellsPerCluster cells per visibility cluster (clusters x yarns clusters when
+//    split by yarn) of kRankAtReference images each beyond the mean at all bins of a 256^2 tile
+//    whose narrowest roughness is kReferenceRoughness (the twill's 8.6), growing as
+//    (kReferenceRoughness / sigma)^kRankRoughnessExponent (the satin's 26 at sigma 0.06), falling
+//    as (kept bins / bins)^kRankBinExponent (the far swatch's 21 of 1024 bins: 2.8) and as (N /
+//    256)^kRankResolutionExponent (the 64^2 test twill's 5.7), never above the kept bins; coded
+//    coefficients at kBytesPerCoefficient (measured 0.10-0.34).
 // Times: per-stage rates of the 256^2 twill (format 1.5, whose forms 2.0 kept), fitted to its full
 // bake and its far-swatch plan (2 threads, idle machine; docs/scene-plans.md, "Estimates"): a
 // fixed part per texel plus a part per texel and direction.
-constexpr double kParallaxBytesPerTexelDirection = 0.035;
-constexpr double kRankAtReference = 9.6, kReferenceRoughness = 0.4, kRankBinExponent = 0.32;
-constexpr double kRankResolutionExponent = 0.38;          // fewer texels, fewer distinct vectors
+constexpr double kParallaxRateScale = 0.245, kParallaxRateExponent = 1.095;
+// The twill at 64^2 against 256^2: its coded height map takes 4.9 times the bytes per texel
+// (0.814 against 0.165), its parallax codes 1.19 times (0.0419 against 0.0352): the proxy h is
+// taken at its 256^2 equivalent h (N / 256)^kHeightResolutionExponent, the rate scaled by
+// (256 / N)^kParallaxResolutionExponent.
+constexpr double kHeightResolutionExponent = 1.151, kParallaxResolutionExponent = 0.126;
+constexpr double kCellsPerCluster = 0.75;
+constexpr double kRankAtReference = 8.64, kReferenceRoughness = 0.4;
+constexpr double kRankRoughnessExponent = 0.59, kRankBinExponent = 0.29;
+constexpr double kRankResolutionExponent = 0.26;          // fewer texels, fewer distinct vectors
 constexpr double kParallaxTableBytes = 2 * 23 * 256 * 2;  // u16 {groups, 23, 256}: 1-3 groups
 constexpr double kBytesPerCoefficient = 0.25;
 constexpr double kMetadataBytes = 10500, kPlanMetadataBytes = 3500;
@@ -84,20 +93,27 @@ struct EstimateShape {
   int visibility_dirs = 0;
 };
 
-// The feature maps as the bake stores them (coded), in bytes; 0 when they cannot be coded (the
-// bake reports that error).
-double feature_map_bytes(const Fabric& fabric) {
+// The feature maps as the bake stores them (coded): all of them and the height map alone, in
+// bytes; 0 when they cannot be coded (the bake reports that error).
+struct MapBytes {
+  double all = 0, height = 0;
+};
+
+MapBytes feature_map_bytes(const Fabric& fabric) {
   try {
-    double bytes = 0;
-    for (const formats::Section& section : compress::feature_map_sections(fabric.maps))
-      bytes += double(section.payload.size());
+    MapBytes bytes;
+    for (const formats::Section& section : compress::feature_map_sections(fabric.maps)) {
+      bytes.all += double(section.bytes().size());
+      if (section.type == reader::SectionType::HeightMap)
+        bytes.height = double(section.bytes().size());
+    }
     return bytes;
   } catch (const Error&) {
-    return 0;
+    return {};
   }
 }
 
-PlanEstimate estimate_bake(const Fabric& fabric, const EstimateShape& shape, double map_bytes,
+PlanEstimate estimate_bake(const Fabric& fabric, const EstimateShape& shape, const MapBytes& maps,
                            double narrowest_roughness) {
   const double n2 = double(fabric.maps.resolution) * fabric.maps.resolution;
   const double vis = double(shape.visibility_dirs) * shape.visibility_dirs;  // sampled
@@ -113,19 +129,26 @@ PlanEstimate estimate_bake(const Fabric& fabric, const EstimateShape& shape, dou
   const double all_bins = double(fabric.bake.radiance_dirs) * fabric.bake.radiance_dirs;
   const double rank = std::min(
       shape.bins, kRankAtReference *
-                      std::sqrt(kReferenceRoughness / std::max(narrowest_roughness, 1e-3)) *
+                      std::pow(kReferenceRoughness / std::max(narrowest_roughness, 1e-3),
+                               kRankRoughnessExponent) *
                       std::pow(std::min(1.0, shape.bins / all_bins), kRankBinExponent) *
                       std::pow(double(fabric.maps.resolution) / 256, kRankResolutionExponent));
-  const double images = clusters * (1 + rank);
-  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + map_bytes  // records, maps
-                       + 64 + n2 * 12                                        // visibility
-                       + n2 + clusters * cluster_vis * 4                     // clusters
-                       + clusters * (m + 1) * cluster_vis * 4 + n2 * m * 4   // basis
+  const double cells = std::max(1.0, std::round(kCellsPerCluster * clusters));
+  const double images = cells * (1 + rank);
+  const double scale = double(fabric.maps.resolution) / 256;
+  const double height_256 =
+      maps.height / std::max(n2, 1.0) * std::pow(scale, kHeightResolutionExponent);
+  const double parallax_rate = kParallaxRateScale * std::pow(height_256, kParallaxRateExponent) *
+                               std::pow(1 / std::max(scale, 1e-3), kParallaxResolutionExponent);
+  const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + maps.all  // records, maps
+                       + 64 + n2 * 12                                       // visibility
+                       + n2 + clusters * cluster_vis * 4                    // clusters
+                       + clusters * (m + 1) * cluster_vis * 4 + n2 * m * 4  // basis
                        + kMetadataBytes + (shape.planned ? kPlanMetadataBytes : 0);
   const double all_dirs = double(fabric.bake.parallax_dirs) * fabric.bake.parallax_dirs;
-  const double parallax = 64 + all_dirs * (8 + 8 + 4) + kParallaxTableBytes +
-                          n2 * shape.view_dirs * kParallaxBytesPerTexelDirection;
-  const double tables = 64 + 16 * clusters + n2 + 4 * images + 2 * images * shape.bins +
+  const double parallax =
+      64 + all_dirs * (8 + 8 + 4) + kParallaxTableBytes + n2 * shape.view_dirs * parallax_rate;
+  const double tables = 64 + 16 * cells + n2 + 4 * images + 2 * images * shape.bins +
                         n2 * rank * kBytesPerCoefficient +
                         (shape.gap_kind ? 64 + 16 + n2 + 4 + 2 + 2064 : 0);
   PlanEstimate e;
@@ -278,7 +301,7 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
       gaps = gaps || g < 1.0f;
     const double dirs = double(fabric.bake.parallax_dirs) * fabric.bake.parallax_dirs;
     const double bins = double(p.half_vector_bins_total);
-    const double maps = feature_map_bytes(fabric);
+    const MapBytes maps = feature_map_bytes(fabric);
     const PlanEstimate full =
         estimate_bake(fabric, {dirs, bins, gaps, false, p.fabric_visibility_dirs}, maps, sigma);
     const PlanEstimate planned = estimate_bake(
