@@ -109,4 +109,10 @@ struct EvalData {
   model::TexelParams<double> texel_params(uint64_t t) const;
 };
 
+// The evaluator's internal data (null when it is not open): for the project's tests and studies,
+// which measure the estimator's parts; not part of the installed interface.
+inline const EvalData* evaluator_data(const Evaluator& evaluator) noexcept {
+  return evaluator.data_.get();
+}
+
 }  // namespace clothbake::eval

@@ -226,9 +226,10 @@ class Evaluator {
   Status texel_value(int64_t x, int64_t y, const double wi[3], const double wo[3],
                      double visibility, LobeMask lobes, Rgb* out) const noexcept;
 
-  const EvalData* data() const noexcept { return data_.get(); }
-
  private:
+  // The internal views and derived tables, for the project's own tests and studies only
+  // (eval/eval_data.hpp, not installed).
+  friend const EvalData* evaluator_data(const Evaluator& evaluator) noexcept;
   std::unique_ptr<EvalData> data_;
 };
 

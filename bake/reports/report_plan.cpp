@@ -83,8 +83,9 @@ ReportOutput plan_report(const PlanReportOptions& o) {
     if (it == rows.end()) {
       FabricRow row;
       row.fabric = loaded.fabrics[k];
-      row.stem = fs::path(row.fabric).stem().string() +
-                 (rows.empty() ? "" : "-" + std::to_string(rows.size()));
+      // Appended in steps: GCC 12 warns (-Wrestrict, a false positive) on the one-expression form.
+      row.stem = fs::path(row.fabric).stem().string();
+      if (!rows.empty()) row.stem.append("-").append(std::to_string(rows.size()));
       rows.push_back(row);
       it = rows.end() - 1;
     }

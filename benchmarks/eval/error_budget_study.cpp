@@ -650,7 +650,7 @@ void study(const EvalData& d, const Config& cfg, LobeMask mask, const char* lobe
 // variance ratio including the estimator's own remainder samples), and its mean against the
 // reference (bias, in standard errors), over the 16 pairs.
 void shipped(const Evaluator& ev, const Config& cfg) {
-  const EvalData& d = *ev.data();
+  const EvalData& d = *evaluator_data(ev);
   std::vector<double> sides = {double(d.n)};
   for (double s : cfg.sizes)
     if (s != d.n) sides.push_back(s);
@@ -784,12 +784,12 @@ int main(int argc, char** argv) {
     Evaluator ev;
     Status s = asset.open_file(path.c_str());
     if (s.ok()) s = ev.open(asset);
-    if (!s.ok() || ev.data()->specular.tables == nullptr) {
+    if (!s.ok() || evaluator_data(ev)->specular.tables == nullptr) {
       std::fprintf(stderr, "error_budget_study: %s: %s\n", path.c_str(),
                    s.ok() ? "no Integral-Radiance tables" : s.message());
       return 2;
     }
-    const EvalData& d = *ev.data();
+    const EvalData& d = *evaluator_data(ev);
     std::printf(
         "# %s: %u x %u texels, %u clusters, %u yarns, %u^2 half-vector bins (%s), %d "
         "samples per pair and position\n",

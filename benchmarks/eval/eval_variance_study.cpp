@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "eval_variance_study: %s\n", s.message());
     return 2;
   }
-  const EvalData& d = *ev.data();
+  const EvalData& d = *evaluator_data(ev);
   const double n = d.n;
   std::printf("asset %s, light (%g, %g, %g), %d uniform samples over the tile\n", argv[1], light[0],
               light[1], light[2], samples);

@@ -367,7 +367,7 @@ int main(int argc, char** argv) {
     for (size_t c = 0; c < candidates.size(); ++c)
       if (candidates[c].kind == 0 && !(s = evaluators[c].open(asset, candidates[c].options)).ok())
         usage(path + ": " + s.message());
-    const EvalData& data = *base.data();
+    const EvalData& data = *evaluator_data(base);
     const double n = data.n;
     const std::string name =
         path.substr(path.rfind('/') == std::string::npos ? 0 : path.rfind('/') + 1);

@@ -125,7 +125,7 @@ TEST(Flat, EveryMethodAgreesInExpectation) {
 
 TEST(TexelShading, IsTheModelWithTheTexelsParametersAndTheStoredVisibility) {
   auto o = open(assets().twill);
-  const EvalData& d = *o->evaluator.data();
+  const EvalData& d = *evaluator_data(o->evaluator);
   reader::VisibilityAsgView visibility;
   ASSERT_TRUE(visibility.open(o->asset).ok());
   Rng rng(5);
@@ -158,7 +158,7 @@ TEST(TexelShading, IsTheModelWithTheTexelsParametersAndTheStoredVisibility) {
 
 TEST(TexelShading, ColourTintsTheYarnAlbedos) {
   auto o = open(assets().twill);
-  const EvalData& d = *o->evaluator.data();
+  const EvalData& d = *evaluator_data(o->evaluator);
   for (uint64_t t : {uint64_t(0), uint64_t(1000), uint64_t(4095)}) {
     const model::TexelParams<double> p = d.texel_params(t);
     const YarnShading& yarn = d.yarns[d.maps.yarn_id[t]];
@@ -175,7 +175,7 @@ TEST(TexelShading, ColourTintsTheYarnAlbedos) {
 
 TEST(Reference, SupersamplingConvergesToTheExactPartitionWithinItsBound) {
   auto o = open(assets().twill);
-  const EvalData& d = *o->evaluator.data();
+  const EvalData& d = *evaluator_data(o->evaluator);
   const Footprint footprints[] = {{10.3, 20.7, 11.3, 21.7},
                                   {5.5, 7.25, 9.5, 11.25},
                                   {3.1, 40.2, 35.1, 72.2},
@@ -304,9 +304,9 @@ TEST(Multiscale, IsUnbiasedWithAThinRemainder) {
     const Stats st = repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 1, 8000, 13);
     expect_mean_within_3se(st, reference(o->evaluator, p, dirs.wi, dirs.wo), 1e-6, "multiscale");
   }
-  const eval::FootprintCover cover = eval::cover_footprint(*o->evaluator.data(), p);
+  const eval::FootprintCover cover = eval::cover_footprint(*evaluator_data(o->evaluator), p);
   EXPECT_EQ(cover.base, eval::FootprintCover::Base::WholePeriods);
-  EXPECT_EQ(eval::remainder_samples(*o->evaluator.data(), cover, 1), 2u);
+  EXPECT_EQ(eval::remainder_samples(*evaluator_data(o->evaluator), cover, 1), 2u);
 }
 
 // The block of whole periods and its two signed rectangles add up to the footprint, point by
@@ -439,7 +439,7 @@ TEST(Multiscale, FootprintsTheControlVariateDoesNotPayForAreSampledAsBruteForce)
 TEST(Multiscale, TexelRecordsAreTheViewsValues) {
   for (const std::string* path : {&assets().twill, &assets().satin}) {
     auto o = open(*path);
-    const EvalData& d = *o->evaluator.data();
+    const EvalData& d = *evaluator_data(o->evaluator);
     const ControlVariateTexels& records = d.cv_texels;
     ASSERT_FALSE(records.empty());
     ASSERT_EQ(records.rank(), d.visibility_rank());
@@ -480,7 +480,7 @@ TEST(Multiscale, TexelRecordsAreTheViewsValues) {
 namespace {
 void expect_destinations_are_bin_depth_offsets(const std::string& path) {
   auto o = open(path);
-  const EvalData& d = *o->evaluator.data();
+  const EvalData& d = *evaluator_data(o->evaluator);
   SCOPED_TRACE(path);
   const double wo[3] = {-0.4, 0.1, 0.85};
   ShadingFrame frame;
@@ -521,7 +521,7 @@ TEST(Multiscale, SampleDestinationsAreTheBinDepthOffsets) {
 // partition lines per axis, so the two differ by at most 2 N^2 max|channel| / s.
 TEST(Multiscale, PushforwardSumsAreTheMovedTile) {
   auto o = open(assets().twill);
-  const EvalData& d = *o->evaluator.data();
+  const EvalData& d = *evaluator_data(o->evaluator);
   ASSERT_TRUE(d.basis.is_open());
   ASSERT_GT(d.visibility_rank(), 0u);
   const PushforwardChannels& layout = d.pushforward.layout();

@@ -53,7 +53,7 @@ bool inside(const Footprint& r, double x, double y) {
 TEST(Subperiod, BlockCoverAddsUpToTheFootprint) {
   for (const uint32_t rank : {UINT32_MAX, 1u}) {
     auto o = open_with(assets().twill, forced(FootprintBase::Blocks, rank));
-    const EvalData& d = *o->evaluator.data();
+    const EvalData& d = *evaluator_data(o->evaluator);
     ASSERT_TRUE(d.subperiod.is_open());
     const double side = double(d.n / d.subperiod.blocks());
     const double spread = block_interior_spread(d.subperiod.layout().rank, d.visibility_rank());
@@ -121,7 +121,7 @@ TEST(Subperiod, BlockCoverAddsUpToTheFootprint) {
 // whole tile's prefix point against the whole-tile push-forward sums (float storage: 1e-5).
 TEST(Subperiod, BlockSumsAreTheMovedBlocks) {
   auto o = open_with(assets().twill, forced(FootprintBase::Blocks));
-  const EvalData& d = *o->evaluator.data();
+  const EvalData& d = *evaluator_data(o->evaluator);
   const PushforwardChannels& layout = d.subperiod.layout();
   ASSERT_EQ(layout.rank, d.visibility_rank());
   const uint32_t nb = d.subperiod.blocks(), side = d.n / nb;
@@ -227,7 +227,7 @@ TEST(Subperiod, IsUnbiasedBelowAPeriod) {
 // the same comparison fails on a footprint of whole blocks; restored, it passes again.
 TEST(Subperiod, UnbiasednessTestCatchesABlockBaseThreePercentOff) {
   auto o = open_with(assets().twill, forced(FootprintBase::Blocks));
-  const EvalData& d = *o->evaluator.data();
+  const EvalData& d = *evaluator_data(o->evaluator);
   const Footprint p{8.0, 12.0, 40.0, 36.0};
   ShadingFrame frame;
   Status status;
@@ -268,7 +268,7 @@ TEST(Subperiod, UnbiasednessTestCatchesABlockBaseThreePercentOff) {
 // block form); its memory is spent only on the bins met.
 TEST(Subperiod, BlockGridFollowsTheMemoryBudget) {
   auto full = open_with(assets().twill, EvalOptions{});
-  const EvalData& d = *full->evaluator.data();
+  const EvalData& d = *evaluator_data(full->evaluator);
   ASSERT_TRUE(d.subperiod.is_open());
   const double bins = double(d.parallax.dirs()) * d.parallax.dirs();
   const double channels = d.subperiod.layout().count();
@@ -287,7 +287,7 @@ TEST(Subperiod, BlockGridFollowsTheMemoryBudget) {
     EvalOptions options;
     options.max_block_sum_bytes = budget;
     auto o = open_with(assets().twill, options);
-    const EvalData& e = *o->evaluator.data();
+    const EvalData& e = *evaluator_data(o->evaluator);
     EXPECT_EQ(e.subperiod.is_open(), want > 0) << budget;
     if (want > 0) {
       EXPECT_EQ(e.subperiod.blocks(), want) << budget;
