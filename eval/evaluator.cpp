@@ -449,6 +449,16 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   }
   if (!s.ok()) return s;
   sum_value(out);
+  // Values that validation accepts (finite, each within its section's range) can still overflow
+  // in the control variate's sums (a visibility coefficient near the float maximum, found by the
+  // C interface's fuzzer): such an estimate is refused, never returned.
+  if (!std::isfinite(out->value.r) || !std::isfinite(out->value.g) ||
+      !std::isfinite(out->value.b)) {
+    *out = Estimate{};
+    return Status::error(ErrorCode::Malformed, Check::ValueRange,
+                         "the estimate is not finite: the asset's values overflow the evaluator's "
+                         "sums");
+  }
   return {};
 }
 

@@ -85,17 +85,30 @@ Status VisibilityBasisView::open(const Asset& asset) noexcept {
                          "cluster_visibility_basis instance 1 must be f32 {N, N, M} exactly when "
                          "M = %u > 0",
                          unsigned(rank));
-  for (uint64_t k = 0; k < components.size; ++k)
-    if (!std::isfinite(components[k]))
+  // The ranges that follow from the definitions (docs/format.md §6.8), with a margin for float
+  // rounding: a mean of clamped visibilities lies in [0, 1], a unit vector's entries in [-1, 1],
+  // and a coefficient, the dot product of a unit vector with one of n^2 entries in [-1, 1], within
+  // n of 0. Finite values far outside them once overflowed the evaluator's sums.
+  constexpr double kMargin = 1e-4;
+  const uint64_t grid = uint64_t(components.dims[2]) * components.dims[3];
+  for (uint64_t k = 0; k < components.size; ++k) {
+    const double v = components[k];
+    const bool mean = (k / grid) % (uint64_t(rank) + 1) == 0;
+    if (!(mean ? v >= -kMargin && v <= 1 + kMargin : std::fabs(v) <= 1 + kMargin))
       return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                           "cluster_visibility_basis: component value %llu is not finite",
-                           static_cast<unsigned long long>(k));
+                           "cluster_visibility_basis: component value %llu (%g) is not finite or "
+                           "outside %s",
+                           static_cast<unsigned long long>(k), v, mean ? "[0, 1]" : "[-1, 1]");
+  }
+  const double max_coefficient = double(components.dims[2]) * (1 + kMargin) + kMargin;
   if (present)
     for (uint64_t k = 0; k < coefficients.size; ++k)
-      if (!std::isfinite(coefficients[k]))
+      if (!(std::fabs(double(coefficients[k])) <= max_coefficient))
         return Status::error(ErrorCode::Malformed, Check::ValueRange,
-                             "cluster_visibility_basis: coefficient %llu is not finite",
-                             static_cast<unsigned long long>(k));
+                             "cluster_visibility_basis: coefficient %llu (%g) is not finite or "
+                             "beyond the grid's side %u",
+                             static_cast<unsigned long long>(k), double(coefficients[k]),
+                             unsigned(components.dims[2]));
   components_ = components.data;
   coefficients_ = present ? coefficients.data : nullptr;
   clusters_ = components.dims[0];

@@ -4,7 +4,8 @@
 // over it is a result, with finite, non-negative values where it succeeds. Built with
 // -fsanitize=fuzzer,address,undefined (tests/fuzz/CMakeLists.txt).
 //
-// An input whose first byte is odd is first repaired as an adversary who knows the format would
+// The first byte selects: bit 0, repair; bit 1, a trusted open. An input whose first byte is odd
+// is first repaired as an adversary who knows the format would
 // repair it: if the structure opens, every section checksum and the header checksum are
 // recomputed, so that the mutation reaches validation's value checks and the evaluator instead of
 // stopping at a checksum (the rest of the input is the asset).
@@ -48,9 +49,11 @@ void repair_checksums(unsigned char* bytes, size_t size) {
   std::memcpy(bytes + kHeaderChecksumOffset, &header.header_checksum, 8);
 }
 
-void check_rgb(const double rgb[3]) {
+// A successful estimate is finite, and non-negative except for the unbiased multi-scale form (its
+// single estimates are not clamped).
+void check_rgb(const double rgb[3], bool may_be_negative) {
   for (int c = 0; c < 3; ++c)
-    if (!std::isfinite(rgb[c]) || rgb[c] < 0) __builtin_trap();
+    if (!std::isfinite(rgb[c]) || (!may_be_negative && rgb[c] < 0)) __builtin_trap();
 }
 
 }  // namespace
@@ -58,6 +61,9 @@ void check_rgb(const double rgb[3]) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const bool repair = (data[0] & 1) != 0;
+  // Bit 1: open trusted (CB_OPEN_TRUSTED: no validation), so that damaged values reach the
+  // evaluator's own checks; its contract: a result or wrong values, never an out-of-bounds read.
+  const uint32_t flags = CB_OPEN_BORROW | ((data[0] & 2) != 0 ? CB_OPEN_TRUSTED : 0u);
   ++data, --size;
   // An exact-size, 8-byte aligned copy (operator new[]), so that AddressSanitizer sees any read
   // past `size`.
@@ -67,8 +73,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
   cb_error error;
   cb_asset* asset = nullptr;
-  const cb_result opened =
-      cb_asset_open_memory(copy.get(), size, CB_OPEN_BORROW, nullptr, &asset, &error);
+  const cb_result opened = cb_asset_open_memory(copy.get(), size, flags, nullptr, &asset, &error);
   if (opened != CB_OK) {
     if (asset != nullptr || std::memchr(error.message, 0, sizeof error.message) == nullptr)
       __builtin_trap();
@@ -99,7 +104,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       for (const auto& i : wi) {
         double rgb[3];
         if (cb_estimate(evaluator, &f, i, wo, CB_LOBES_ALL, &rng, rgb, &error) == CB_OK)
-          check_rgb(rgb);
+          check_rgb(rgb, method == CB_METHOD_MULTISCALE);
         double pdf = -1;
         if (cb_direction_pdf(evaluator, &f, i, wo, &pdf, &error) == CB_OK &&
             (!std::isfinite(pdf) || pdf < 0))

@@ -3,6 +3,9 @@
 // accepts, the same bytes for 1 and 2 threads, and record the 2-sigma verdict in the metadata.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <utility>
+
 #include <algorithm>
 
 #include "bake/inputs/fabric_load.hpp"
@@ -86,6 +89,44 @@ TEST(TablesStages, ProduceReadableSectionsDeterministically) {
   EXPECT_EQ(basis.rank(), 4u);
   EXPECT_EQ(basis.dirs(), 8u);
   EXPECT_EQ(basis.resolution(), 16u);
+  // Values outside the ranges the definitions give (a mean in [0, 1], a unit vector's entries in
+  // [-1, 1], a coefficient within the grid's side of 0) are refused even when finite: a coefficient
+  // near the float maximum once overflowed the evaluator's sums (the C interface's fuzzer).
+  {
+    reader::ArrayView<float> components, coefficients;
+    ASSERT_TRUE(asset.array(reader::SectionType::ClusterVisibilityBasis, 0, &components).ok());
+    ASSERT_TRUE(asset.array(reader::SectionType::ClusterVisibilityBasis, 1, &coefficients).ok());
+    const auto at = [&](const float* p) {
+      return std::size_t(reinterpret_cast<const std::byte*>(p) - b1.data());
+    };
+    const std::size_t mean0 = at(components.data), unit0 = at(components.data + 8 * 8),
+                      coefficient0 = at(coefficients.data);
+    for (const auto& [offset, value] :
+         std::vector<std::pair<std::size_t, float>>{{mean0, -0.5f},
+                                                    {mean0, 1.5f},
+                                                    {unit0, 1.5f},
+                                                    {unit0, -1.5f},
+                                                    {coefficient0, 9.0f},
+                                                    {coefficient0, -3.0e38f}}) {
+      std::vector<std::byte> bad = b1;
+      std::memcpy(bad.data() + offset, &value, 4);
+      reader::Asset damaged;
+      ASSERT_TRUE(damaged.open_memory(bad.data(), bad.size()).ok());
+      reader::VisibilityBasisView view;
+      const reader::Status st = view.open(damaged);
+      EXPECT_EQ(st.code(), reader::ErrorCode::Malformed) << offset << " " << value;
+      EXPECT_STREQ(st.check_id(), "CBK-E021") << st.message();
+    }
+    // In range: 8 (the grid's side) for a coefficient, 1 for a unit vector's entry.
+    std::vector<std::byte> fine = b1;
+    const float eight = 8.0f, one = 1.0f;
+    std::memcpy(fine.data() + coefficient0, &eight, 4);
+    std::memcpy(fine.data() + unit0, &one, 4);
+    reader::Asset edited;
+    ASSERT_TRUE(edited.open_memory(fine.data(), fine.size()).ok());
+    reader::VisibilityBasisView view;
+    EXPECT_TRUE(view.open(edited).ok());
+  }
   reader::RawRadianceTables spec;
   ASSERT_TRUE(spec.open(asset, reader::RadianceTableKind::Specular).ok());
   EXPECT_EQ(spec.bins_per_side(), 8u);
