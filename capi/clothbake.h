@@ -15,8 +15,8 @@
  *    light, `wo` towards the viewer; any finite non-zero vectors (normalised here).
  *  - Footprints are axis-aligned rectangles in tile units: one unit is one repeat of the fabric's
  *    tile along u or v (a renderer with texture coordinates uv and `tiles_per_uv` repeats per uv
- *    unit passes u * tiles_per_uv). Any position (the tile wraps) and any size up to 2^24 tiles;
- *    a zero-area footprint is a point.
+ *    unit passes u * tiles_per_uv). Any position with corners within 2^40 texels of the origin
+ *    (the tile wraps) and any size up to 2^24 tiles; a zero-area footprint is a point.
  *  - Random numbers: a cb_rng the caller owns (one per thread); the same seed gives the same
  *    estimates on every platform (SplitMix64).
  *  - Untrusted bytes: cb_asset_open_* validates the whole asset unless CB_OPEN_TRUSTED is given
@@ -30,6 +30,9 @@
 
 #ifdef __cplusplus
 extern "C" {
+#define CB_NOEXCEPT noexcept
+#else
+#define CB_NOEXCEPT
 #endif
 
 #define CLOTHBAKE_C_API_VERSION 1
@@ -49,7 +52,7 @@ typedef enum cb_result {
 } cb_result;
 
 /* The name of a result ("CB_OK", "CB_ERROR_IO", ...); never NULL. Pure. */
-const char* cb_result_name(cb_result result);
+const char* cb_result_name(cb_result result) CB_NOEXCEPT;
 
 /* A message for the caller's buffer: always NUL-terminated, truncated to fit. */
 typedef struct cb_error {
@@ -90,15 +93,15 @@ typedef struct cb_evaluator cb_evaluator;
  * buffer not 8-byte aligned), INVALID_ASSET (the message names the first failed check),
  * UNSUPPORTED, OUT_OF_MEMORY. Safe on untrusted bytes. Thread-safe. */
 cb_result cb_asset_open_memory(const void* bytes, size_t size, uint32_t flags,
-                               const cb_allocator* allocator, cb_asset** out, cb_error* error);
+                               const cb_allocator* allocator, cb_asset** out, cb_error* error) CB_NOEXCEPT;
 
 /* Opens the asset file at `path` (mapped read-only, not copied; the file must not be truncated
  * while open). Validation, errors and thread safety as cb_asset_open_memory, plus IO. */
 cb_result cb_asset_open_file(const char* path, uint32_t flags, const cb_allocator* allocator,
-                             cb_asset** out, cb_error* error);
+                             cb_asset** out, cb_error* error) CB_NOEXCEPT;
 
 /* Closes an asset (NULL: nothing). Every evaluator over it must be destroyed first. */
-void cb_asset_close(cb_asset* asset);
+void cb_asset_close(cb_asset* asset) CB_NOEXCEPT;
 
 /* What a renderer may want to know of an asset. */
 typedef struct cb_asset_info {
@@ -107,8 +110,10 @@ typedef struct cb_asset_info {
   uint32_t scene_planned; /* 1 when a scene plan left parts out (queries may be CB_ERROR_OUT_OF_PLAN) */
 } cb_asset_info;
 
-/* Fills *out. Errors: INVALID_ARGUMENT (NULL). Thread-safe. */
-cb_result cb_asset_get_info(const cb_asset* asset, cb_asset_info* out, cb_error* error);
+/* Fills *out (zeroed on error). Errors: INVALID_ARGUMENT (NULL); NOT_FOUND or INVALID_ASSET when
+ * the fabric record or the scene-plan record of an asset opened trusted is missing or damaged.
+ * Thread-safe. */
+cb_result cb_asset_get_info(const cb_asset* asset, cb_asset_info* out, cb_error* error) CB_NOEXCEPT;
 
 /* Methods (docs/evaluator.md, "Methods"). */
 typedef enum cb_method {
@@ -133,11 +138,12 @@ typedef struct cb_options {
   uint32_t tables;        /* 0 = auto (compressed, else raw), 1 = raw, 2 = compressed */
   uint32_t sheen;         /* 0 = the published sheen table (default), 1 = converged albedo */
   uint32_t spp;           /* samples per estimate for the sampling methods, default 1 (>= 1) */
-  double direct_max_side; /* footprints below this many texels a side are summed exactly, 1 */
+  double direct_max_side; /* the multi-scale methods sum footprints below this many texels a
+                             side exactly, default 1 */
 } cb_options;
 
 /* The defaults above. Pure. */
-void cb_options_default(cb_options* options);
+void cb_options_default(cb_options* options) CB_NOEXCEPT;
 
 /* Creates an evaluator over `asset` (which must outlive it): opens the views every method needs and
  * builds the derived footprint sums (docs/evaluator.md, "Footprint sums": a few MB for a 256^2
@@ -146,10 +152,10 @@ void cb_options_default(cb_options* options);
  * (sections that disagree), OUT_OF_MEMORY (the allocator), UNSUPPORTED (the derived sums could not
  * be allocated). Thread-safe. */
 cb_result cb_evaluator_create(const cb_asset* asset, const cb_options* options,
-                              const cb_allocator* allocator, cb_evaluator** out, cb_error* error);
+                              const cb_allocator* allocator, cb_evaluator** out, cb_error* error) CB_NOEXCEPT;
 
 /* Destroys an evaluator (NULL: nothing). */
-void cb_evaluator_destroy(cb_evaluator* evaluator);
+void cb_evaluator_destroy(cb_evaluator* evaluator) CB_NOEXCEPT;
 
 /* A footprint in tile units: [u0, u1] x [v0, v1], u1 >= u0, v1 >= v0. */
 typedef struct cb_footprint {
@@ -162,20 +168,23 @@ typedef struct cb_rng {
 } cb_rng;
 
 /* Seeds a random state (any seed). Pure. */
-void cb_rng_seed(cb_rng* rng, uint64_t seed);
+void cb_rng_seed(cb_rng* rng, uint64_t seed) CB_NOEXCEPT;
 
 /* One estimate of the footprint average of the BSDF times |cos| of wi, the visibility and the
  * parallax included (Eq. 5), over the lobes of `lobes` (a non-zero subset of CB_LOBES_ALL), in RGB:
- * out_rgb[0..2] >= 0. The method and spp are the evaluator's options; the sampling methods advance
- * `rng`, and their estimates are unbiased: average several for less noise. Errors:
- * INVALID_ARGUMENT (NULL, a bad footprint, direction or lobe mask), NOT_FOUND (tables the method
- * needs), OUT_OF_PLAN, UNSUPPORTED (a first query of a view bin builds its sums, which could not
- * be allocated). On error
- * out_rgb is 0. Thread-safe: one evaluator may serve every thread, each with its own rng.
- * Allocates only on a view bin's first use and for Reference on wide footprints. */
+ * finite; >= 0 for BRUTE and REFERENCE, while one estimate of the control-variate methods can be
+ * slightly negative (not clamped: clamping would bias the mean). The method and spp are the
+ * evaluator's options; the sampling methods advance `rng`; the estimates of MULTISCALE and BRUTE
+ * are unbiased (average several for less noise), MULTISCALE_PAPER's are biased by design.
+ * Errors: INVALID_ARGUMENT (NULL, a bad footprint, direction or lobe mask), NOT_FOUND (tables the
+ * method needs), OUT_OF_PLAN, UNSUPPORTED (an allocation below failed), INVALID_ASSET (values
+ * that overflow the evaluator's sums: the estimate is refused, never returned non-finite). On
+ * error out_rgb is 0. Thread-safe: one evaluator may serve every thread, each with its own rng.
+ * Allocates on a view bin's or a parallax direction's first use, and per estimate for tables of
+ * more than 1 024 images or for REFERENCE on wide footprints (docs/integration.md). */
 cb_result cb_estimate(const cb_evaluator* evaluator, const cb_footprint* footprint,
                       const double wi[3], const double wo[3], uint32_t lobes, cb_rng* rng,
-                      double out_rgb[3], cb_error* error);
+                      double out_rgb[3], cb_error* error) CB_NOEXCEPT;
 
 /* A sampled light direction. */
 typedef struct cb_direction_sample {
@@ -188,19 +197,24 @@ typedef struct cb_direction_sample {
 /* Samples wi for the view wo from the lobe mixture at the footprint's representative texel (its
  * centre shifted by the mean parallax offset; docs/evaluator.md, "Importance sampling"). u[0..2]
  * uniform in [0, 1). Any density gives unbiased estimates with cb_estimate's value at wi divided by
- * pdf. Errors: INVALID_ARGUMENT, OUT_OF_PLAN. Thread-safe; no allocation. */
+ * pdf. Errors: INVALID_ARGUMENT, OUT_OF_PLAN, UNSUPPORTED (see the allocation). Thread-safe.
+ * Allocates on a parallax direction's first use in an entropy-coded parallax table (the default
+ * bake's): its decoded plane and SAT, kept for later calls; UNSUPPORTED when that fails. */
 cb_result cb_sample_direction(const cb_evaluator* evaluator, const cb_footprint* footprint,
                               const double wo[3], const double u[3], cb_direction_sample* out,
-                              cb_error* error);
+                              cb_error* error) CB_NOEXCEPT;
 
 /* The density cb_sample_direction's continuous techniques give wi (it integrates to
- * 1 - P(delta)), for multiple importance sampling. Errors and thread safety as above. */
+ * 1 - P(delta)), for multiple importance sampling. Errors, allocation and thread safety as
+ * cb_sample_direction. */
 cb_result cb_direction_pdf(const cb_evaluator* evaluator, const cb_footprint* footprint,
                            const double wi[3], const double wo[3], double* out_pdf,
-                           cb_error* error);
+                           cb_error* error) CB_NOEXCEPT;
 
 #ifdef __cplusplus
 }
 #endif
+
+#undef CB_NOEXCEPT
 
 #endif /* CLOTHBAKE_H */

@@ -1,6 +1,7 @@
 // The C interface (clothbake.h) over the reader, the opt-in validator and the evaluator. Every
-// entry point is noexcept: the libraries below report errors as reader::Status, and nothing here
-// throws (the objects are created with placement new into the caller's allocator's memory).
+// entry point is declared noexcept (CB_NOEXCEPT in C++): the libraries below report errors as
+// reader::Status, and nothing here throws (the objects are created with placement new, of types
+// whose constructors are noexcept, into the caller's allocator's memory).
 #include "capi/clothbake.h"
 
 #include <cmath>
@@ -38,6 +39,7 @@ constexpr uint32_t kKnownOpenFlags = CB_OPEN_BORROW | CB_OPEN_TRUSTED;
 
 void* default_allocate(void*, size_t size, size_t alignment) {
   // aligned_alloc needs a size that is a multiple of the alignment.
+  if (size > SIZE_MAX - (alignment - 1)) return nullptr;
   const size_t rounded = (size + alignment - 1) / alignment * alignment;
   return std::aligned_alloc(alignment, rounded == 0 ? alignment : rounded);
 }
@@ -163,7 +165,7 @@ bool texel_footprint(const cb_evaluator* e, const cb_footprint* f, reader::Footp
 
 extern "C" {
 
-const char* cb_result_name(cb_result result) {
+const char* cb_result_name(cb_result result) noexcept {
   switch (result) {
     case CB_OK:
       return "CB_OK";
@@ -186,7 +188,8 @@ const char* cb_result_name(cb_result result) {
 }
 
 cb_result cb_asset_open_memory(const void* bytes, size_t size, uint32_t flags,
-                               const cb_allocator* allocator, cb_asset** out, cb_error* error) {
+                               const cb_allocator* allocator, cb_asset** out,
+                               cb_error* error) noexcept {
   if (out != nullptr) *out = nullptr;
   if (bytes == nullptr || out == nullptr)
     return fail(error, CB_ERROR_INVALID_ARGUMENT, "cb_asset_open_memory",
@@ -225,7 +228,7 @@ cb_result cb_asset_open_memory(const void* bytes, size_t size, uint32_t flags,
 }
 
 cb_result cb_asset_open_file(const char* path, uint32_t flags, const cb_allocator* allocator,
-                             cb_asset** out, cb_error* error) {
+                             cb_asset** out, cb_error* error) noexcept {
   if (out != nullptr) *out = nullptr;
   if (path == nullptr || out == nullptr)
     return fail(error, CB_ERROR_INVALID_ARGUMENT, "cb_asset_open_file",
@@ -239,7 +242,8 @@ cb_result cb_asset_open_file(const char* path, uint32_t flags, const cb_allocato
     return fail(error, CB_ERROR_OUT_OF_MEMORY, path, "cannot allocate the asset");
   asset->allocator = memory;
   const reader::Status s = asset->asset.open_file(path);
-  const cb_result r = s.ok() ? validate(*asset, flags, path, error) : fail_status(error, s, path);
+  // The reader's messages name the path already; validation's findings do not.
+  const cb_result r = s.ok() ? validate(*asset, flags, path, error) : fail_status(error, s, "");
   if (r != CB_OK) {
     cb_asset_close(asset);
     return r;
@@ -248,7 +252,7 @@ cb_result cb_asset_open_file(const char* path, uint32_t flags, const cb_allocato
   return CB_OK;
 }
 
-void cb_asset_close(cb_asset* asset) {
+void cb_asset_close(cb_asset* asset) noexcept {
   if (asset == nullptr) return;
   asset->asset = reader::Asset();  // unmaps a file before the copy goes
   void* copy = asset->copy;
@@ -257,7 +261,7 @@ void cb_asset_close(cb_asset* asset) {
   if (copy != nullptr) memory.release(memory.user, copy);
 }
 
-cb_result cb_asset_get_info(const cb_asset* asset, cb_asset_info* out, cb_error* error) {
+cb_result cb_asset_get_info(const cb_asset* asset, cb_asset_info* out, cb_error* error) noexcept {
   if (asset == nullptr || out == nullptr)
     return fail(error, CB_ERROR_INVALID_ARGUMENT, "cb_asset_get_info",
                 "asset and out are required");
@@ -270,12 +274,15 @@ cb_result cb_asset_get_info(const cb_asset* asset, cb_asset_info* out, cb_error*
   reader::ScenePlanRecord plan{};
   bool present = false;
   const reader::Status p = reader::read_scene_plan(asset->asset, &plan, &present);
-  if (!p.ok()) return fail_status(error, p, "cb_asset_get_info");
+  if (!p.ok()) {
+    *out = cb_asset_info{};
+    return fail_status(error, p, "cb_asset_get_info");
+  }
   out->scene_planned = present ? 1u : 0u;
   return CB_OK;
 }
 
-void cb_options_default(cb_options* options) {
+void cb_options_default(cb_options* options) noexcept {
   if (options == nullptr) return;
   *options = cb_options{};
   options->method = CB_METHOD_MULTISCALE;
@@ -284,7 +291,8 @@ void cb_options_default(cb_options* options) {
 }
 
 cb_result cb_evaluator_create(const cb_asset* asset, const cb_options* options,
-                              const cb_allocator* allocator, cb_evaluator** out, cb_error* error) {
+                              const cb_allocator* allocator, cb_evaluator** out,
+                              cb_error* error) noexcept {
   if (out != nullptr) *out = nullptr;
   if (asset == nullptr || options == nullptr || out == nullptr)
     return fail(error, CB_ERROR_INVALID_ARGUMENT, "cb_evaluator_create",
@@ -322,17 +330,17 @@ cb_result cb_evaluator_create(const cb_asset* asset, const cb_options* options,
   return CB_OK;
 }
 
-void cb_evaluator_destroy(cb_evaluator* evaluator) {
+void cb_evaluator_destroy(cb_evaluator* evaluator) noexcept {
   destroy(evaluator);
 }
 
-void cb_rng_seed(cb_rng* rng, uint64_t seed) {
+void cb_rng_seed(cb_rng* rng, uint64_t seed) noexcept {
   if (rng != nullptr) rng->state = seed;
 }
 
 cb_result cb_estimate(const cb_evaluator* evaluator, const cb_footprint* footprint,
                       const double wi[3], const double wo[3], uint32_t lobes, cb_rng* rng,
-                      double out_rgb[3], cb_error* error) {
+                      double out_rgb[3], cb_error* error) noexcept {
   if (out_rgb != nullptr) out_rgb[0] = out_rgb[1] = out_rgb[2] = 0;
   reader::Footprint f;
   if (evaluator == nullptr || rng == nullptr || out_rgb == nullptr || wi == nullptr ||
@@ -353,7 +361,7 @@ cb_result cb_estimate(const cb_evaluator* evaluator, const cb_footprint* footpri
 
 cb_result cb_sample_direction(const cb_evaluator* evaluator, const cb_footprint* footprint,
                               const double wo[3], const double u[3], cb_direction_sample* out,
-                              cb_error* error) {
+                              cb_error* error) noexcept {
   if (out != nullptr) *out = cb_direction_sample{};
   reader::Footprint f;
   if (evaluator == nullptr || out == nullptr || wo == nullptr || !finite3(u) ||
@@ -373,7 +381,7 @@ cb_result cb_sample_direction(const cb_evaluator* evaluator, const cb_footprint*
 
 cb_result cb_direction_pdf(const cb_evaluator* evaluator, const cb_footprint* footprint,
                            const double wi[3], const double wo[3], double* out_pdf,
-                           cb_error* error) {
+                           cb_error* error) noexcept {
   if (out_pdf != nullptr) *out_pdf = 0;
   reader::Footprint f;
   if (evaluator == nullptr || out_pdf == nullptr || wi == nullptr || wo == nullptr ||

@@ -31,6 +31,7 @@ ChildStart start_child(const std::function<int()>& body) {
     } catch (...) {
       code = kChildBodyThrewExitCode;
     }
+    std::fflush(nullptr);  // what the body printed through stdio (_exit does not flush)
     ::_exit(code);
   }
   out.pid = pid;

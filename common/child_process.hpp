@@ -28,8 +28,10 @@ struct ChildStart {
 inline constexpr int kChildBodyThrewExitCode = 70;
 
 // Flushes every stdio stream (so that buffered output is not written twice), then forks. The
-// child runs `body` and leaves with _exit(body's return value), without running atexit handlers
-// or the parent's static destructors; an exception escaping `body` ends it with
+// child runs `body`, flushes stdio and leaves with _exit(body's return value; only its low 8
+// bits reach the parent, so return 0..255), without running atexit handlers or the parent's
+// static destructors (iostreams are not flushed: close them in the body); an exception escaping
+// `body` ends it with
 // _exit(kChildBodyThrewExitCode). The parent gets the pid at once (it must reap the child: one of
 // the wait functions below), or pid -1 and fork's errno (EAGAIN, ENOMEM) with no child.
 // Allocates nothing itself (building the std::function may). Not thread-safe in the sense that

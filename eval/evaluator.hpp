@@ -26,8 +26,10 @@
 //   Reference       the exact integral under the piecewise-constant texel model the asset stores
 //                   (an exact partition of P into pieces on which the integrand is constant); the
 //                   ground truth of every error the project reports.
-// Footprints whose both sides are below EvalOptions::direct_max_side texels are answered by the
-// reference's exact sum in every method (no tables, no noise).
+// The two multi-scale methods answer footprints whose both sides are below
+// EvalOptions::direct_max_side texels by the reference's exact sum (no tables, no noise), and
+// every method but Brute answers a footprint of area below 1e-12 texel^2 (a point) so; Brute
+// samples it.
 //
 // Contract: C++17, standard library only, over the reader library and model/. open() allocates the
 // derived footprint sums (docs/evaluator.md, "Memory") and never throws: allocation failure is a
@@ -36,9 +38,14 @@
 // footprints of more than 64 source texels, the unbiased form's push-forward sums and block prefix
 // sums of a view bin on its first use (together at most EvalOptions::max_block_sum_bytes plus
 // about 20 KB a bin), and in the reader a compressed parallax table's per-direction SAT
-// (MultiscalePaper's footprint mean) or an entropy-coded direction's decoded plane; a failed map,
-// sum or SAT is Unsupported. It is noexcept, thread-safe (const), and safe for any argument values
-// (bad ones give InvalidArgument). The Asset must outlive the Evaluator.
+// (MultiscalePaper's footprint mean) or an entropy-coded direction's decoded plane; and, per
+// estimate of the unbiased form, one array of the compressed tables' image values at the half
+// vector when they hold more than 1 024 images (the satin's 1 420 do; fewer live on the stack). A
+// failed map, sum, SAT or array is Unsupported. One failure is silent: a compressed parallax
+// direction whose plane cannot be decoded (its allocation fails, or its block is damaged in an
+// asset opened without validation) contributes depth 0 to the per-texel depths that need it, so
+// those samples see less parallax. It is noexcept, thread-safe (const), and safe for any argument
+// values (bad ones give InvalidArgument). The Asset must outlive the Evaluator.
 #pragma once
 
 #include <cstdint>

@@ -80,10 +80,11 @@ template <class TexelChannels>
 bool FootprintSums::build(uint32_t n, uint32_t channels, TexelChannels values) {
   const uint32_t stride = channels;
   const uint64_t points = uint64_t(n + 1) * (n + 1);
-  std::vector<double> prefix;
-  std::vector<double> texel(stride), row(stride);
-  try {
+  std::vector<double> prefix, texel, row;
+  try {  // every allocation of build() (its callers are noexcept: a failure is `false`)
     prefix.assign(points * stride, 0.0);
+    texel.assign(stride, 0.0);
+    row.assign(stride, 0.0);
   } catch (...) {
     return false;
   }

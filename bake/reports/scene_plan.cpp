@@ -182,6 +182,13 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
   p.radiance_dirs = fabric.bake.radiance_dirs;
   p.half_vector_bins_total = p.radiance_dirs * p.radiance_dirs;
   p.fabric_visibility_dirs = p.visibility_dirs = fabric.bake.visibility_dirs;
+  // Set before anything can return: the bake seeds its compression from the plan of any object
+  // of the fabric, seen or not.
+  {
+    const compress::CompressSettings defaults = compress::settings_from_bake(fabric.bake);
+    p.compression_target =
+        defaults.fixed ? 0.0 : planned_compression_target(defaults.max_error, max_error);
+  }
   if (u.pixels == 0) {
     p.warnings.push_back("no pixel sees this object: the scene needs nothing of its fabric");
     return p;
@@ -322,8 +329,7 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
                "the kept bins",
                defaults.rank)});
     else {
-      const double target = planned_compression_target(defaults.max_error, max_error);
-      p.compression_target = target;
+      const double target = p.compression_target;
       p.decisions.push_back(
           {"compression target", target < defaults.max_error ? "tightened" : "kept",
            target < defaults.max_error
@@ -331,8 +337,8 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
                      "compressed tables at max_error = %.3g",
                      max_error, 100 * defaults.max_error, target)
                : fmt("the default bake's max_error = %.3g %%: the planned and full renders then "
-                     "differ by at most (2 x %.3g %%)^2 = %.2g relMSE, within half the budget "
-                     "%.3g; a looser target would add noise, not change the picture",
+                     "differ by at most (2 x %.3g %%)^2 = %.2g relMSE, within half of the "
+                     "budget %.3g; a looser target would add noise, not change the picture",
                      100 * target, 100 * target, 4 * target * target, max_error)});
     }
   }
@@ -543,7 +549,8 @@ ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::str
                   {"objects", objects}};
   // The planned tables' target (planned_compression_target; unless the command line set one, or
   // the fabric asks for a fixed C-PCA shape, which the plan keeps): never tighter than the
-  // default bake's unless the budget needs it, so a plan never adds bytes to the tables.
+  // default bake's unless the budget needs it (only then can the tables cost more than the
+  // default bake's).
   const FabricPlan& first = *mine.front();
   if (!request->seeds.contains(stages::kCompressSettingsArtifact) && first.compression_target > 0) {
     compress::CompressRequest compression;

@@ -46,6 +46,7 @@ struct ParallaxView::Packed {
   }
   Packed(const Packed&) = delete;
   Packed& operator=(const Packed&) = delete;
+  std::atomic<uint64_t> references{1};  // SharedPacked handles
   uint64_t count = 0;
   std::unique_ptr<std::once_flag[]> flags;
   std::unique_ptr<std::atomic<uint32_t*>[]> sats;
@@ -53,6 +54,14 @@ struct ParallaxView::Packed {
   std::unique_ptr<std::atomic<uint16_t*>[]> planes16;
   std::atomic<uint64_t> bytes{0};
 };
+
+ParallaxView::SharedPacked::SharedPacked(const SharedPacked& other) noexcept : p_(other.p_) {
+  if (p_ != nullptr) p_->references.fetch_add(1, std::memory_order_relaxed);
+}
+
+ParallaxView::SharedPacked::~SharedPacked() {
+  if (p_ != nullptr && p_->references.fetch_sub(1, std::memory_order_acq_rel) == 1) delete p_;
+}
 
 namespace {
 // Any section of `type` with an instance below `instances`.
@@ -270,7 +279,7 @@ Status ParallaxView::open_coded(const Asset& asset) noexcept {
                              "it is predicted from, is left out of bin_map instance 1",
                              static_cast<unsigned long long>(i), unsigned(refs.bin[e]));
   }
-  auto packed = std::shared_ptr<Packed>(new (std::nothrow) Packed(d));
+  SharedPacked packed(new (std::nothrow) Packed(d));
   if (!packed || packed->count != d)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_entropy: cannot allocate the block directory");

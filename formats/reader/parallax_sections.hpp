@@ -144,9 +144,9 @@ class ParallaxView {
   // footprints (SATs built on demand; footprint_depth returns Unsupported if one cannot be
   // allocated).
   Status open(const Asset& asset, ParallaxSource source = ParallaxSource::Auto) noexcept;
-  bool is_open() const noexcept { return codes_ != nullptr || packed_ != nullptr; }
-  bool has_sat() const noexcept { return sat_ != nullptr || packed_ != nullptr; }
-  bool is_compressed() const noexcept { return packed_ != nullptr; }
+  bool is_open() const noexcept { return codes_ != nullptr || static_cast<bool>(packed_); }
+  bool has_sat() const noexcept { return sat_ != nullptr || static_cast<bool>(packed_); }
+  bool is_compressed() const noexcept { return static_cast<bool>(packed_); }
   // A scene-planned table: only the directions of its bin map are stored.
   bool is_planned() const noexcept { return covered_ != nullptr; }
   // Whether direction bin `bin` (< dirs^2) is stored (always, except in a planned table).
@@ -235,6 +235,29 @@ class ParallaxView {
   const uint16_t* plane16(uint32_t bin) const noexcept;  // compressed form: the decoded plane
 
   struct Packed;  // the compressed form's decoded planes and on-demand SATs
+  // A counted reference to the Packed that the copies of a view share, created without a
+  // throwing allocation (a std::shared_ptr's control block may throw, and the reader is built
+  // without exceptions). Copies and the last release are thread-safe (atomic count).
+  class SharedPacked {
+   public:
+    SharedPacked() noexcept = default;
+    explicit SharedPacked(Packed* adopted) noexcept : p_(adopted) {}  // a new Packed's reference
+    SharedPacked(const SharedPacked& other) noexcept;
+    SharedPacked(SharedPacked&& other) noexcept : p_(other.p_) { other.p_ = nullptr; }
+    SharedPacked& operator=(SharedPacked other) noexcept {
+      Packed* held = p_;
+      p_ = other.p_;
+      other.p_ = held;
+      return *this;
+    }
+    ~SharedPacked();
+    Packed* operator->() const noexcept { return p_; }
+    Packed& operator*() const noexcept { return *p_; }
+    explicit operator bool() const noexcept { return p_ != nullptr; }
+
+   private:
+    Packed* p_ = nullptr;
+  };
   Status open_raw(const Asset& asset) noexcept;
   Status open_coded(const Asset& asset) noexcept;
 
@@ -248,7 +271,7 @@ class ParallaxView {
   const uint32_t* weights_ = nullptr;  // compressed form: m[d]
   uint32_t groups_ = 0;
   CompressedParallaxInfoRecord packed_info_{};
-  std::shared_ptr<Packed> packed_;
+  SharedPacked packed_;
   const uint8_t* covered_ = nullptr;  // planned table: bin_map instance 1 (1 = stored)
   bool exact_sums_ = false;  // 65535 N^2 < 2^32: every prefix sum is one exact u32 (N <= 256)
 };
