@@ -3,6 +3,15 @@
 
 namespace clothbake::eval {
 
+void EvalData::bin_offset_per_depth(uint32_t bin, double out[2]) const {
+  out[0] = out[1] = 0.0;
+  if (!options.parallax) return;
+  const model::DirectionGrid<double> grid{int(parallax.dirs()), parallax.info().min_cos};
+  const model::Vec3d c = grid.bin_center(int(bin % uint32_t(grid.n)), int(bin / uint32_t(grid.n)));
+  out[0] = double(n) * c.x / c.z;
+  out[1] = double(n) * c.y / c.z;
+}
+
 model::TexelParams<double> EvalData::texel_params(uint64_t t) const {
   model::TexelParams<double> p;
   const YarnShading& yarn = yarns[maps.yarn_id[t]];

@@ -82,6 +82,9 @@ struct EvalData {
   // for the control variate to pay (EvalOptions::min_control_variate_floats).
   double yarn_run = 0;
   uint32_t visibility_rank() const { return basis.is_open() ? basis.rank() : 0; }
+  // The texel offset per unit of depth of parallax view bin `bin` (Eq. 2 at the bin's centre
+  // direction c: N (c_x, c_y) / c_z), or 0 without parallax (EvalOptions::parallax false).
+  void bin_offset_per_depth(uint32_t bin, double out[2]) const;
   // e_0 = 1 and the texel's visibility basis coefficients e_1..e_M into e[0..M].
   void visibility_coefficients(uint64_t t, double* e) const {
     e[0] = 1.0;

@@ -40,14 +40,8 @@ void PushforwardSums::build(uint32_t bin) const noexcept {
     return;  // bin_sums() answers null
   }
   // m_k: every source texel's unit square moved rigidly by its bin depth at the bin's centre.
-  double factor[2] = {0.0, 0.0};
-  if (d.options.parallax) {
-    const model::DirectionGrid<double> grid{int(d.parallax.dirs()), d.parallax.info().min_cos};
-    const model::Vec3d c =
-        grid.bin_center(int(bin % uint32_t(grid.n)), int(bin / uint32_t(grid.n)));
-    factor[0] = double(n) * c.x / c.z;
-    factor[1] = double(n) * c.y / c.z;
-  }
+  double factor[2];
+  d.bin_offset_per_depth(bin, factor);
   for (uint32_t qy = 0; qy < n; ++qy)
     for (uint32_t qx = 0; qx < n; ++qx) {
       const double r = d.options.parallax ? d.parallax.bin_depth(bin, qx, qy) : 0.0;

@@ -46,14 +46,8 @@ void SubperiodSums::build(uint32_t bin) const noexcept {
   } catch (const std::bad_alloc&) {
     return;  // bin_prefix() answers null
   }
-  double factor[2] = {0.0, 0.0};
-  if (d.options.parallax) {
-    const model::DirectionGrid<double> grid{int(d.parallax.dirs()), d.parallax.info().min_cos};
-    const model::Vec3d c =
-        grid.bin_center(int(bin % uint32_t(grid.n)), int(bin / uint32_t(grid.n)));
-    factor[0] = double(n) * c.x / c.z;
-    factor[1] = double(n) * c.y / c.z;
-  }
+  double factor[2];
+  d.bin_offset_per_depth(bin, factor);
   const ControlVariateTexels& records = d.cv_texels;
   // Adds weight * channels(t) at rank r: the same per-texel values the control variate reads
   // (the record's cell images and stored weights, visibility coefficients, gap, colour, yarn).

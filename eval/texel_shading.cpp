@@ -52,12 +52,8 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   const model::DirectionGrid<double> parallax_grid{int(data.parallax.dirs()),
                                                    data.parallax.info().min_cos};
   f.parallax_bins = parallax_grid.bilinear_fast(f.view);
-  for (int k = 0; k < 4; ++k) {
-    const int b = f.parallax_bins.index[k];
-    const model::Vec3d c = parallax_grid.bin_center(b % parallax_grid.n, b / parallax_grid.n);
-    f.bin_offset_per_depth[k][0] = on * c.x / c.z;
-    f.bin_offset_per_depth[k][1] = on * c.y / c.z;
-  }
+  for (int k = 0; k < 4; ++k)
+    data.bin_offset_per_depth(uint32_t(f.parallax_bins.index[k]), f.bin_offset_per_depth[k]);
   // A scene-planned asset answers only what its scene can ask (never a number for the rest).
   for (int k = 0; k < 4; ++k)
     if (data.options.parallax && f.parallax_bins.weight[k] > 0.0 &&
