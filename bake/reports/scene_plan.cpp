@@ -184,11 +184,9 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
   p.fabric_visibility_dirs = p.visibility_dirs = fabric.bake.visibility_dirs;
   // Set before anything can return: the bake seeds its compression from the plan of any object
   // of the fabric, seen or not.
-  {
-    const compress::CompressSettings defaults = compress::settings_from_bake(fabric.bake);
-    p.compression_target =
-        defaults.fixed ? 0.0 : planned_compression_target(defaults.max_error, max_error);
-  }
+  const compress::CompressSettings defaults = compress::settings_from_bake(fabric.bake);
+  p.compression_target =
+      defaults.fixed ? 0.0 : planned_compression_target(defaults.max_error, max_error);
   if (u.pixels == 0) {
     p.warnings.push_back("no pixel sees this object: the scene needs nothing of its fabric");
     return p;
@@ -321,7 +319,6 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
                   planned.planned_seconds};
   }
   {
-    const compress::CompressSettings defaults = compress::settings_from_bake(fabric.bake);
     if (defaults.fixed)
       p.decisions.push_back(
           {"compression target", "kept",
