@@ -40,8 +40,12 @@ RunResult run_once(const std::vector<std::string>& picked, Artifacts seeded,
     const Stage& stage = *plan[i];
     bar.begin_stage(int(i), int(plan.size()), stage.name);
     Artifacts produced;
+    if (options.progress) options.progress(stage.name, 0.0);
     StageContext context(stage, result.artifacts, produced, options, order, result.stages,
-                         [&bar](double f) { bar.update(f); });
+                         [&bar, &options, &stage](double f) {
+                           bar.update(f);
+                           if (options.progress) options.progress(stage.name, f);
+                         });
     StageReport report;
     report.name = stage.name;
     report.peak_scope = reset_peak_rss() ? "stage" : "process";
@@ -75,6 +79,7 @@ RunResult run_once(const std::vector<std::string>& picked, Artifacts seeded,
       result.artifacts.take(produced, out);
     }
     result.stages.push_back(report);
+    if (options.progress) options.progress(stage.name, 1.0);
   }
   bar.finish();
   result.wall_seconds = wall_seconds() - run_wall;

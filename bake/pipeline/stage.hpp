@@ -95,6 +95,14 @@ struct RunOptions {
   bool show_progress = false;   // progress bar on stderr
   bool record_timings = false;  // stages may store the timings in their outputs (write stage)
   StageCache* cache = nullptr;  // optional: reuse finished stage outputs by key
+  // Optional, for library callers (the Python module's bake): called with the running stage's name
+  // and its fraction done, in [0, 1]: (name, 0) before the stage runs or is read from the cache,
+  // the stage's own StageContext::progress reports in between, (name, 1) after it. The reports
+  // come from whichever thread makes them (a stage's TBB workers included), unserialised and
+  // unthrottled, and may arrive out of order within a stage. An exception it throws ends the run
+  // like the stage's own error (from a worker, TBB carries it to the run's thread): nothing is
+  // written at the output.
+  std::function<void(const std::string& stage, double fraction)> progress;
 };
 
 // What a running stage sees. Reading an undeclared input or producing an undeclared output is an

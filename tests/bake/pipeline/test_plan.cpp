@@ -143,6 +143,39 @@ TEST(Driver, UndeclaredReadsAndWritesAndMissingOutputsAreInternalErrors) {
   }
 }
 
+// RunOptions::progress sees every stage in run order, (name, 0) first and (name, 1) last, with the
+// stage's own reports between; an exception it throws ends the run and later stages do not run.
+TEST(Driver, ProgressCallbackSeesEveryStageAndItsExceptionEndsTheRun) {
+  auto stages = diamond();
+  stages[2].run = [](StageContext& ctx) {  // "a" reports, then produces as make() does
+    ctx.progress(0.25);
+    ctx.progress(0.75);
+    ctx.output("section/a", 12);
+    ctx.output("metadata/a", 12);
+  };
+  std::vector<std::pair<std::string, double>> reports;
+  RunOptions options;
+  options.progress = [&](const std::string& stage, double f) { reports.emplace_back(stage, f); };
+  Artifacts seeded;
+  seeded.put("path", 10);
+  run_pipeline({}, std::move(seeded), options, stages);
+  const std::vector<std::pair<std::string, double>> expected{
+      {"load", 0.0}, {"load", 1.0}, {"a", 0.0}, {"a", 0.25}, {"a", 0.75},    {"a", 1.0},
+      {"b", 0.0},    {"b", 1.0},    {"c", 0.0}, {"c", 1.0},  {"write", 0.0}, {"write", 1.0}};
+  EXPECT_EQ(reports, expected);
+
+  struct Stop {};
+  std::vector<std::string> ran;
+  options.progress = [&](const std::string& stage, double f) {
+    if (f == 0.0) ran.push_back(stage);
+    if (stage == "a" && f > 0.5) throw Stop{};
+  };
+  Artifacts again;
+  again.put("path", 10);
+  EXPECT_THROW(run_pipeline({}, std::move(again), options, stages), Stop);
+  EXPECT_EQ(ran, (std::vector<std::string>{"load", "a"}));
+}
+
 TEST(Driver, ThreadLimitIsApplied) {
   std::vector<Stage> stages{make("only", {}, {"x"})};
   RunOptions options;
