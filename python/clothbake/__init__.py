@@ -347,8 +347,8 @@ class Evaluator:
         """The density sample()'s continuous techniques give wi for the view wo, per row: (n,).
 
         (cb_direction_pdf: it integrates to 1 - P(delta) over the sphere), for multiple importance
-        sampling; sample()'s pdf of a continuous sample equals this for its wi. Raises and
-        allocates as sample().
+        sampling; sample()'s pdf of a continuous sample equals this at its wi to rounding (a few
+        units in the last place). Raises and allocates as sample().
         """
         f = _footprints(footprints)
         n = f.shape[0]
