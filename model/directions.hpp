@@ -25,6 +25,8 @@ namespace clothbake::model {
 
 template <class T>
 inline constexpr T kPi = T(3.14159265358979323846264338327950288);
+template <class T>
+inline constexpr T kInvPi = T(0.318309886183790671537767526745028724);
 
 // Square [-1,1]^2 -> unit disk, area-preserving (Shirley and Chiu 1997).
 template <class T>

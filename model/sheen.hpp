@@ -23,7 +23,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
 
 #include "model/directions.hpp"  // kPi
 #include "model/sheen_table.hpp"
@@ -40,19 +39,6 @@ enum class SheenConvention : int { Published = 0, Converged = 1 };
 
 inline const char* sheen_convention_name(SheenConvention convention) {
   return convention == SheenConvention::Converged ? "converged" : "published";
-}
-
-// Parses "published" or "converged"; returns false (and leaves `convention` alone) otherwise.
-inline bool parse_sheen_convention(const std::string& name, SheenConvention& convention) {
-  if (name == "published") {
-    convention = SheenConvention::Published;
-    return true;
-  }
-  if (name == "converged") {
-    convention = SheenConvention::Converged;
-    return true;
-  }
-  return false;
 }
 
 // LTC coefficients of one (cos theta_o, roughness): M^-1 = [[a, 0, b], [0, a, 0], [0, 0, 1]] in

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "model/tile.hpp"
 
 namespace clothbake::raycast {
 namespace {
@@ -17,11 +18,6 @@ constexpr double kSegmentOverlap = 1e-6;
 // Bounds the segments of one ray (a ray can cross at most t_max / (tile distance) tiles; this only
 // guards against a non-terminating loop on absurd input).
 constexpr int kMaxSegments = 1 << 20;
-
-long wrap_index(long i, long n) {
-  long r = i % n;
-  return r < 0 ? r + n : r;
-}
 
 void embree_error(void* /*user*/, RTCError code, const char* message) {
   // Embree reports through this callback; the calling code checks rtcGetDeviceError afterwards.
@@ -181,7 +177,7 @@ PeriodicHeightField::~PeriodicHeightField() {
 
 float PeriodicHeightField::height(long x, long y) const {
   const long n = resolution_;
-  return heights_[std::size_t(wrap_index(y, n) * n + wrap_index(x, n))];
+  return heights_[std::size_t(model::wrap_index(y, n) * n + model::wrap_index(x, n))];
 }
 
 double PeriodicHeightField::budget_t_max(double dx, double dy, double t_max, bool* cut) const {

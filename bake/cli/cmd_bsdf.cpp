@@ -29,6 +29,7 @@
 #include "model/cloth_bsdf.hpp"
 #include "model/directions.hpp"
 #include "model/lobe_integral.hpp"
+#include "model/parameter_text.hpp"
 #include "render/image_output.hpp"
 
 namespace clothbake::cli {

@@ -23,6 +23,7 @@
 #include "eval/evaluator.hpp"
 #include "formats/writer/open_asset.hpp"
 #include "formats/writer/valid_asset.hpp"
+#include "model/parameter_text.hpp"
 
 namespace clothbake::cli {
 namespace {

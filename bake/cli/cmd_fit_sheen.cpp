@@ -19,6 +19,7 @@
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "formats/writer/atomic_file.hpp"
+#include "model/parameter_text.hpp"
 #include "sheen/sheen_fit.hpp"
 #include "sheen/sheen_table_writer.hpp"
 

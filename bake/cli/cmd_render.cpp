@@ -27,6 +27,7 @@
 #include "bake/pipeline/progress.hpp"
 #include "bake/reports/scene_bake.hpp"
 #include "common/error.hpp"
+#include "model/parameter_text.hpp"
 #include "render/image_output.hpp"
 #include "render/renderer.hpp"
 #include "render/sample_limit.hpp"

@@ -8,15 +8,11 @@
 #include <optional>
 
 #include "common/error.hpp"
+#include "model/tile.hpp"
 
 namespace clothbake::weave {
 
 namespace {
-
-long wrap_index(long i, long n) {
-  long r = i % n;
-  return r < 0 ? r + n : r;
-}
 
 std::string lower_trimmed(const std::string& text) {
   std::size_t begin = 0, end = text.size();
@@ -58,7 +54,7 @@ std::string valid_satin_moves(int n) {
 }  // namespace
 
 bool WeaveMatrix::warp_up_wrapped(long pick, long end) const {
-  return warp_up(int(wrap_index(pick, picks)), int(wrap_index(end, ends)));
+  return warp_up(int(model::wrap_index(pick, picks)), int(model::wrap_index(end, ends)));
 }
 
 WeaveMatrix WeaveMatrix::complement() const {
@@ -111,7 +107,7 @@ WeaveMatrix twill(int over, int under, bool left_hand) {
   for (int p = 0; p < n; ++p) {
     const int shift = left_hand ? -p : p;
     for (int k = 0; k < over; ++k)
-      m.set(p, int(wrap_index(long(k) + shift, n)), true);
+      m.set(p, int(model::wrap_index(long(k) + shift, n)), true);
   }
   return m;
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "model/cloth_bsdf.hpp"
+#include "model/parameter_text.hpp"
 #include "tests/model/chi2.hpp"
 
 namespace {

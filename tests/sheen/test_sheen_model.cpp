@@ -9,6 +9,7 @@
 #include <limits>
 #include <vector>
 
+#include "model/parameter_text.hpp"
 #include "model/sheen.hpp"
 #include "sheen/ltc_fit.hpp"
 #include "sheen/rng.hpp"
