@@ -245,6 +245,9 @@ class Evaluator:
             raise TypeError(f"spp must be an int, got {type(spp).__name__}")
         if not 1 <= spp < (1 << 32):
             raise ValueError(f"spp must be in [1, 2**32), got {spp}")
+        if isinstance(direct_max_side, bool) or not isinstance(direct_max_side, (int, float)):
+            kind = type(direct_max_side).__name__
+            raise TypeError(f"direct_max_side must be a number, got {kind}")
         self._asset = asset
         self._method: Method = method
         self._spp = spp

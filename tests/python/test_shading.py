@@ -170,6 +170,10 @@ def test_shape_and_dtype_errors_name_the_argument(asset: clothbake.Asset) -> Non
         clothbake.Evaluator(asset, method="fast")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=r"spp must be in \[1, 2\*\*32\)"):
         clothbake.Evaluator(asset, spp=0)
+    with pytest.raises(TypeError, match="direct_max_side must be a number"):
+        clothbake.Evaluator(asset, direct_max_side="1")  # type: ignore[arg-type]
+    with pytest.raises(clothbake.InvalidArgumentError, match="CB_ERROR_INVALID_ARGUMENT"):
+        clothbake.Evaluator(asset, direct_max_side=-1.0)
 
 
 def test_library_errors_carry_the_result_name_and_the_failing_row(asset: clothbake.Asset) -> None:
