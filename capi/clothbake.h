@@ -44,8 +44,9 @@ typedef enum cb_result {
   CB_ERROR_INVALID_ASSET = 3,    /* not an asset, another major version, truncated, corrupt or
                                     failing validation: the message names the check (CBK-Ennn) */
   CB_ERROR_NOT_FOUND = 4,        /* the asset lacks what the evaluator or the method needs */
-  CB_ERROR_UNSUPPORTED = 5,      /* valid, but not readable here (codec, section version), or
-                                    the evaluator's own tables could not be allocated */
+  CB_ERROR_UNSUPPORTED = 5,      /* valid, but not readable here (codec, section version, a
+                                    method or table form the single file leaves out), or the
+                                    allocator returned NULL for a decoded or derived table */
   CB_ERROR_OUT_OF_MEMORY = 6,    /* the caller's allocator returned NULL */
   CB_ERROR_OUT_OF_PLAN = 7       /* a scene-planned asset left out what the query needs: estimate
                                     it with CB_METHOD_BRUTE, which reads no tables, or return 0 */
@@ -60,10 +61,12 @@ typedef struct cb_error {
 } cb_error;
 
 /* Memory. `allocate` returns `size` bytes aligned to `alignment` (a power of two, at most 64) or
- * NULL; `release` frees what it returned (never called with NULL). Used for every object this
- * interface creates (cb_asset, cb_evaluator, the copy of an asset's bytes); the evaluator's derived
- * tables are allocated by the library's own allocator in this version (docs/integration.md,
- * "Memory"). Both may be called from any thread that calls a create or destroy function. */
+ * NULL; `release` frees what it returned (never called with NULL). Every byte the library holds
+ * comes from it: the objects (cb_asset, cb_evaluator), the copy of an asset's bytes, the decoded
+ * maps and tables (the asset's allocator) and the evaluator's derived sums, some built on first
+ * use by cb_estimate (the evaluator's allocator; docs/integration.md, "Memory"). Both may be called
+ * from any thread that calls into the object they serve, so they must be thread-safe. NULL, or a
+ * struct with a NULL function, selects aligned_alloc/free. */
 typedef struct cb_allocator {
   void* (*allocate)(void* user, size_t size, size_t alignment);
   void (*release)(void* user, void* pointer);
@@ -74,16 +77,18 @@ typedef struct cb_asset cb_asset;
 typedef struct cb_evaluator cb_evaluator;
 
 /* Open flags. */
-#define CB_OPEN_BORROW 1u  /* open_memory: read the caller's bytes in place (they must stay alive
-                              and unchanged until cb_asset_close, and start at an 8-byte
-                              boundary); without it the bytes are copied */
-#define CB_OPEN_TRUSTED 2u /* skip the full validation (every checksum, every value range, every
-                              baked view opened and cross-checked, what `clothbake validate`
-                              does): open then checks the structure only (magic, version, the
-                              section table, sizes and offsets), and the evaluator the layouts and
-                              shapes of the views it opens and some values, but no checksum and
-                              not every value: damaged bytes may shade as wrong values. For assets
-                              the caller baked or verified (docs/integration.md) */
+#define CB_OPEN_BORROW                                                      \
+  1u /* open_memory: read the caller's bytes in place (they must stay alive \
+        and unchanged until cb_asset_close, and start at an 8-byte          \
+        boundary); without it the bytes are copied */
+#define CB_OPEN_TRUSTED                                                      \
+  2u /* skip the full validation (every checksum, every value range, every   \
+        baked view opened and cross-checked, what `clothbake validate`       \
+        does): open then checks the structure only (magic, version, the      \
+        section table, sizes and offsets), and the evaluator the layouts and \
+        shapes of the views it opens and some values, but no checksum and    \
+        not every value: damaged bytes may shade as wrong values. For assets \
+        the caller baked or verified (docs/integration.md) */
 
 /* Opens an asset from `size` bytes at `bytes`. Validates it (see CB_OPEN_TRUSTED): the cost is one
  * pass over the bytes and opening every baked table (docs/performance.md, "C interface"). Without
@@ -93,7 +98,8 @@ typedef struct cb_evaluator cb_evaluator;
  * buffer not 8-byte aligned), INVALID_ASSET (the message names the first failed check),
  * UNSUPPORTED, OUT_OF_MEMORY. Safe on untrusted bytes. Thread-safe. */
 cb_result cb_asset_open_memory(const void* bytes, size_t size, uint32_t flags,
-                               const cb_allocator* allocator, cb_asset** out, cb_error* error) CB_NOEXCEPT;
+                               const cb_allocator* allocator, cb_asset** out,
+                               cb_error* error) CB_NOEXCEPT;
 
 /* Opens the asset file at `path` (mapped read-only, not copied; the file must not be truncated
  * while open). Validation, errors and thread safety as cb_asset_open_memory, plus IO. */
@@ -105,9 +111,10 @@ void cb_asset_close(cb_asset* asset) CB_NOEXCEPT;
 
 /* What a renderer may want to know of an asset. */
 typedef struct cb_asset_info {
-  uint32_t resolution;    /* texels per tile side (tiles are square) */
-  double tile_size_mm;    /* the tile's physical side, in millimetres (0: unknown) */
-  uint32_t scene_planned; /* 1 when a scene plan left parts out (queries may be CB_ERROR_OUT_OF_PLAN) */
+  uint32_t resolution; /* texels per tile side (tiles are square) */
+  double tile_size_mm; /* the tile's physical side, in millimetres (0: unknown) */
+  uint32_t
+      scene_planned; /* 1 when a scene plan left parts out (queries may be CB_ERROR_OUT_OF_PLAN) */
 } cb_asset_info;
 
 /* Fills *out (zeroed on error). Errors: INVALID_ARGUMENT (NULL); NOT_FOUND or INVALID_ASSET when
@@ -118,7 +125,8 @@ cb_result cb_asset_get_info(const cb_asset* asset, cb_asset_info* out, cb_error*
 /* Methods (docs/evaluator.md, "Methods"). */
 typedef enum cb_method {
   CB_METHOD_MULTISCALE = 0,       /* unbiased multi-scale (the default) */
-  CB_METHOD_MULTISCALE_PAPER = 1, /* the paper's Eq. 8-10 as printed (biased) */
+  CB_METHOD_MULTISCALE_PAPER = 1, /* the paper's Eq. 8-10 as printed (biased); not in the single
+                                     source file clothbake.cpp: UNSUPPORTED there */
   CB_METHOD_BRUTE = 2,            /* Monte Carlo over the footprint, no tables */
   CB_METHOD_REFERENCE = 3         /* the exact integral (slow on wide footprints) */
 } cb_method;
@@ -135,7 +143,8 @@ typedef enum cb_method {
 /* Evaluator options: a POD struct; fill it with cb_options_default first. */
 typedef struct cb_options {
   uint32_t method;        /* cb_method, default CB_METHOD_MULTISCALE */
-  uint32_t tables;        /* 0 = auto (compressed, else raw), 1 = raw, 2 = compressed */
+  uint32_t tables;        /* 0 = auto (compressed, else raw), 1 = raw, 2 = compressed; the
+                             single source file reads compressed tables only (1: UNSUPPORTED) */
   uint32_t sheen;         /* 0 = the published sheen table (default), 1 = converged albedo */
   uint32_t spp;           /* samples per estimate for the sampling methods, default 1 (>= 1) */
   double direct_max_side; /* the multi-scale methods sum footprints below this many texels a
@@ -152,7 +161,8 @@ void cb_options_default(cb_options* options) CB_NOEXCEPT;
  * (sections that disagree), OUT_OF_MEMORY (the allocator), UNSUPPORTED (the derived sums could not
  * be allocated). Thread-safe. */
 cb_result cb_evaluator_create(const cb_asset* asset, const cb_options* options,
-                              const cb_allocator* allocator, cb_evaluator** out, cb_error* error) CB_NOEXCEPT;
+                              const cb_allocator* allocator, cb_evaluator** out,
+                              cb_error* error) CB_NOEXCEPT;
 
 /* Destroys an evaluator (NULL: nothing). */
 void cb_evaluator_destroy(cb_evaluator* evaluator) CB_NOEXCEPT;

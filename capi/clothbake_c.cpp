@@ -6,9 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <cstring>
-#include <new>
 
 #include "eval/evaluator.hpp"
 #include "formats/reader/asset.hpp"
@@ -16,15 +14,17 @@
 #include "formats/reader/scene_plan_sections.hpp"
 #include "formats/validate/validate.hpp"
 
+// Each object keeps the allocator it came from, which its reader views (the asset) and derived
+// tables (the evaluator) use too.
 struct cb_asset {
   clothbake::reader::Asset asset;
-  cb_allocator allocator{};
+  clothbake::model::Allocator allocator{};
   void* copy = nullptr;  // the asset's bytes when copied (open_memory without CB_OPEN_BORROW)
 };
 
 struct cb_evaluator {
   clothbake::eval::Evaluator evaluator;
-  cb_allocator allocator{};
+  clothbake::model::Allocator allocator{};
   clothbake::eval::Method method = clothbake::eval::Method::Multiscale;
   uint32_t spp = 1;
   double resolution = 0;  // texels per tile side
@@ -37,21 +37,11 @@ namespace eval = clothbake::eval;
 
 constexpr uint32_t kKnownOpenFlags = CB_OPEN_BORROW | CB_OPEN_TRUSTED;
 
-void* default_allocate(void*, size_t size, size_t alignment) {
-  // aligned_alloc needs a size that is a multiple of the alignment.
-  if (size > SIZE_MAX - (alignment - 1)) return nullptr;
-  const size_t rounded = (size + alignment - 1) / alignment * alignment;
-  return std::aligned_alloc(alignment, rounded == 0 ? alignment : rounded);
-}
-
-void default_release(void*, void* pointer) {
-  std::free(pointer);
-}
-
-cb_allocator allocator_or_default(const cb_allocator* allocator) {
+// The caller's allocator when it gives both functions, else the library's default one.
+clothbake::model::Allocator allocator_or_default(const cb_allocator* allocator) {
   if (allocator != nullptr && allocator->allocate != nullptr && allocator->release != nullptr)
-    return *allocator;
-  return cb_allocator{default_allocate, default_release, nullptr};
+    return {allocator->allocate, allocator->release, allocator->user};
+  return clothbake::model::default_allocator();
 }
 
 // Appends as much of `text` as fits after the NUL-terminated contents of buf[0..size).
@@ -110,18 +100,19 @@ cb_result fail_status(cb_error* error, const reader::Status& status, const char*
   return result_of(status);
 }
 
+// A cb_asset or cb_evaluator from `allocator`, which it keeps; null without memory.
 template <class T>
-T* create(const cb_allocator& allocator) {
-  void* memory = allocator.allocate(allocator.user, sizeof(T), alignof(T));
-  return memory == nullptr ? nullptr : new (memory) T();
+T* create(const clothbake::model::Allocator& allocator) {
+  T* object = clothbake::model::create_object<T>(allocator);
+  if (object != nullptr) object->allocator = allocator;
+  return object;
 }
 
 template <class T>
 void destroy(T* object) {
   if (object == nullptr) return;
-  const cb_allocator allocator = object->allocator;
-  object->~T();
-  allocator.release(allocator.user, object);
+  const clothbake::model::Allocator allocator = object->allocator;
+  clothbake::model::destroy_object(allocator, object);
 }
 
 struct FirstFinding {
@@ -200,11 +191,11 @@ cb_result cb_asset_open_memory(const void* bytes, size_t size, uint32_t flags,
   if (borrow && reinterpret_cast<uintptr_t>(bytes) % 8 != 0)
     return fail(error, CB_ERROR_INVALID_ARGUMENT, "cb_asset_open_memory",
                 "a borrowed buffer must start at an 8-byte boundary (CB_OPEN_BORROW)");
-  const cb_allocator memory = allocator_or_default(allocator);
+  const clothbake::model::Allocator memory = allocator_or_default(allocator);
   cb_asset* asset = create<cb_asset>(memory);
   if (asset == nullptr)
     return fail(error, CB_ERROR_OUT_OF_MEMORY, "cb_asset_open_memory", "cannot allocate the asset");
-  asset->allocator = memory;
+  asset->asset.set_allocator(&asset->allocator);
   const void* data = bytes;
   if (!borrow) {
     asset->copy = memory.allocate(memory.user, size == 0 ? 8 : size, 8);
@@ -236,11 +227,11 @@ cb_result cb_asset_open_file(const char* path, uint32_t flags, const cb_allocato
   if ((flags & ~kKnownOpenFlags) != 0 || (flags & CB_OPEN_BORROW) != 0)
     return fail(error, CB_ERROR_INVALID_ARGUMENT, path,
                 "unknown flags (CB_OPEN_BORROW is for cb_asset_open_memory)");
-  const cb_allocator memory = allocator_or_default(allocator);
+  const clothbake::model::Allocator memory = allocator_or_default(allocator);
   cb_asset* asset = create<cb_asset>(memory);
   if (asset == nullptr)
     return fail(error, CB_ERROR_OUT_OF_MEMORY, path, "cannot allocate the asset");
-  asset->allocator = memory;
+  asset->asset.set_allocator(&asset->allocator);
   const reader::Status s = asset->asset.open_file(path);
   // The reader's messages name the path already; validation's findings do not.
   const cb_result r = s.ok() ? validate(*asset, flags, path, error) : fail_status(error, s, "");
@@ -256,7 +247,7 @@ void cb_asset_close(cb_asset* asset) noexcept {
   if (asset == nullptr) return;
   asset->asset = reader::Asset();  // unmaps a file before the copy goes
   void* copy = asset->copy;
-  const cb_allocator memory = asset->allocator;
+  const clothbake::model::Allocator memory = asset->allocator;
   destroy(asset);
   if (copy != nullptr) memory.release(memory.user, copy);
 }
@@ -310,12 +301,12 @@ cb_result cb_evaluator_create(const cb_asset* asset, const cb_options* options,
   eo.sheen_convention = options->sheen == 0 ? clothbake::model::SheenConvention::Published
                                             : clothbake::model::SheenConvention::Converged;
   eo.direct_max_side = options->direct_max_side;
-  const cb_allocator memory = allocator_or_default(allocator);
+  const clothbake::model::Allocator memory = allocator_or_default(allocator);
   cb_evaluator* e = create<cb_evaluator>(memory);
   if (e == nullptr)
     return fail(error, CB_ERROR_OUT_OF_MEMORY, "cb_evaluator_create",
                 "cannot allocate the evaluator");
-  e->allocator = memory;
+  eo.allocator = &e->allocator;
   const eval::Method methods[] = {eval::Method::Multiscale, eval::Method::MultiscalePaper,
                                   eval::Method::Brute, eval::Method::Reference};
   e->method = methods[options->method];

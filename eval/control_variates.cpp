@@ -11,8 +11,6 @@ namespace {
 
 using model::Lobe;
 
-constexpr double kInvPi = 0.318309886183790671537767526745028724;
-
 // The per-footprint constants of the control variate g (docs/evaluator.md, "Multi-scale as
 // printed"):
 //   specular  g(q) = kbar G |i_z| T_sheen v_c(q) T_c(q)(q, h)  (T: the table value, I D binned;
@@ -20,7 +18,7 @@ constexpr double kInvPi = 0.318309886183790671537767526745028724;
 //   diffuse   g(q) = |i_z| / pi T_sheen v_c(q) I(q) R(q)       (R = R_d or T_d times the colour)
 //   sheen     g(q) = colour sheen(i, o) |i_z| v_c(q)
 //   delta     g(q) = T_sheen v_c(q) T_gap(q)                   (T_gap = 1 - I, from its table)
-struct Constants : ActiveLobes {
+struct PaperConstants : ActiveLobes {
   Rgb diffuse_scale, sheen_scale, delta_scale;
   reader::BinWeights gap_bin;
   // kbar_c G-bar |i_z| T_sheen per cluster, RGB (the first 3 C entries are set; a plain array so
@@ -33,7 +31,7 @@ struct Constants : ActiveLobes {
 
 // g of every active lobe but the specular one at texel q (integer coordinates, any: the tile
 // wraps); the specular lobe has its own residual, Eq. 9's.
-void control_variate(const EvalData& data, const ShadingFrame& frame, const Constants& k,
+void control_variate(const EvalData& data, const ShadingFrame& frame, const PaperConstants& k,
                      int64_t qx, int64_t qy, Rgb g[model::kLobeCount]) {
   const uint64_t t = data.texel(qx, qy);
   const uint32_t x = uint32_t(t % data.n), y = uint32_t(t / data.n);
@@ -97,7 +95,7 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame, c
     return reader::plan_footprint(shifted, n, &plan);
   out->counters.table_queries += 1;
 
-  // Constants from the texel at the centre of the shifted footprint (Eq. 10's p-bar).
+  // PaperConstants from the texel at the centre of the shifted footprint (Eq. 10's p-bar).
   const uint64_t centre_texel = data.texel(int64_t(std::floor(0.5 * (shifted.x0 + shifted.x1))),
                                            int64_t(std::floor(0.5 * (shifted.y0 + shifted.y1))));
   const model::ClothBsdf<double> centre(data.texel_params(centre_texel));
@@ -105,7 +103,7 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame, c
   const bool reflect = frame.wi.z * frame.wo.z > 0.0;
   const double cos_i = frame.cos_i;
   const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
-  Constants k;
+  PaperConstants k;
   static_cast<ActiveLobes&>(k) = active_lobes(data, frame);
 
   Rgb base[model::kLobeCount];
@@ -135,7 +133,7 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame, c
     out->counters.table_queries += 1;
   }
   if (k.diffuse) {
-    k.diffuse_scale = t_sheen * (cos_i * kInvPi);
+    k.diffuse_scale = t_sheen * (cos_i * model::kInvPi<double>);
     const uint32_t first = k.diffuse_lobe == Lobe::DiffuseReflection
                                ? data.sums.layout().diffuse_r()
                                : data.sums.layout().diffuse_t();

@@ -2,18 +2,13 @@
 #include "eval/cv_texels.hpp"
 
 #include <algorithm>
-#include <new>
 
 #include "eval/eval_data.hpp"
 
 namespace clothbake::eval {
 
-void ControlVariateTexels::AlignedFree::operator()(unsigned char* p) const noexcept {
-  ::operator delete[](p, std::align_val_t(64));
-}
-
 bool ControlVariateTexels::build(const EvalData& data) noexcept {
-  bytes_.reset();
+  lines_.reset();
   stride_ = rank_ = 0;
   const reader::CompressedRadianceTables& tables = data.specular.compressed;
   if (!tables.is_open() || data.yarns.size() > 65535 || tables.image_count() > 65535 ||
@@ -33,10 +28,8 @@ bool ControlVariateTexels::build(const EvalData& data) noexcept {
   }
   const uint64_t stride =
       (sizeof(Header) + 4 * uint64_t(rank) + 2 * uint64_t(max_count - 1) + 15) / 16 * 16;
-  unsigned char* raw = static_cast<unsigned char*>(
-      ::operator new[](texels* stride, std::align_val_t(64), std::nothrow));
-  if (raw == nullptr) return false;
-  bytes_.reset(raw);
+  if (!lines_.allocate((texels * stride + 63) / 64, data.allocator)) return false;
+  unsigned char* raw = reinterpret_cast<unsigned char*>(lines_.data());
   stride_ = uint32_t(stride);
   rank_ = rank;
   double weights[reader::kMaxCompressedRank + 1];

@@ -28,7 +28,8 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <memory>
+
+#include "model/memory.hpp"
 
 namespace clothbake::eval {
 
@@ -54,28 +55,31 @@ class ControlVariateTexels {
   // limits are lower). Not thread-safe against readers; call once, before sharing the data.
   bool build(const EvalData& data) noexcept;
 
-  bool empty() const noexcept { return bytes_ == nullptr; }
+  bool empty() const noexcept { return bytes() == nullptr; }
   uint32_t stride() const noexcept { return stride_; }
   uint32_t rank() const noexcept { return rank_; }
 
   // The record of texel index t (< N^2): its header, then e (rank() floats) and q.
   const Header& header(uint64_t t) const noexcept {
-    return *reinterpret_cast<const Header*>(bytes_.get() + t * stride_);
+    return *reinterpret_cast<const Header*>(bytes() + t * stride_);
   }
   const float* coefficients(uint64_t t) const noexcept {
-    return reinterpret_cast<const float*>(bytes_.get() + t * stride_ + sizeof(Header));
+    return reinterpret_cast<const float*>(bytes() + t * stride_ + sizeof(Header));
   }
   const int16_t* image_weights(uint64_t t) const noexcept {
-    return reinterpret_cast<const int16_t*>(bytes_.get() + t * stride_ + sizeof(Header) +
+    return reinterpret_cast<const int16_t*>(bytes() + t * stride_ + sizeof(Header) +
                                             4 * std::size_t(rank_));
   }
-  const void* address(uint64_t t) const noexcept { return bytes_.get() + t * stride_; }
+  const void* address(uint64_t t) const noexcept { return bytes() + t * stride_; }
 
  private:
-  struct AlignedFree {
-    void operator()(unsigned char* p) const noexcept;
+  struct alignas(64) CacheLine {
+    unsigned char bytes[64];
   };
-  std::unique_ptr<unsigned char[], AlignedFree> bytes_;
+  const unsigned char* bytes() const noexcept {
+    return reinterpret_cast<const unsigned char*>(lines_.data());
+  }
+  model::Buffer<CacheLine> lines_;  // the records, from the evaluator's allocator
   uint32_t stride_ = 0, rank_ = 0;
 };
 

@@ -34,6 +34,11 @@ model::TexelParams<double> EvalData::texel_params(uint64_t t) const {
 double TableSource::texel_value(const reader::BinWeights& weights, uint32_t x, uint32_t y,
                                 uint32_t label, int* cluster) const noexcept {
   if (is_compressed()) return compressed.texel_value(weights, x, y, cluster);
+#ifdef CLOTHBAKE_SINGLE_FILE
+  (void)weights, (void)x, (void)y, (void)label;
+  *cluster = -1;
+  return 0.0;  // unreachable: the single file opens compressed tables only
+#else
   const int column = raw.column_of_cluster(label);
   *cluster = column < 0 ? -1 : int(label);
   if (column < 0) return 0.0;
@@ -41,6 +46,7 @@ double TableSource::texel_value(const reader::BinWeights& weights, uint32_t x, u
   for (uint32_t k = 0; k < weights.count; ++k)
     v += weights.weight[k] * raw.texel_value(weights.bin[k], x, y, uint32_t(column));
   return v;
+#endif
 }
 
 }  // namespace clothbake::eval

@@ -4,11 +4,12 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
 
 #include "eval/cv_texels.hpp"
 #include "eval/evaluator.hpp"
+#ifndef CLOTHBAKE_SINGLE_FILE  // MultiscalePaper's sums: not in the single file
 #include "eval/footprint_sums.hpp"
+#endif
 #include "eval/pushforward_sums.hpp"
 #include "eval/subperiod_sums.hpp"
 #include "formats/reader/cluster_sections.hpp"
@@ -17,7 +18,9 @@
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
+#ifndef CLOTHBAKE_SINGLE_FILE  // the single file reads compressed tables only
 #include "formats/reader_raw/radiance_tables.hpp"
+#endif
 #include "model/cloth_bsdf.hpp"
 
 namespace clothbake::eval {
@@ -32,12 +35,18 @@ struct YarnShading {
 
 // One kind of Integral-Radiance tables, raw or compressed (exactly one of the two is open).
 struct TableSource {
+#ifndef CLOTHBAKE_SINGLE_FILE
   reader::RawRadianceTables raw;
+#endif
   reader::CompressedRadianceTables compressed;
   const reader::RadianceTables* tables = nullptr;  // &raw or &compressed, null when absent
 
-  bool present() const { return tables != nullptr; }
-  bool is_compressed() const { return tables == &compressed; }
+  bool present() const {
+    return tables != nullptr;
+  }
+  bool is_compressed() const {
+    return tables == &compressed;
+  }
   // T(q, h) of texel (x, y) (x, y < N) interpolated over the bins of `weights`, and the cluster
   // whose table holds it (-1: none; the value is then 0). `label` is the texel's label-map cluster,
   // which is the raw tables' column (their columns hold a texel only under its label).
@@ -47,9 +56,10 @@ struct TableSource {
 
 struct EvalData {
   EvalOptions options;
-  uint32_t n = 0;  // resolution of every per-texel section
+  const model::Allocator* allocator = nullptr;  // of this object and every table below (not null)
+  uint32_t n = 0;                               // resolution of every per-texel section
   reader::FeatureMaps maps;
-  std::vector<YarnShading> yarns;
+  model::Buffer<YarnShading> yarns;
   model::Rgb<double> sheen_color;
   double sheen_roughness = 0.5;
   reader::ParallaxView parallax;
@@ -62,17 +72,19 @@ struct EvalData {
   // A scene-planned asset: what its bake left out (planned false: nothing).
   reader::ScenePlanRecord plan{};
   bool planned = false;
-  FootprintSums sums;                  // multiscale-paper's footprint sums
-  std::vector<Rgb> cluster_albedo;     // mean specular albedo k of each cluster's texels (tile)
-  std::vector<uint32_t> cluster_yarn;  // the yarn of most of each cluster's texels
+#ifndef CLOTHBAKE_SINGLE_FILE
+  FootprintSums sums;  // multiscale-paper's footprint sums
+#endif
+  model::Buffer<Rgb> cluster_albedo;     // mean specular albedo k of each cluster's texels (tile)
+  model::Buffer<uint32_t> cluster_yarn;  // the yarn of most of each cluster's texels
   // Per yarn, the parameters of its representative texel: the one whose fibre (tangent line and
   // roughness) is nearest the yarn's mean; the unbiased form evaluates Eq. 10's attenuation there
   // with the tangent turned normal to h.
-  std::vector<model::TexelParams<double>> yarn_fibre;
-  std::vector<uint32_t> image_cluster;  // per compressed specular image: its cluster
+  model::Buffer<model::TexelParams<double>> yarn_fibre;
+  model::Buffer<uint32_t> image_cluster;  // per compressed specular image: its cluster
   // Per cluster c: its compressed specular images are [cluster_image_begin[c], [c + 1]) (the
   // tables store them cluster by cluster); C + 1 entries.
-  std::vector<uint32_t> cluster_image_begin;
+  model::Buffer<uint32_t> cluster_image_begin;
   PushforwardSums pushforward;     // the unbiased form's whole-tile sums (pushforward_sums.hpp)
   SubperiodSums subperiod;         // its block sums (subperiod_sums.hpp; not open: no block form)
   ControlVariateTexels cv_texels;  // the unbiased form's per-texel records of g (cv_texels.hpp)
@@ -81,7 +93,9 @@ struct EvalData {
   // when the tile has one yarn. The scale below which a footprint holds too little of the weave
   // for the control variate to pay (EvalOptions::min_control_variate_floats).
   double yarn_run = 0;
-  uint32_t visibility_rank() const { return basis.is_open() ? basis.rank() : 0; }
+  uint32_t visibility_rank() const {
+    return basis.is_open() ? basis.rank() : 0;
+  }
   // The texel offset per unit of depth of parallax view bin `bin` (Eq. 2 at the bin's centre
   // direction c: N (c_x, c_y) / c_z), or 0 without parallax (EvalOptions::parallax false).
   void bin_offset_per_depth(uint32_t bin, double out[2]) const;
@@ -95,7 +109,9 @@ struct EvalData {
       e[k + 1] = c[k];
   }
 
-  uint32_t cluster_count() const { return clusters.cluster_count(); }
+  uint32_t cluster_count() const {
+    return clusters.cluster_count();
+  }
   uint64_t texel(int64_t x, int64_t y) const {
     if ((n & (n - 1)) == 0) {  // a power of two: the two's complement mask is the residue
       const uint64_t mask = uint64_t(n) - 1;

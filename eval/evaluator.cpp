@@ -17,8 +17,10 @@ namespace {
 using reader::Check;
 using reader::ErrorCode;
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 // Largest derived footprint sums open() builds (bounds (N + 1)^2 x (3 + 8 C) doubles).
 constexpr uint64_t kMaxDerivedBytes = uint64_t(1) << 30;
+#endif
 
 const char* const kMethodNames[kMethodCount] = {"multiscale", "multiscale-paper", "brute",
                                                 "reference"};
@@ -36,6 +38,7 @@ Status open_tables(const reader::Asset& asset, reader::RadianceTableKind kind, T
     }
     if (s.code() != ErrorCode::NotFound || choice == TableChoice::Compressed) return s;
   }
+#ifndef CLOTHBAKE_SINGLE_FILE
   Status s = source->raw.open(asset, kind);
   if (s.ok()) {
     source->tables = &source->raw;
@@ -43,6 +46,12 @@ Status open_tables(const reader::Asset& asset, reader::RadianceTableKind kind, T
   }
   if (s.code() == ErrorCode::NotFound && choice == TableChoice::Auto) return {};
   return s;
+#else
+  // The single file reads no raw tables (docs/integration.md, "One source file").
+  if (choice == TableChoice::Auto) return {};
+  return Status::error(ErrorCode::Unsupported, Check::None,
+                       "raw Integral-Radiance tables are not read by the single-file build");
+#endif
 }
 
 Status cross_section(const char* what, uint32_t got, uint32_t want) {
@@ -58,6 +67,7 @@ const char* method_name(Method method) noexcept {
   return m >= 0 && m < kMethodCount ? kMethodNames[m] : "unknown";
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 bool parse_method(const char* name, Method* out) noexcept {
   if (name == nullptr) return false;
   for (int m = 0; m < kMethodCount; ++m)
@@ -66,6 +76,11 @@ bool parse_method(const char* name, Method* out) noexcept {
       return true;
     }
   return false;
+}
+#endif
+
+void Evaluator::Release::operator()(EvalData* data) const noexcept {
+  if (data != nullptr) model::destroy_object(*data->allocator, data);
 }
 
 Evaluator::Evaluator() noexcept = default;
@@ -76,6 +91,7 @@ Evaluator& Evaluator::operator=(Evaluator&&) noexcept = default;
 uint32_t Evaluator::resolution() const noexcept {
   return data_ ? data_->n : 0;
 }
+#ifndef CLOTHBAKE_SINGLE_FILE
 uint32_t Evaluator::cluster_count() const noexcept {
   return data_ ? data_->cluster_count() : 0;
 }
@@ -86,6 +102,7 @@ const char* Evaluator::table_source() const noexcept {
 uint64_t Evaluator::derived_bytes() const noexcept {
   return data_ ? data_->sums.bytes() : 0;
 }
+#endif
 
 Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) noexcept {
   data_.reset();
@@ -109,9 +126,12 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "direct_max_side must be finite and >= 0");
-  std::unique_ptr<EvalData> d(new (std::nothrow) EvalData);
+  const model::Allocator* allocator =
+      options.allocator != nullptr ? options.allocator : asset.allocator();
+  std::unique_ptr<EvalData, Release> d(model::create_object<EvalData>(*allocator));
   if (!d) return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate");
   d->options = options;
+  d->allocator = allocator;
 
   Status s = reader::read_feature_maps(asset, &d->maps);
   if (!s.ok()) return s;
@@ -124,11 +144,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   if (!s.ok()) return s;
   if (yarns.size == 0)
     return Status::error(ErrorCode::Malformed, Check::YarnIdRange, "the asset has no yarn records");
-  try {
-    d->yarns.resize(yarns.size);
-  } catch (const std::bad_alloc&) {
+  if (!d->yarns.allocate(yarns.size, allocator))
     return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate the yarn table");
-  }
   for (uint64_t k = 0; k < yarns.size; ++k) {
     const reader::YarnMaterialRecord& r = yarns[k];
     YarnShading& y = d->yarns[k];
@@ -202,6 +219,7 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                            clusters);
   }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
   const SumChannels layout{clusters};
   if (uint64_t(d->n + 1) * (d->n + 1) * layout.count() * sizeof(double) > kMaxDerivedBytes)
     return Status::error(ErrorCode::Unsupported, Check::None,
@@ -209,27 +227,31 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                          unsigned(d->n), unsigned(d->n), unsigned(clusters),
                          static_cast<unsigned long long>(kMaxDerivedBytes));
   const EvalData& data = *d;
-  const bool built = d->sums.build(d->n, layout, [&](uint64_t t, double* out) {
-    for (uint32_t c = 0; c < layout.count(); ++c)
-      out[c] = 0.0;
-    const uint32_t label = data.clusters.label(int64_t(t % data.n), int64_t(t / data.n));
-    const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
-    const float* colour = data.maps.albedo.data + 3 * t;
-    const Rgb c(colour[0], colour[1], colour[2]);
-    const double gap = data.maps.gap[t];
-    const Rgb k = yarn.specular_albedo * c;
-    const Rgb rd = (yarn.diffuse_reflectance * c) * gap;
-    const Rgb td = (yarn.diffuse_transmittance * c) * gap;
-    for (int ch = 0; ch < 3; ++ch) {
-      out[layout.albedo() + ch] = k[ch];
-      out[layout.diffuse_r() + 3 * label + ch] = rd[ch];
-      out[layout.diffuse_t() + 3 * label + ch] = td[ch];
-    }
-    out[layout.area() + label] = 1.0;
-    out[layout.gap() + label] = 1.0 - gap;
-  });
+  const bool built = d->sums.build(
+      d->n, layout,
+      [&](uint64_t t, double* out) {
+        for (uint32_t c = 0; c < layout.count(); ++c)
+          out[c] = 0.0;
+        const uint32_t label = data.clusters.label(int64_t(t % data.n), int64_t(t / data.n));
+        const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
+        const float* colour = data.maps.albedo.data + 3 * t;
+        const Rgb c(colour[0], colour[1], colour[2]);
+        const double gap = data.maps.gap[t];
+        const Rgb k = yarn.specular_albedo * c;
+        const Rgb rd = (yarn.diffuse_reflectance * c) * gap;
+        const Rgb td = (yarn.diffuse_transmittance * c) * gap;
+        for (int ch = 0; ch < 3; ++ch) {
+          out[layout.albedo() + ch] = k[ch];
+          out[layout.diffuse_r() + 3 * label + ch] = rd[ch];
+          out[layout.diffuse_t() + 3 * label + ch] = td[ch];
+        }
+        out[layout.area() + label] = 1.0;
+        out[layout.gap() + label] = 1.0 - gap;
+      },
+      allocator);
   if (!built)
     return Status::error(ErrorCode::Unsupported, Check::None, "cannot allocate the footprint sums");
+#endif
   // The visibility basis: optional; it must describe the label map's clusters.
   s = d->basis.open(asset);
   if (s.code() == ErrorCode::NotFound) {
@@ -248,99 +270,102 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
   // constants of the unbiased control variate.
   const uint64_t texels = uint64_t(d->n) * d->n;
   const uint32_t yarn_count = uint32_t(d->yarns.size());
-  try {
-    std::vector<double> count(clusters, 0.0);
-    std::vector<uint64_t> cluster_yarn_count(uint64_t(clusters) * yarn_count, 0);
-    d->cluster_albedo.assign(clusters, Rgb());
-    for (uint64_t t = 0; t < texels; ++t) {
-      const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
-      const float* colour = d->maps.albedo.data + 3 * t;
-      d->cluster_albedo[label] +=
-          d->yarns[d->maps.yarn_id[t]].specular_albedo * Rgb(colour[0], colour[1], colour[2]);
-      count[label] += 1.0;
-      ++cluster_yarn_count[uint64_t(label) * yarn_count + d->maps.yarn_id[t]];
-    }
-    d->cluster_yarn.assign(clusters, 0);
-    for (uint32_t c = 0; c < clusters; ++c) {
-      if (count[c] > 0) d->cluster_albedo[c] = d->cluster_albedo[c] / count[c];
-      const uint64_t* row = &cluster_yarn_count[uint64_t(c) * yarn_count];
-      d->cluster_yarn[c] = uint32_t(std::max_element(row, row + yarn_count) - row);
-    }
-    // The representative texel of each yarn: nearest to the yarn's mean of (t t^T, roughness),
-    // t t^T being the sign-free description of a fibre line.
-    std::vector<std::array<double, 7>> mean(yarn_count, std::array<double, 7>{});
-    std::vector<double> yarn_texels(yarn_count, 0.0);
-    auto fibre = [&](uint64_t t) {
-      const float* v = d->maps.tangent.data + 3 * t;
-      const double len = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
-      const double x = len > 0 ? v[0] / len : 0, y = len > 0 ? v[1] / len : 0,
-                   z = len > 0 ? v[2] / len : 1;
-      return std::array<double, 7>{
-          x * x, y * y, z * z, x * y, x * z, y * z, d->yarns[d->maps.yarn_id[t]].roughness};
-    };
-    for (uint64_t t = 0; t < texels; ++t) {
-      const auto f = fibre(t);
-      const uint32_t y = d->maps.yarn_id[t];
-      for (int k = 0; k < 7; ++k)
-        mean[y][k] += f[k];
-      yarn_texels[y] += 1.0;
-    }
-    for (uint32_t y = 0; y < yarn_count; ++y)
-      for (double& m : mean[y])
-        m /= std::max(yarn_texels[y], 1.0);
-    std::vector<double> best(yarn_count, INFINITY);
-    std::vector<uint64_t> representative(yarn_count, 0);
-    for (uint64_t t = 0; t < texels; ++t) {
-      const uint32_t y = d->maps.yarn_id[t];
-      const auto f = fibre(t);
-      double dist = 0;
-      for (int k = 0; k < 7; ++k)
-        dist += (f[k] - mean[y][k]) * (f[k] - mean[y][k]);
-      if (dist < best[y]) best[y] = dist, representative[y] = t;
-    }
-    d->yarn_fibre.clear();
-    for (uint32_t y = 0; y < yarn_count; ++y)
-      d->yarn_fibre.push_back(d->texel_params(representative[y]));
-    // The unbiased form's push-forward sums (compressed specular tables only).
-    if (d->specular.present() && d->specular.is_compressed()) {
-      const reader::CompressedRadianceTables& tables = d->specular.compressed;
-      d->image_cluster.resize(tables.image_count());
-      for (uint32_t i = 0; i < tables.image_count(); ++i)
-        d->image_cluster[i] = tables.image_cluster(i);
-      d->cluster_image_begin.assign(clusters + 1, 0);
-      for (uint32_t i = 0; i < tables.image_count(); ++i)  // image_cluster is non-decreasing
-        d->cluster_image_begin[d->image_cluster[i] + 1] = i + 1;
-      for (uint32_t c = 0; c < clusters; ++c)
-        d->cluster_image_begin[c + 1] =
-            std::max(d->cluster_image_begin[c + 1], d->cluster_image_begin[c]);
-      PushforwardChannels layout;
-      layout.images = tables.image_count();
-      layout.clusters = clusters;
-      layout.rank = d->visibility_rank();
-      if (!d->pushforward.init(d.get(), d->parallax.dirs() * d->parallax.dirs(), layout))
+  const Status out_of_memory = Status::error(ErrorCode::Unsupported, Check::None,
+                                             "cannot allocate the control variate's constants");
+  model::Buffer<double> count;  // zero-filled, as every Buffer below
+  model::Buffer<uint64_t> cluster_yarn_count;
+  model::Buffer<std::array<double, 7>> mean;
+  model::Buffer<double> yarn_texels, best;
+  model::Buffer<uint64_t> representative;
+  if (!count.allocate(clusters, allocator) ||
+      !cluster_yarn_count.allocate(uint64_t(clusters) * yarn_count, allocator) ||
+      !d->cluster_albedo.allocate(clusters, allocator) ||
+      !d->cluster_yarn.allocate(clusters, allocator) || !mean.allocate(yarn_count, allocator) ||
+      !yarn_texels.allocate(yarn_count, allocator) ||
+      !best.assign(yarn_count, INFINITY, allocator) ||
+      !representative.allocate(yarn_count, allocator) ||
+      !d->yarn_fibre.allocate(yarn_count, allocator))
+    return out_of_memory;
+  for (uint64_t t = 0; t < texels; ++t) {
+    const uint32_t label = d->clusters.label(int64_t(t % d->n), int64_t(t / d->n));
+    const float* colour = d->maps.albedo.data + 3 * t;
+    d->cluster_albedo[label] +=
+        d->yarns[d->maps.yarn_id[t]].specular_albedo * Rgb(colour[0], colour[1], colour[2]);
+    count[label] += 1.0;
+    ++cluster_yarn_count[uint64_t(label) * yarn_count + d->maps.yarn_id[t]];
+  }
+  for (uint32_t c = 0; c < clusters; ++c) {
+    if (count[c] > 0) d->cluster_albedo[c] = d->cluster_albedo[c] / count[c];
+    const uint64_t* row = &cluster_yarn_count[uint64_t(c) * yarn_count];
+    d->cluster_yarn[c] = uint32_t(std::max_element(row, row + yarn_count) - row);
+  }
+  // The representative texel of each yarn: nearest to the yarn's mean of (t t^T, roughness),
+  // t t^T being the sign-free description of a fibre line.
+  auto fibre = [&](uint64_t t) {
+    const float* v = d->maps.tangent.data + 3 * t;
+    const double len = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+    const double x = len > 0 ? v[0] / len : 0, y = len > 0 ? v[1] / len : 0,
+                 z = len > 0 ? v[2] / len : 1;
+    return std::array<double, 7>{
+        x * x, y * y, z * z, x * y, x * z, y * z, d->yarns[d->maps.yarn_id[t]].roughness};
+  };
+  for (uint64_t t = 0; t < texels; ++t) {
+    const auto f = fibre(t);
+    const uint32_t y = d->maps.yarn_id[t];
+    for (int k = 0; k < 7; ++k)
+      mean[y][k] += f[k];
+    yarn_texels[y] += 1.0;
+  }
+  for (uint32_t y = 0; y < yarn_count; ++y)
+    for (double& m : mean[y])
+      m /= std::max(yarn_texels[y], 1.0);
+  for (uint64_t t = 0; t < texels; ++t) {
+    const uint32_t y = d->maps.yarn_id[t];
+    const auto f = fibre(t);
+    double dist = 0;
+    for (int k = 0; k < 7; ++k)
+      dist += (f[k] - mean[y][k]) * (f[k] - mean[y][k]);
+    if (dist < best[y]) best[y] = dist, representative[y] = t;
+  }
+  for (uint32_t y = 0; y < yarn_count; ++y)
+    d->yarn_fibre[y] = d->texel_params(representative[y]);
+  // The unbiased form's push-forward sums (compressed specular tables only).
+  if (d->specular.present() && d->specular.is_compressed()) {
+    const reader::CompressedRadianceTables& tables = d->specular.compressed;
+    if (!d->image_cluster.allocate(tables.image_count(), allocator) ||
+        !d->cluster_image_begin.allocate(clusters + 1, allocator))
+      return out_of_memory;
+    for (uint32_t i = 0; i < tables.image_count(); ++i)
+      d->image_cluster[i] = tables.image_cluster(i);
+    for (uint32_t i = 0; i < tables.image_count(); ++i)  // image_cluster is non-decreasing
+      d->cluster_image_begin[d->image_cluster[i] + 1] = i + 1;
+    for (uint32_t c = 0; c < clusters; ++c)
+      d->cluster_image_begin[c + 1] =
+          std::max(d->cluster_image_begin[c + 1], d->cluster_image_begin[c]);
+    PushforwardChannels layout;
+    layout.images = tables.image_count();
+    layout.clusters = clusters;
+    layout.rank = d->visibility_rank();
+    if (!d->pushforward.init(d.get(), d->parallax.dirs() * d->parallax.dirs(), layout))
+      return Status::error(ErrorCode::Unsupported, Check::None,
+                           "cannot allocate the push-forward bookkeeping");
+    if (!d->cv_texels.build(*d))
+      return Status::error(ErrorCode::Unsupported, Check::None,
+                           "cannot allocate the control variate's texel records");
+    // The block form's sums: the finest grid of at most 16 x 16 blocks (a divisor of N) whose
+    // sums over every view bin stay within max_block_sum_bytes; none when even 2 x 2 does not.
+    PushforwardChannels block_layout = layout;
+    block_layout.rank = std::min(d->options.block_sum_rank, layout.rank);
+    const double bins = double(d->parallax.dirs()) * double(d->parallax.dirs());
+    for (uint32_t blocks = 16; blocks >= 2; blocks /= 2) {
+      const double bytes =
+          double(blocks + 1) * (blocks + 1) * block_layout.count() * sizeof(float) * bins;
+      if (d->n % blocks != 0 || !(bytes <= d->options.max_block_sum_bytes)) continue;
+      if (!d->subperiod.init(d.get(), uint32_t(bins), block_layout, blocks))
         return Status::error(ErrorCode::Unsupported, Check::None,
-                             "cannot allocate the push-forward bookkeeping");
-      if (!d->cv_texels.build(*d))
-        return Status::error(ErrorCode::Unsupported, Check::None,
-                             "cannot allocate the control variate's texel records");
-      // The block form's sums: the finest grid of at most 16 x 16 blocks (a divisor of N) whose
-      // sums over every view bin stay within max_block_sum_bytes; none when even 2 x 2 does not.
-      PushforwardChannels block_layout = layout;
-      block_layout.rank = std::min(d->options.block_sum_rank, layout.rank);
-      const double bins = double(d->parallax.dirs()) * double(d->parallax.dirs());
-      for (uint32_t blocks = 16; blocks >= 2; blocks /= 2) {
-        const double bytes =
-            double(blocks + 1) * (blocks + 1) * block_layout.count() * sizeof(float) * bins;
-        if (d->n % blocks != 0 || !(bytes <= d->options.max_block_sum_bytes)) continue;
-        if (!d->subperiod.init(d.get(), uint32_t(bins), block_layout, blocks))
-          return Status::error(ErrorCode::Unsupported, Check::None,
-                               "cannot allocate the block sums' bookkeeping");
-        break;
-      }
+                             "cannot allocate the block sums' bookkeeping");
+      break;
     }
-  } catch (const std::bad_alloc&) {
-    return Status::error(ErrorCode::Unsupported, Check::None,
-                         "cannot allocate the control variate's constants");
   }
   data_ = std::move(d);
   return {};
@@ -384,6 +409,11 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
                          "spp must be at least 1 for method %s", method_name(method));
   if (unsigned(method) >= unsigned(kMethodCount))
     return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown method");
+#ifdef CLOTHBAKE_SINGLE_FILE
+  if (method == Method::MultiscalePaper)
+    return Status::error(ErrorCode::Unsupported, Check::None,
+                         "method multiscale-paper is not in the single-file build");
+#endif
   const bool multiscale = method == Method::Multiscale || method == Method::MultiscalePaper;
   if (multiscale && !data_->specular.present())
     return Status::error(
@@ -442,8 +472,10 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   } else if (method == Method::Brute || without_cv) {
     out->counters.without_control_variate = without_cv;
     brute_force(*data_, frame, sampled, spp, rng, out);
+#ifndef CLOTHBAKE_SINGLE_FILE
   } else if (method == Method::MultiscalePaper) {
     s = paper_control_variates(*data_, frame, footprint, spp, rng, out);
+#endif
   } else {
     s = pushforward_control_variates(*data_, frame, footprint, cover, spp, rng, out);
   }
@@ -462,6 +494,7 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   return {};
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the C++ interface's extras, which the C interface does not offer
 Status Evaluator::texel_value(int64_t x, int64_t y, const double wi[3], const double wo[3],
                               double visibility, LobeMask lobes, Rgb* out) const noexcept {
   if (data_ == nullptr || out == nullptr)
@@ -500,5 +533,6 @@ Status Evaluator::reference_supersampled(const Footprint& footprint, const doubl
   sum_value(out);
   return {};
 }
+#endif
 
 }  // namespace clothbake::eval

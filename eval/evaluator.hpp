@@ -31,21 +31,23 @@
 // every method but Brute answers a footprint of area below 1e-12 texel^2 (a point) so; Brute
 // samples it.
 //
-// Contract: C++17, standard library only, over the reader library and model/. open() allocates the
-// derived footprint sums (docs/evaluator.md, "Memory") and never throws: allocation failure is a
-// Status. estimate() allocates only on first use or for large footprints (docs/evaluator.md,
-// "Allocation in estimate()"): the Reference method's dense weight map of N x N doubles for
-// footprints of more than 64 source texels, the unbiased form's push-forward sums and block prefix
-// sums of a view bin on its first use (together at most EvalOptions::max_block_sum_bytes plus
-// about 20 KB a bin), and in the reader a compressed parallax table's per-direction SAT
-// (MultiscalePaper's footprint mean) or an entropy-coded direction's decoded plane; and, per
-// estimate of the unbiased form, one array of the compressed tables' image values at the half
-// vector when they hold more than 1 024 images (the satin's 1 420 do; fewer live on the stack). A
-// failed map, sum, SAT or array is Unsupported. One failure is silent: a compressed parallax
-// direction whose plane cannot be decoded (its allocation fails, or its block is damaged in an
-// asset opened without validation) contributes depth 0 to the per-texel depths that need it, so
-// those samples see less parallax. It is noexcept, thread-safe (const), and safe for any argument
-// values (bad ones give InvalidArgument). The Asset must outlive the Evaluator.
+// Contract: C++17, standard library only, over the reader library and model/. Every allocation,
+// open()'s and estimate()'s below, comes from EvalOptions::allocator (the asset's when null; the
+// reader's decoded maps and tables from the asset's). open() allocates the derived footprint sums
+// (docs/evaluator.md, "Memory") and never throws: allocation failure is a Status. estimate()
+// allocates only on first use or for large footprints (docs/evaluator.md, "Allocation in
+// estimate()"): the Reference method's dense weight map of N x N doubles for footprints of more
+// than 64 source texels, the unbiased form's push-forward sums and block prefix sums of a view bin
+// on its first use (together at most EvalOptions::max_block_sum_bytes plus about 20 KB a bin), and
+// in the reader a compressed parallax table's per-direction SAT (MultiscalePaper's footprint mean)
+// or an entropy-coded direction's decoded plane; and, per estimate of the unbiased form, one array
+// of the compressed tables' image values at the half vector when they hold more than 1 024 images
+// (the satin's 1 420 do; fewer live on the stack). A failed map, sum, SAT or array is Unsupported.
+// One failure is silent: a compressed parallax direction whose plane cannot be decoded (its
+// allocation fails, or its block is damaged in an asset opened without validation) contributes
+// depth 0 to the per-texel depths that need it, so those samples see less parallax. It is noexcept,
+// thread-safe (const), and safe for any argument values (bad ones give InvalidArgument). The Asset
+// must outlive the Evaluator.
 #pragma once
 
 #include <cstdint>
@@ -69,8 +71,10 @@ inline constexpr int kMethodCount = 4;
 
 // "multiscale", "multiscale-paper", "brute", "reference".
 const char* method_name(Method method) noexcept;
+#ifndef CLOTHBAKE_SINGLE_FILE  // for command lines; the C interface numbers its methods
 // Inverse of method_name; false for anything else.
 bool parse_method(const char* name, Method* out) noexcept;
+#endif
 
 // A set of lobes of Eq. 4 (bit = model::Lobe value).
 using LobeMask = uint32_t;
@@ -141,6 +145,9 @@ struct EvalOptions {
   // Zeltner et al. by default, as renderers ship it; Converged for the layer's exact albedo. The
   // asset stores only the sheen colour and roughness, so this is the evaluator's choice.
   model::SheenConvention sheen_convention = model::SheenConvention::Published;
+  // Where open() and the sums built on first use get their memory (model/memory.hpp): the asset's
+  // allocator when null. It must outlive the evaluator.
+  const model::Allocator* allocator = nullptr;
 };
 
 // The random source of the sampling methods: the project's SplitMix64 (model/splitmix64.hpp), bit
@@ -184,11 +191,13 @@ class Evaluator {
   bool is_open() const noexcept { return data_ != nullptr; }
 
   uint32_t resolution() const noexcept;
+#ifndef CLOTHBAKE_SINGLE_FILE  // reports of the C++ interface, which the C interface leaves out
   uint32_t cluster_count() const noexcept;
   // Which tables the multi-scale methods read: "raw", "compressed" or "none".
   const char* table_source() const noexcept;
   // Bytes of the derived footprint sums held by open().
   uint64_t derived_bytes() const noexcept;
+#endif
 
   // One estimate of the footprint average of Eq. 5 (header comment). wi (towards the light) and wo
   // (towards the viewer) are any finite non-zero vectors in the local frame (normalised here);
@@ -200,12 +209,14 @@ class Evaluator {
   Status estimate(const Footprint& footprint, const double wi[3], const double wo[3], Method method,
                   uint32_t spp, Rng& rng, LobeMask lobes, Estimate* out) const noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // for the project's tests and references; not in the single file
   // The Reference method with s x s midpoint samples per covered source texel instead of the exact
   // partition (s >= 1): converges to Reference at |difference| <= max_t f(t) / s per channel, f(t)
   // the integrand of texel t summed over the lobes asked for (docs/evaluator.md, "Reference"); for
   // testing that bound.
   Status reference_supersampled(const Footprint& footprint, const double wi[3], const double wo[3],
                                 uint32_t s, LobeMask lobes, Estimate* out) const noexcept;
+#endif
 
   // Importance sampling for a renderer's BSDF samples (Sec. 5.1, multiple importance sampling): the
   // lobe mixture of model::ClothBsdf at the footprint's representative texel, the one at the centre
@@ -226,18 +237,23 @@ class Evaluator {
   Status direction_pdf(const Footprint& footprint, const double wi[3], const double wo[3],
                        double* out) const noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE
   // The integrand of Eq. 5 at one texel (x, y) (any integers: the tile wraps) for a visibility
   // given by the caller instead of the stored ASG: f^(x, i, o) V |i_z| over the lobes of the mask
   // (delta: its weight when i = -o). For ray-traced references whose visibility comes from real
   // shadow rays. Errors: InvalidArgument for bad directions, mask or visibility outside [0, 1].
   Status texel_value(int64_t x, int64_t y, const double wi[3], const double wo[3],
                      double visibility, LobeMask lobes, Rgb* out) const noexcept;
+#endif
 
  private:
   // The internal views and derived tables, for the project's own tests and studies only
   // (eval/eval_data.hpp, not installed).
   friend const EvalData* evaluator_data(const Evaluator& evaluator) noexcept;
-  std::unique_ptr<EvalData> data_;
+  struct Release {  // gives EvalData back to the allocator it came from
+    void operator()(EvalData* data) const noexcept;
+  };
+  std::unique_ptr<EvalData, Release> data_;
 };
 
 }  // namespace clothbake::eval

@@ -2,8 +2,6 @@
 #include "eval/exact_sum.hpp"
 
 #include <cmath>
-#include <new>
-#include <vector>
 
 namespace clothbake::eval {
 namespace {
@@ -60,13 +58,8 @@ double axis_piece_count(double a0, double a1, uint32_t n) {
 class WeightMap {
  public:
   explicit WeightMap(uint32_t n) : n_(n) {}
-  bool make_dense() {
-    try {
-      dense_.assign(uint64_t(n_) * n_, 0.0);
-    } catch (const std::bad_alloc&) {
-      return false;
-    }
-    return true;
+  bool make_dense(const model::Allocator* allocator) {
+    return dense_.allocate(uint64_t(n_) * n_, allocator);
   }
   void add(uint64_t texel, double weight) {
     if (!dense_.empty()) {
@@ -99,7 +92,7 @@ class WeightMap {
   uint32_t count_ = 0;
   uint64_t texel_[kCapacity];
   double weight_[kCapacity];
-  std::vector<double> dense_;
+  model::Buffer<double> dense_;
 };
 
 }  // namespace
@@ -129,7 +122,7 @@ Status exact_average(const EvalData& data, const ShadingFrame& frame, const Foot
 
   WeightMap weights(data.n);
   const bool dense = supersampling > 0 || exact_source_count(data, p) > kSmallExactSources;
-  if (dense && !weights.make_dense())
+  if (dense && !weights.make_dense(data.allocator))
     return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
                          "reference: cannot allocate the %u x %u weight map", unsigned(data.n),
                          unsigned(data.n));

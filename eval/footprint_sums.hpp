@@ -13,15 +13,14 @@
 // rectangle: the plan of reader::make_footprint_plan reduces it to one tile, and a fractional
 // corner is the bilinear interpolation of the prefix sums (exact for piecewise-constant texels).
 //
-// C++17, standard library only. build() allocates (N + 1)^2 x channels doubles; integral() does
-// not allocate and is noexcept.
+// C++17, standard library only. build() allocates (N + 1)^2 x channels doubles from the given
+// allocator (model/memory.hpp); integral() does not allocate and is noexcept.
 #pragma once
 
-#include <algorithm>
 #include <cstdint>
-#include <vector>
 
 #include "formats/reader/radiance_query.hpp"
+#include "model/memory.hpp"
 
 namespace clothbake::eval {
 
@@ -39,12 +38,14 @@ struct SumChannels {
 class FootprintSums {
  public:
   // Builds the tables from per-texel values: values(t, out) writes count() channels of texel t
-  // (t = y * N + x). Returns false when the memory cannot be allocated.
+  // (t = y * N + x). Returns false when `allocator` (the default one when null) gives no memory.
   template <class TexelChannels>
-  bool build(uint32_t n, SumChannels layout, TexelChannels values);
+  bool build(uint32_t n, SumChannels layout, TexelChannels values,
+             const model::Allocator* allocator = nullptr) noexcept;
   // The same for any `channels` channels (layout() is then empty): the block-mean parallax depths.
   template <class TexelChannels>
-  bool build(uint32_t n, uint32_t channels, TexelChannels values);
+  bool build(uint32_t n, uint32_t channels, TexelChannels values,
+             const model::Allocator* allocator = nullptr) noexcept;
 
   bool empty() const { return n_ == 0; }
   uint32_t resolution() const { return n_; }
@@ -66,31 +67,30 @@ class FootprintSums {
   uint32_t n_ = 0;
   uint32_t stride_ = 0;
   SumChannels layout_;
-  std::vector<double> prefix_;  // (N + 1) x (N + 1) x stride, exclusive prefix sums
+  model::Buffer<double> prefix_;  // (N + 1) x (N + 1) x stride, exclusive prefix sums
 };
 
 template <class TexelChannels>
-bool FootprintSums::build(uint32_t n, SumChannels layout, TexelChannels values) {
-  if (!build(n, layout.count(), values)) return false;
+bool FootprintSums::build(uint32_t n, SumChannels layout, TexelChannels values,
+                          const model::Allocator* allocator) noexcept {
+  if (!build(n, layout.count(), values, allocator)) return false;
   layout_ = layout;
   return true;
 }
 
 template <class TexelChannels>
-bool FootprintSums::build(uint32_t n, uint32_t channels, TexelChannels values) {
+bool FootprintSums::build(uint32_t n, uint32_t channels, TexelChannels values,
+                          const model::Allocator* allocator) noexcept {
   const uint32_t stride = channels;
   const uint64_t points = uint64_t(n + 1) * (n + 1);
-  std::vector<double> prefix, texel, row;
-  try {  // every allocation of build() (its callers are noexcept: a failure is `false`)
-    prefix.assign(points * stride, 0.0);
-    texel.assign(stride, 0.0);
-    row.assign(stride, 0.0);
-  } catch (...) {
+  model::Buffer<double> prefix, texel, row;  // zero-filled
+  if (!prefix.allocate(points * stride, allocator) || !texel.allocate(stride, allocator) ||
+      !row.allocate(stride, allocator))
     return false;
-  }
   // prefix[j][i] = sum over y < j, x < i: row by row, a running row sum plus the row above.
   for (uint32_t y = 0; y < n; ++y) {
-    std::fill(row.begin(), row.end(), 0.0);
+    for (double& r : row)
+      r = 0.0;
     for (uint32_t x = 0; x < n; ++x) {
       values(uint64_t(y) * n + x, texel.data());
       const double* above = prefix.data() + (uint64_t(y) * (n + 1) + x + 1) * stride;

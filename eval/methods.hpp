@@ -15,6 +15,7 @@ namespace clothbake::eval {
 void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprint& footprint,
                  uint32_t spp, Rng& rng, Estimate* out) noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the single file leaves the paper's biased method out
 // Eq. 8-10 as printed (MultiscalePaper): base terms from the Integral-Radiance tables and the
 // footprint sums over the footprint shifted by its mean parallax offset, plus a residual of spp
 // samples k G D (V - v_c) at p + mean offset. P has positive area; the specular tables are open.
@@ -22,6 +23,7 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
 Status paper_control_variates(const EvalData& data, const ShadingFrame& frame,
                               const Footprint& footprint, uint32_t spp, Rng& rng,
                               Estimate* out) noexcept;
+#endif
 
 // The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
 // each texel's low-rank visibility at every sample's own destination; its integral over the

@@ -4,8 +4,6 @@
 // "Unbiased multi-scale").
 #include <algorithm>
 #include <cmath>
-#include <new>
-#include <vector>
 
 #include "eval/footprint_samples.hpp"
 #include "eval/methods.hpp"
@@ -16,7 +14,6 @@ namespace {
 
 using model::Lobe;
 
-constexpr double kInvPi = 0.318309886183790671537767526745028724;
 constexpr uint32_t kMaxRank = reader::kMaxVisibilityBasisRank;
 constexpr uint32_t kStackImages = 1024;
 
@@ -27,7 +24,7 @@ constexpr uint32_t kStackImages = 1024;
 //     sheen     colour sheen(i, o) |i_z| v(t)
 //     delta     T_sheen (1 - I(t)) v(t)     (when i = -o)
 //   v(t) = sum_j b_cj(i) e_j(t), c = cluster of t, b_cj the visibility basis at the light.
-struct Constants : ActiveLobes {
+struct PushforwardConstants : ActiveLobes {
   Rgb diffuse_scale, sheen_scale, delta_scale;
   uint32_t rank = 0;
   // Per cluster: b_cj(i), j = 0..M (plain arrays: the 255-cluster capacity costs nothing).
@@ -41,8 +38,8 @@ struct Constants : ActiveLobes {
 // g of every lobe asked for at texel index t (< N^2), added to g[], and when `low` is not null
 // g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]: one packed
 // record (cv_texels.hpp) and the per-estimate constants.
-void control_variate(const EvalData& data, const Constants& k, uint64_t t, Rgb g[model::kLobeCount],
-                     uint32_t low_rank = 0, Rgb* low = nullptr) {
+void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
+                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -239,9 +236,9 @@ double attenuation(model::TexelParams<double> params, const ShadingFrame& frame,
 // sum_q weight[q] sums[q] of `points` vectors of push-forward sums (layout's channels) holds,
 // added to base[].
 template <typename S>
-void add_base(const EvalData& data, const Constants& k, const PushforwardChannels& layout,
-              const S* const* sums, const double* weight, uint32_t points,
-              Rgb base[model::kLobeCount]) {
+void add_base(const EvalData& data, const PushforwardConstants& k,
+              const PushforwardChannels& layout, const S* const* sums, const double* weight,
+              uint32_t points, Rgb base[model::kLobeCount]) {
   const uint32_t clusters = data.cluster_count();
   const uint32_t r1 = layout.rank + 1;
   if (k.specular) {
@@ -383,15 +380,12 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   // example fabric stays under; beyond, one allocation per estimate, made before any point is
   // drawn so that a refusal leaves the generator as the other refusals do).
   double stack_images[kStackImages];
-  std::vector<double> heap_images;
+  model::Buffer<double> heap_images;
   double* image_at_h = stack_images;
   if (layout.images > kStackImages) {
-    try {
-      heap_images.resize(layout.images);
-    } catch (const std::bad_alloc&) {
+    if (!heap_images.allocate(layout.images, data.allocator))
       return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
                            "cannot allocate the images' values at h");
-    }
     image_at_h = heap_images.data();
   }
 
@@ -415,7 +409,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       if (counts[r] > 0) stratified_points(cover.regions[r].rect, counts[r], rng, draw);
   }
 
-  Constants k;
+  PushforwardConstants k;
   static_cast<ActiveLobes&>(k) = active_lobes(data, frame);
   // The base reads the bin's sums (the block form: its prefix points) and four rows of the tables'
   // basis, kilobytes each at addresses that change with the view and h: asked for now, they
@@ -466,7 +460,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       k.specular_scale[c] = data.cluster_albedo[c] * t_sheen * (g * cos_i);
     }
   }
-  if (k.diffuse) k.diffuse_scale = t_sheen * (cos_i * kInvPi);
+  if (k.diffuse) k.diffuse_scale = t_sheen * (cos_i * model::kInvPi<double>);
   if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
   if (k.delta) k.delta_scale = t_sheen;
 

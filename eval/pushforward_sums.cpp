@@ -2,7 +2,6 @@
 #include "eval/pushforward_sums.hpp"
 
 #include <cmath>
-#include <new>
 
 #include "eval/eval_data.hpp"
 #include "model/directions.hpp"
@@ -13,13 +12,7 @@ bool PushforwardSums::init(const EvalData* data, uint32_t bins,
                            const PushforwardChannels& layout) noexcept {
   data_ = data;
   layout_ = layout;
-  try {
-    once_.reset(new std::once_flag[bins]);
-    sums_.assign(bins, std::vector<double>());
-  } catch (const std::bad_alloc&) {
-    return false;
-  }
-  return true;
+  return once_.allocate(bins, data->allocator) && sums_.allocate(bins, data->allocator);
 }
 
 const double* PushforwardSums::bin_sums(uint32_t bin) const noexcept {
@@ -32,13 +25,9 @@ void PushforwardSums::build(uint32_t bin) const noexcept {
   const EvalData& d = *data_;
   const uint32_t n = d.n;
   const uint64_t texels = uint64_t(n) * n;
-  std::vector<double> multiplicity, sums;
-  try {
-    multiplicity.assign(texels, 0.0);
-    sums.assign(layout_.count(), 0.0);
-  } catch (const std::bad_alloc&) {
+  model::Buffer<double> multiplicity, sums;  // zero-filled
+  if (!multiplicity.allocate(texels, d.allocator) || !sums.allocate(layout_.count(), d.allocator))
     return;  // bin_sums() answers null
-  }
   // m_k: every source texel's unit square moved rigidly by its bin depth at the bin's centre.
   double factor[2];
   d.bin_offset_per_depth(bin, factor);

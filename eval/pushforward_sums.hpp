@@ -32,9 +32,9 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
 #include <mutex>
-#include <vector>
+
+#include "model/memory.hpp"
 
 namespace clothbake::eval {
 
@@ -69,8 +69,8 @@ class PushforwardSums {
 
   const EvalData* data_ = nullptr;
   PushforwardChannels layout_;
-  mutable std::unique_ptr<std::once_flag[]> once_;
-  mutable std::vector<std::vector<double>> sums_;
+  mutable model::Buffer<std::once_flag> once_;
+  mutable model::Buffer<model::Buffer<double>> sums_;
 };
 
 }  // namespace clothbake::eval

@@ -2,7 +2,6 @@
 #include "eval/subperiod_sums.hpp"
 
 #include <cmath>
-#include <new>
 
 #include "eval/eval_data.hpp"
 #include "model/directions.hpp"
@@ -14,19 +13,17 @@ bool SubperiodSums::init(const EvalData* data, uint32_t bins, const PushforwardC
   data_ = data;
   layout_ = layout;
   blocks_ = 0;
-  try {
-    once_.reset(new std::once_flag[bins]);
-    prefix_.assign(bins, std::vector<float>());
-  } catch (const std::bad_alloc&) {
+  if (!once_.allocate(bins, data->allocator) || !prefix_.allocate(bins, data->allocator))
     return false;
-  }
   blocks_ = blocks;
   return true;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 uint64_t SubperiodSums::bin_bytes() const noexcept {
   return uint64_t(blocks_ + 1) * (blocks_ + 1) * layout_.count() * sizeof(float);
 }
+#endif
 
 const float* SubperiodSums::bin_prefix(uint32_t bin) const noexcept {
   if (bin >= prefix_.size()) return nullptr;
@@ -39,13 +36,9 @@ void SubperiodSums::build(uint32_t bin) const noexcept {
   const uint32_t n = d.n, nb = blocks_, side = n / nb;
   const uint32_t count = layout_.count(), rank = layout_.rank;
   const uint64_t points = uint64_t(nb + 1) * (nb + 1);
-  std::vector<double> prefix, block;
-  try {
-    prefix.assign(points * count, 0.0);
-    block.assign(count, 0.0);
-  } catch (const std::bad_alloc&) {
+  model::Buffer<double> prefix, block;  // zero-filled
+  if (!prefix.allocate(points * count, d.allocator) || !block.allocate(count, d.allocator))
     return;  // bin_prefix() answers null
-  }
   double factor[2];
   d.bin_offset_per_depth(bin, factor);
   const ControlVariateTexels& records = d.cv_texels;
@@ -84,7 +77,8 @@ void SubperiodSums::build(uint32_t bin) const noexcept {
   };
   for (uint32_t by = 0; by < nb; ++by)
     for (uint32_t bx = 0; bx < nb; ++bx) {
-      std::fill(block.begin(), block.end(), 0.0);
+      for (double& b : block)
+        b = 0.0;
       for (uint32_t qy = by * side; qy < (by + 1) * side; ++qy)
         for (uint32_t qx = bx * side; qx < (bx + 1) * side; ++qx) {
           const double r = d.options.parallax ? d.parallax.bin_depth(bin, qx, qy) : 0.0;
@@ -105,12 +99,10 @@ void SubperiodSums::build(uint32_t bin) const noexcept {
       for (uint32_t c = 0; c < count; ++c)
         out[c] = block[c] + left[c] + below[c] - corner[c];
     }
-  std::vector<float> stored;
-  try {
-    stored.assign(prefix.begin(), prefix.end());
-  } catch (const std::bad_alloc&) {
-    return;
-  }
+  model::Buffer<float> stored;
+  if (!stored.allocate(prefix.size(), d.allocator)) return;
+  for (std::size_t i = 0; i < prefix.size(); ++i)
+    stored[i] = float(prefix[i]);
   prefix_[bin] = std::move(stored);
 }
 

@@ -31,9 +31,7 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
 #include <mutex>
-#include <vector>
 
 #include "eval/pushforward_sums.hpp"
 
@@ -52,8 +50,10 @@ class SubperiodSums {
   bool is_open() const noexcept { return blocks_ != 0; }
   const PushforwardChannels& layout() const noexcept { return layout_; }
   uint32_t blocks() const noexcept { return blocks_; }
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
   // Bytes of one bin's prefix sums.
   uint64_t bin_bytes() const noexcept;
+#endif
 
   // The (nb + 1)^2 x count() prefix sums of view bin `bin` (< bins), point (i, j) at
   // (j (nb + 1) + i) count(); built on first use; null when they cannot be allocated.
@@ -66,8 +66,8 @@ class SubperiodSums {
   const EvalData* data_ = nullptr;
   PushforwardChannels layout_;
   uint32_t blocks_ = 0;
-  mutable std::unique_ptr<std::once_flag[]> once_;
-  mutable std::vector<std::vector<float>> prefix_;
+  mutable model::Buffer<std::once_flag> once_;
+  mutable model::Buffer<model::Buffer<float>> prefix_;
 };
 
 }  // namespace clothbake::eval

@@ -85,10 +85,13 @@ bool make_frame(const EvalData& data, const double wi[3], const double wo[3], Lo
   return true;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept {
   return data.parallax.weighted_depth(frame.parallax_bins.index, frame.parallax_bins.weight, x, y);
 }
+#endif
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // MultiscalePaper's
 Rgb texel_diffuse_albedo(const EvalData& data, uint64_t t, model::Lobe lobe) noexcept {
   const YarnShading& yarn = data.yarns[data.maps.yarn_id[t]];
   const float* colour = data.maps.albedo.data + 3 * t;
@@ -96,6 +99,7 @@ Rgb texel_diffuse_albedo(const EvalData& data, uint64_t t, model::Lobe lobe) noe
                                                  : yarn.diffuse_transmittance) *
          Rgb(colour[0], colour[1], colour[2]);
 }
+#endif
 
 ActiveLobes active_lobes(const EvalData& data, const ShadingFrame& frame) noexcept {
   ActiveLobes a;

@@ -47,13 +47,17 @@ bool unit_vector(const double v[3], model::Vec3d* out) noexcept;
 bool make_frame(const EvalData& data, const double wi[3], const double wo[3], LobeMask mask,
                 ShadingFrame* frame, Status* status) noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 // The parallax depth r of texel (x, y) for the frame's view (bilinear between bins, as
 // reader::ParallaxView::depth): what multiscale-paper's footprint mean approximates.
 double texel_depth(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y) noexcept;
+#endif
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // MultiscalePaper's
 // The diffuse albedo of texel index t for the diffuse lobe `lobe` (reflection: R_d, transmission:
 // T_d): the yarn's times the texel's colour (docs/evaluator.md, "Texel parameters").
 Rgb texel_diffuse_albedo(const EvalData& data, uint64_t t, model::Lobe lobe) noexcept;
+#endif
 
 // The lobes of frame.mask that a control variate carries for (i, o) and the specular lobe's
 // half-vector bin weights: the specular and diffuse lobes of the reflection or transmission side

@@ -87,6 +87,7 @@ Asset& Asset::operator=(Asset&& other) noexcept {
     header_ = other.header_;
     mapping_ = other.mapping_;
     mapping_size_ = other.mapping_size_;
+    allocator_ = other.allocator_;
     other.bytes_ = nullptr;
     other.size_ = 0;
     other.mapping_ = nullptr;

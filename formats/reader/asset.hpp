@@ -5,8 +5,9 @@
 // clothbake_reader_validate):
 //  - C++17, standard library only; no exceptions leave the API (every entry point is noexcept and
 //    returns a Status).
-//  - Heap allocation only where a coded section is decoded, always with new (std::nothrow), sized
-//    from shapes already checked, a failure returned as a Status (never a throw):
+//  - Heap allocation only where a coded section is decoded, always from the asset's allocator
+//    (set_allocator; model/memory.hpp, the default one aligned_alloc), sized from shapes already
+//    checked, a failure returned as a Status (never a throw):
 //    read_feature_maps (the decoded maps, CBK-E024), CompressedRadianceTables::open (SATs, basis,
 //    cell map and coefficients; ErrorCode::Unsupported) and ParallaxView on the compressed table
 //    (its block directory at open, each direction's decoded plane and SAT on first use).
@@ -32,6 +33,7 @@
 
 #include "formats/reader/layout.hpp"
 #include "formats/reader/status.hpp"
+#include "model/memory.hpp"
 
 namespace clothbake::reader {
 
@@ -189,6 +191,14 @@ class Asset {
   // The Metadata section as text (UTF-8 JSON; not parsed here). NotFound if absent.
   Status metadata_json(std::string_view* out) const noexcept;
 
+  // Where the views opened over this asset (decoded maps, tables, parallax) get their memory:
+  // `allocator` (which must outlive the asset and every view over it), or the default allocator
+  // when null (the initial state). Kept by close() and moves; set it before opening views.
+  void set_allocator(const model::Allocator* allocator) noexcept { allocator_ = allocator; }
+  const model::Allocator* allocator() const noexcept {
+    return allocator_ != nullptr ? allocator_ : &model::default_allocator();
+  }
+
  private:
   Status typed_section(SectionType type, uint32_t instance, ElementType element,
                        SectionInfo* out) const noexcept;
@@ -200,6 +210,7 @@ class Asset {
   FileHeader header_{};
   void* mapping_ = nullptr;  // owned mapping (open_file), else null
   std::size_t mapping_size_ = 0;
+  const model::Allocator* allocator_ = nullptr;
 };
 
 }  // namespace clothbake::reader

@@ -9,7 +9,7 @@
 namespace clothbake::reader {
 namespace {
 
-Status bad(const char* what) noexcept {
+Status undecodable_coefficients(const char* what) noexcept {
   return Status::error(ErrorCode::Malformed, Check::ValueRange,
                        "compressed_tables: the coded coefficients are not decodable: %s", what);
 }
@@ -22,7 +22,7 @@ Status decode_compressed_coefficients(const uint8_t* stream, uint64_t size, uint
                                       int16_t* out) noexcept {
   auto fail = [&](const char* what) {
     if (coefficient_count > 0) std::memset(out, 0, coefficient_count * sizeof(int16_t));
-    return bad(what);
+    return undecodable_coefficients(what);
   };
   if (stream == nullptr) return fail("no bytes");
   if (size < kCoefficientHeaderBytes + kCoefficientTableBytes)

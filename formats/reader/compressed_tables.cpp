@@ -44,11 +44,17 @@ bool half_is_finite(Half h) noexcept {
   return (h.bits & 0x7c00u) != 0x7c00u;
 }
 
+// `count` values (at least one, so that an empty table still tests true) from the asset's
+// allocator; empty when the memory cannot be had.
 template <class T>
-std::unique_ptr<T[]> allocate(uint64_t count) noexcept {
-  return std::unique_ptr<T[]>(new (std::nothrow) T[std::size_t(count)]);
+model::Buffer<T> allocate(uint64_t count, const model::Allocator* allocator) noexcept {
+  model::Buffer<T> buffer;
+  if (count > SIZE_MAX || !buffer.allocate(count == 0 ? 1 : std::size_t(count), allocator))
+    buffer.reset();
+  return buffer;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the SATs serve footprint queries, which the single file leaves out
 // Builds the exclusive prefix sums S[j][i][k] (j, i in [0, N]) of the per-texel image weights.
 template <class E>
 void build_sats(uint32_t n, uint32_t images, const uint8_t* cell_map, const CompressedCell* cells,
@@ -79,6 +85,7 @@ void build_sats(uint32_t n, uint32_t images, const uint8_t* cell_map, const Comp
     }
   }
 }
+#endif
 
 }  // namespace
 
@@ -162,7 +169,7 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
                    : !(cells_view.rank == 2 && cells_view.dims[0] == cells_n &&
                        cells_view.dims[1] == kCellFields))
     return layout_error(kind, "cells", "must be u32 {cell_count, 4}");
-  auto cells = allocate<CompressedCell>(cells_n ? cells_n : 1);
+  auto cells = allocate<CompressedCell>(cells_n ? cells_n : 1, asset.allocator());
   if (!cells) return Status::error(ErrorCode::Unsupported, Check::None, "out of memory");
   uint64_t image_total = 0, coefficient_total = 0;
   for (uint32_t g = 0; g < cells_n; ++g) {
@@ -264,8 +271,9 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
 
   // Coefficients: decoded into the copy the tables keep.
   const uint64_t texel_count = uint64_t(n) * n;
-  auto coefficient_copy = allocate<int16_t>(info.coefficient_count ? info.coefficient_count : 1);
-  auto first_coefficient = allocate<uint32_t>(texel_count);
+  auto coefficient_copy =
+      allocate<int16_t>(info.coefficient_count ? info.coefficient_count : 1, asset.allocator());
+  auto first_coefficient = allocate<uint32_t>(texel_count, asset.allocator());
   if (!coefficient_copy || !first_coefficient)
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "compressed_tables %s: cannot allocate the coefficients", kind_name(kind));
@@ -284,7 +292,7 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
     s = asset.view_of(parts[5], &stream);
     if (!s.ok()) return s;
     if (stream.rank != 1) return layout_error(kind, "coefficients", "must be u8 {bytes}");
-    std::unique_ptr<uint32_t[]> ranks = allocate<uint32_t>(cells_n ? cells_n : 1);
+    model::Buffer<uint32_t> ranks = allocate<uint32_t>(cells_n ? cells_n : 1, asset.allocator());
     if (!ranks) return Status::error(ErrorCode::Unsupported, Check::None, "out of memory");
     for (uint32_t g = 0; g < cells_n; ++g)
       ranks[g] = cells[g].rank;
@@ -301,34 +309,41 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   }
 
   // Decode.
-  std::unique_ptr<int32_t[]> sat32;
-  std::unique_ptr<int64_t[]> sat64;
+  model::Buffer<int32_t> sat32;
+  model::Buffer<int64_t> sat64;
+#ifndef CLOTHBAKE_SINGLE_FILE
   if (wide)
-    sat64 = allocate<int64_t>(sat_count);
+    sat64 = allocate<int64_t>(sat_count, asset.allocator());
   else
-    sat32 = allocate<int32_t>(sat_count);
-  auto row = allocate<int64_t>(images ? images : 1);
-  auto scaled = allocate<float>(uint64_t(bins) * (images ? images : 1));
-  auto map_copy = allocate<uint8_t>(uint64_t(n) * n);
-  auto cell_cluster = allocate<uint32_t>(cells_n ? cells_n : 1);
-  auto cell_images = allocate<uint32_t>(2 * (cells_n ? cells_n : 1));
-  std::unique_ptr<uint8_t[]> covered;
+    sat32 = allocate<int32_t>(sat_count, asset.allocator());
+  const bool sats_allocated = wide ? bool(sat64) : bool(sat32);
+#else
+  const bool sats_allocated = true;  // no SATs: the single file makes no footprint queries
+#endif
+  auto row = allocate<int64_t>(images ? images : 1, asset.allocator());
+  auto scaled = allocate<float>(uint64_t(bins) * (images ? images : 1), asset.allocator());
+  auto map_copy = allocate<uint8_t>(uint64_t(n) * n, asset.allocator());
+  auto cell_cluster = allocate<uint32_t>(cells_n ? cells_n : 1, asset.allocator());
+  auto cell_images = allocate<uint32_t>(2 * (cells_n ? cells_n : 1), asset.allocator());
+  model::Buffer<uint8_t> covered;
   if (bin_map.present() && kind != RadianceTableKind::Gap) {
-    covered = allocate<uint8_t>(bins);
+    covered = allocate<uint8_t>(bins, asset.allocator());
     if (covered) std::memcpy(covered.get(), bin_map.mask, bins);
   }
-  if ((wide ? !sat64 : !sat32) || !row || !scaled || !map_copy || !cell_cluster || !cell_images ||
+  if (!sats_allocated || !row || !scaled || !map_copy || !cell_cluster || !cell_images ||
       (bin_map.present() && kind != RadianceTableKind::Gap && !covered))
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "compressed_tables %s: cannot allocate %" PRIu64
                          " bytes for the decoded tables",
                          kind_name(kind), sat_count * (wide ? 8 : 4));
+#ifndef CLOTHBAKE_SINGLE_FILE
   if (images > 0) {
     if (wide)
       build_sats(n, images, map.data, cells.get(), coefficients.data, sat64.get(), row.get());
     else
       build_sats(n, images, map.data, cells.get(), coefficients.data, sat32.get(), row.get());
   }
+#endif
   for (uint32_t i = 0; i < images; ++i) {
     uint64_t column = 0;  // the stored column of bin b (compact planned form: covered bins only)
     for (uint32_t b = 0; b < bins; ++b) {
@@ -369,6 +384,7 @@ Status CompressedRadianceTables::open(const Asset& asset, RadianceTableKind kind
   return {};
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 uint64_t CompressedRadianceTables::decoded_bytes() const noexcept {
   if (!is_open()) return 0;
   const uint64_t bins = uint64_t(bins_per_side_) * bins_per_side_;
@@ -376,6 +392,7 @@ uint64_t CompressedRadianceTables::decoded_bytes() const noexcept {
          uint64_t(n_) * n_ * (1 + sizeof(uint32_t)) + uint64_t(info_.coefficient_count) * 2 +
          uint64_t(info_.cell_count) * 3 * sizeof(uint32_t);
 }
+#endif
 
 int CompressedRadianceTables::cluster_of_texel(uint32_t x, uint32_t y) const noexcept {
   if (!is_open() || x >= n_ || y >= n_) return -1;
@@ -463,6 +480,7 @@ uint32_t CompressedRadianceTables::image_cluster(uint32_t image) const noexcept 
   return c;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 int CompressedRadianceTables::decode_texel(uint32_t x, uint32_t y, float* out) const noexcept {
   if (!is_open() || out == nullptr || x >= n_ || y >= n_) return -1;
   const uint32_t bins = bins_per_side_ * bins_per_side_;
@@ -488,7 +506,9 @@ int CompressedRadianceTables::decode_texel(uint32_t x, uint32_t y, float* out) c
   }
   return c;
 }
+#endif
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 template <class E>
 bool CompressedRadianceTables::query_impl(const Footprint& rect, const double h[3], int cluster,
                                           double* out) const noexcept {
@@ -618,6 +638,7 @@ bool CompressedRadianceTables::query_impl(const Footprint& rect, const double h[
   }
   return true;
 }
+#endif
 
 bool CompressedRadianceTables::covers_bins(const double h[3]) const noexcept {
   if (!covered_) return true;
@@ -628,6 +649,7 @@ bool CompressedRadianceTables::covers_bins(const double h[3]) const noexcept {
   return true;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 bool CompressedRadianceTables::try_query(const Footprint& rect, const double h[3], uint32_t cluster,
                                          double* out) const noexcept {
   if (out == nullptr || !is_open() || cluster >= cluster_count_) return false;
@@ -642,5 +664,17 @@ bool CompressedRadianceTables::try_query_all(const Footprint& rect, const double
   if (covered_ && !covers_bins(h)) return false;
   return wide_ ? query_impl<int64_t>(rect, h, -1, out) : query_impl<int32_t>(rect, h, -1, out);
 }
+#else
+// The single file builds no SATs: every footprint query fails (the unbiased multi-scale method,
+// brute force and the reference make none).
+bool CompressedRadianceTables::try_query(const Footprint&, const double[3], uint32_t,
+                                         double*) const noexcept {
+  return false;
+}
+bool CompressedRadianceTables::try_query_all(const Footprint&, const double[3],
+                                             double*) const noexcept {
+  return false;
+}
+#endif
 
 }  // namespace clothbake::reader

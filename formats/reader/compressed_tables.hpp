@@ -54,7 +54,7 @@ class CompressedRadianceTables final : public RadianceTables {
   // A scene-planned kind (info flags kCompressedPlannedFlag): false when a bin of h's bilinear
   // lookup (weight > 0) is outside bin_map instance 0; its queries then fail (query(): OutOfPlan).
   bool covers_bins(const double h[3]) const noexcept override;
-  bool is_planned() const noexcept { return covered_ != nullptr; }
+  bool is_planned() const noexcept { return !covered_.empty(); }
 
   const CompressedTableInfoRecord& info() const noexcept { return info_; }
   uint32_t cell_count() const noexcept { return info_.cell_count; }
@@ -63,8 +63,10 @@ class CompressedRadianceTables final : public RadianceTables {
   bool has_cluster(uint32_t c) const noexcept {
     return c < cluster_count_ && image_begin_[c + 1] > image_begin_[c];
   }
+#ifndef CLOTHBAKE_SINGLE_FILE  // a report of the tools
   // Bytes of the decoded SATs and basis held in memory.
   uint64_t decoded_bytes() const noexcept;
+#endif
   // Visibility cluster of texel (x, y) (x, y < N), or -1 when the texel has no cell (its value is 0
   // in every cluster).
   int cluster_of_texel(uint32_t x, uint32_t y) const noexcept;
@@ -99,14 +101,18 @@ class CompressedRadianceTables final : public RadianceTables {
   }
   // The visibility cluster whose tables image `image` (< image_count()) belongs to.
   uint32_t image_cluster(uint32_t image) const noexcept;
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
   // Every bin of one texel at once (out: bins floats, zeros for a texel without a cell); returns
   // the texel's cluster or -1. O(bins x (1 + rank)): for full decompression (verify, export).
   int decode_texel(uint32_t x, uint32_t y, float* out) const noexcept;
+#endif
 
  private:
+#ifndef CLOTHBAKE_SINGLE_FILE
   template <class E>
   bool query_impl(const Footprint& rect, const double h[3], int cluster,
                   double* out) const noexcept;
+#endif
   // The image weights of texel (x, y) (x, y < N): images first_image .. first_image + rank of its
   // cell, weight 1 for the mean and the stored coefficient q_j for basis image j; rank -1 without
   // a cell. What the per-image SATs hold as differences, read directly.
@@ -122,16 +128,16 @@ class CompressedRadianceTables final : public RadianceTables {
   CompressedTableInfoRecord info_{};
   RadianceTableKind kind_ = RadianceTableKind::Specular;
   uint32_t n_ = 0, bins_per_side_ = 0, cluster_count_ = 0, images_ = 0;
-  bool wide_ = false;                 // int64 SATs (N > 256)
-  std::unique_ptr<int32_t[]> sat32_;  // (N + 1)^2 x images, exclusive prefix sums
-  std::unique_ptr<int64_t[]> sat64_;
-  std::unique_ptr<float[]> basis_;                 // bins x images: scale[i] * basis[i][b]
-  std::unique_ptr<uint8_t[]> cell_map_;            // N x N
-  std::unique_ptr<uint32_t[]> cell_cluster_;       // per cell
-  std::unique_ptr<uint32_t[]> cell_images_;        // per cell: first_image, rank
-  std::unique_ptr<int16_t[]> coefficients_;        // the stored coefficients (M)
-  std::unique_ptr<uint32_t[]> first_coefficient_;  // N x N: index of the texel's first coefficient
-  std::unique_ptr<uint8_t[]> covered_;             // planned: bins kept (1) or left out (0)
+  bool wide_ = false;             // int64 SATs (N > 256)
+  model::Buffer<int32_t> sat32_;  // (N + 1)^2 x images, exclusive prefix sums
+  model::Buffer<int64_t> sat64_;
+  model::Buffer<float> basis_;                 // bins x images: scale[i] * basis[i][b]
+  model::Buffer<uint8_t> cell_map_;            // N x N
+  model::Buffer<uint32_t> cell_cluster_;       // per cell
+  model::Buffer<uint32_t> cell_images_;        // per cell: first_image, rank
+  model::Buffer<int16_t> coefficients_;        // the stored coefficients (M)
+  model::Buffer<uint32_t> first_coefficient_;  // N x N: index of the texel's first coefficient
+  model::Buffer<uint8_t> covered_;             // planned: bins kept (1) or left out (0)
   // Images of cluster c: [image_begin_[c], image_begin_[c + 1]) (cells sorted by cluster).
   uint32_t image_begin_[kMaxRadianceClusters + 1] = {};
 };

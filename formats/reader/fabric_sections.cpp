@@ -192,11 +192,12 @@ Status read_feature_maps(const Asset& asset, FeatureMaps* out) noexcept {
   // open() bounded every section by the file size, and a header's N is <= 16384 and equal to the
   // others': these sizes cannot overflow. The codes of one map (at most 3 per texel), one byte
   // plane and the rANS tables are scratch.
-  maps.storage.reset(new (std::nothrow) float[decoded]);
-  std::unique_ptr<uint16_t[]> codes(new (std::nothrow) uint16_t[texels * 3]);
-  std::unique_ptr<uint8_t[]> plane(new (std::nothrow) uint8_t[texels]);
-  std::unique_ptr<ParallaxEntropyScratch> scratch(new (std::nothrow) ParallaxEntropyScratch);
-  if (!maps.storage || !codes || !plane || !scratch)
+  const model::Allocator* allocator = asset.allocator();
+  model::Buffer<uint16_t> codes;
+  model::Buffer<uint8_t> plane;
+  model::Buffer<ParallaxEntropyScratch> scratch;
+  if (!maps.storage.allocate(decoded, allocator) || !codes.allocate(texels * 3, allocator) ||
+      !plane.allocate(texels, allocator) || !scratch.allocate(1, allocator))
     return Status::error(ErrorCode::Unsupported, Check::ResourceLimit,
                          "feature maps: cannot allocate %llu bytes for the decoded maps",
                          static_cast<unsigned long long>(decoded * sizeof(float)));

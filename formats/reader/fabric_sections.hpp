@@ -21,14 +21,14 @@ uint16_t known_section_version(SectionType type) noexcept;
 // object owns; yarn_id is viewed in place in the asset. So the views stay valid while both this
 // object and the asset live. Move-only (moving keeps the views valid: the storage is on the heap).
 struct FeatureMaps {
-  uint32_t resolution = 0;           // N
-  ArrayView<float> height;           // N*N, tile-side units
-  ArrayView<float> tangent;          // N*N*3, unit, local frame
-  ArrayView<float> normal;           // N*N*3, unit, local frame
-  ArrayView<float> gap;              // N*N, I(x) in [0, 1]
-  ArrayView<uint16_t> yarn_id;       // N*N, index into the yarn materials
-  ArrayView<float> albedo;           // N*N*3, linear RGB
-  std::unique_ptr<float[]> storage;  // the decoded maps
+  uint32_t resolution = 0;       // N
+  ArrayView<float> height;       // N*N, tile-side units
+  ArrayView<float> tangent;      // N*N*3, unit, local frame
+  ArrayView<float> normal;       // N*N*3, unit, local frame
+  ArrayView<float> gap;          // N*N, I(x) in [0, 1]
+  ArrayView<uint16_t> yarn_id;   // N*N, index into the yarn materials
+  ArrayView<float> albedo;       // N*N*3, linear RGB
+  model::Buffer<float> storage;  // the decoded maps
 
   FeatureMaps() = default;
   FeatureMaps(FeatureMaps&&) noexcept = default;

@@ -226,8 +226,10 @@ static_assert(offsetof(YarnMaterialRecord, reserved) == 144);
 
 // Short lower-case name of a section type ("height", "yarn_materials"), or nullptr if unknown.
 const char* section_type_name(SectionType type) noexcept;
+#ifndef CLOTHBAKE_SINGLE_FILE  // for command lines
 // Inverse of section_type_name; returns false if the name is unknown.
 bool section_type_from_name(const char* name, SectionType* out) noexcept;
+#endif
 // "u8", "f32", ... or nullptr if unknown.
 const char* element_type_name(ElementType type) noexcept;
 // "raw", "zstd", or nullptr if unknown.

@@ -45,6 +45,7 @@ const char* section_type_name(SectionType type) noexcept {
   return nullptr;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 bool section_type_from_name(const char* name, SectionType* out) noexcept {
   if (name == nullptr) return false;
   for (const auto& entry : kSectionNames)
@@ -54,6 +55,7 @@ bool section_type_from_name(const char* name, SectionType* out) noexcept {
     }
   return false;
 }
+#endif
 
 const char* element_type_name(ElementType type) noexcept {
   switch (type) {

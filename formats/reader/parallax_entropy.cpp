@@ -8,7 +8,7 @@
 namespace clothbake::reader {
 namespace {
 
-Status bad(const char* what) noexcept {
+Status undecodable_block(const char* what) noexcept {
   return Status::error(ErrorCode::Malformed, Check::ValueRange,
                        "parallax_entropy: a block is not decodable: %s", what);
 }
@@ -25,7 +25,7 @@ Status decode_parallax_block(const uint8_t* block, uint64_t size, const uint16_t
   const uint64_t count = uint64_t(n) * n;
   auto fail = [&](const char* what) {
     std::memset(plane, 0, count);
-    return bad(what);
+    return undecodable_block(what);
   };
   if (block == nullptr || tables == nullptr) return fail("no bytes");
   detail::RansBlockStart start;

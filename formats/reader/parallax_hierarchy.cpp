@@ -8,7 +8,7 @@
 namespace clothbake::reader {
 namespace {
 
-Status bad(const char* what) noexcept {
+Status undecodable_hierarchy(const char* what) noexcept {
   return Status::error(ErrorCode::Malformed, Check::ValueRange,
                        "parallax_entropy: a hierarchical block is not decodable: %s", what);
 }
@@ -27,7 +27,7 @@ Status decode_hierarchical_block(const uint8_t* block, uint64_t size, const uint
   const uint64_t count = uint64_t(n) * n;
   auto fail = [&](const char* what) {
     std::memset(plane, 0, count * sizeof(uint16_t));
-    return bad(what);
+    return undecodable_hierarchy(what);
   };
   if (block == nullptr || tables == nullptr) return fail("no bytes");
   if (k < 0 || k > 4) return fail("more than four references");

@@ -9,16 +9,12 @@
 #include "formats/reader/parallax_hierarchy.hpp"
 #include "formats/reader/scene_plan_sections.hpp"
 #include "model/directions.hpp"
+#include "model/tile.hpp"
 
 namespace clothbake::reader {
 namespace {
 
 constexpr uint64_t kTwo32 = uint64_t(1) << 32;
-
-int64_t wrap(int64_t i, int64_t n) noexcept {
-  int64_t r = i % n;
-  return r < 0 ? r + n : r;
-}
 
 }  // namespace
 
@@ -26,32 +22,44 @@ int64_t wrap(int64_t i, int64_t n) noexcept {
 // u32 inclusive SAT (the ParallaxSat layout), each built once under its flag and published
 // through its atomic pointer.
 struct ParallaxView::Packed {
-  explicit Packed(uint64_t dirs)
-      : flags(new (std::nothrow) std::once_flag[dirs]),
-        sats(new (std::nothrow) std::atomic<uint32_t*>[dirs]),
-        plane_flags(new (std::nothrow) std::once_flag[dirs]),
-        planes16(new (std::nothrow) std::atomic<uint16_t*>[dirs]) {
-    if (!flags || !sats || !plane_flags || !planes16) return;
+  explicit Packed(const model::Allocator* memory) noexcept : allocator(memory) {}
+  ~Packed() {
+    for (uint64_t d = 0; d < count; ++d) {
+      release(sats[d].load(std::memory_order_relaxed));
+      release(planes16[d].load(std::memory_order_relaxed));
+    }
+  }
+  Packed(const Packed&) = delete;
+  Packed& operator=(const Packed&) = delete;
+
+  // The per-direction flags and pointers (all null); false when the memory cannot be had.
+  bool allocate_directory(uint64_t dirs) noexcept {
+    if (!flags.allocate(dirs, allocator) || !sats.allocate(dirs, allocator) ||
+        !plane_flags.allocate(dirs, allocator) || !planes16.allocate(dirs, allocator))
+      return false;
     for (uint64_t d = 0; d < dirs; ++d) {
       sats[d].store(nullptr, std::memory_order_relaxed);
       planes16[d].store(nullptr, std::memory_order_relaxed);
     }
     count = dirs;
+    return true;
   }
-  ~Packed() {
-    for (uint64_t d = 0; d < count; ++d) {
-      delete[] sats[d].load(std::memory_order_relaxed);
-      delete[] planes16[d].load(std::memory_order_relaxed);
-    }
+  // `n` values of T from the asset's allocator (n <= 16384^2: no overflow), or null.
+  template <class T>
+  T* allocate(uint64_t n) const noexcept {
+    return static_cast<T*>(allocator->allocate(allocator->user, std::size_t(n) * sizeof(T), 8));
   }
-  Packed(const Packed&) = delete;
-  Packed& operator=(const Packed&) = delete;
+  void release(void* pointer) const noexcept {
+    if (pointer != nullptr) allocator->release(allocator->user, pointer);
+  }
+
+  const model::Allocator* allocator;
   std::atomic<uint64_t> references{1};  // SharedPacked handles
   uint64_t count = 0;
-  std::unique_ptr<std::once_flag[]> flags;
-  std::unique_ptr<std::atomic<uint32_t*>[]> sats;
-  std::unique_ptr<std::once_flag[]> plane_flags;
-  std::unique_ptr<std::atomic<uint16_t*>[]> planes16;
+  model::Buffer<std::once_flag> flags;
+  model::Buffer<std::atomic<uint32_t*>> sats;
+  model::Buffer<std::once_flag> plane_flags;
+  model::Buffer<std::atomic<uint16_t*>> planes16;
   std::atomic<uint64_t> bytes{0};
 };
 
@@ -60,7 +68,8 @@ ParallaxView::SharedPacked::SharedPacked(const SharedPacked& other) noexcept : p
 }
 
 ParallaxView::SharedPacked::~SharedPacked() {
-  if (p_ != nullptr && p_->references.fetch_sub(1, std::memory_order_acq_rel) == 1) delete p_;
+  if (p_ != nullptr && p_->references.fetch_sub(1, std::memory_order_acq_rel) == 1)
+    model::destroy_object(*p_->allocator, p_);
 }
 
 namespace {
@@ -90,9 +99,11 @@ Status ParallaxView::open(const Asset& asset, ParallaxSource source) noexcept {
   return s;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 uint64_t ParallaxView::decoded_bytes() const noexcept {
   return packed_ ? packed_->bytes.load(std::memory_order_relaxed) : 0;
 }
+#endif
 
 double ParallaxView::depth_step(uint32_t bin) const noexcept {
   if (!covers(bin)) return 0.0;
@@ -279,8 +290,8 @@ Status ParallaxView::open_coded(const Asset& asset) noexcept {
                              "it is predicted from, is left out of bin_map instance 1",
                              static_cast<unsigned long long>(i), unsigned(refs.bin[e]));
   }
-  SharedPacked packed(new (std::nothrow) Packed(d));
-  if (!packed || packed->count != d)
+  SharedPacked packed(model::create_object<Packed>(*asset.allocator(), asset.allocator()));
+  if (!packed || !packed->allocate_directory(d))
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_entropy: cannot allocate the block directory");
   if (planned) covered_ = map.mask;  // in the asset's bytes, which outlive the view
@@ -302,11 +313,13 @@ Status ParallaxView::open_coded(const Asset& asset) noexcept {
   return {};
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 bool ParallaxView::ensure_plane(uint32_t bin) const noexcept {
   if (stream_ == nullptr) return true;
   if (!covers(bin)) return false;  // planned: the direction was left out
   return plane16(bin) != nullptr;
 }
+#endif
 
 const uint16_t* ParallaxView::bin_codes(uint32_t bin) const noexcept {
   if (!covers(bin)) return nullptr;
@@ -343,11 +356,11 @@ const uint16_t* ParallaxView::plane16(uint32_t bin) const noexcept {
     for (int e = 0; e < refs.count; ++e)  // lower levels first (at most two deep)
       if ((ref_planes[e] = plane16(refs.bin[e])) == nullptr) return;
     const uint64_t n = info_.resolution;
-    uint16_t* plane = new (std::nothrow) uint16_t[n * n];
-    std::unique_ptr<int32_t[]> diff(new (std::nothrow) int32_t[n * n]);
-    std::unique_ptr<ParallaxHierScratch> scratch(new (std::nothrow) ParallaxHierScratch);
-    if (!plane || !diff || !scratch) {
-      delete[] plane;
+    uint16_t* plane = p.allocate<uint16_t>(n * n);
+    model::Buffer<int32_t> diff;
+    model::Buffer<ParallaxHierScratch> scratch;
+    if (!plane || !diff.allocate(n * n, p.allocator) || !scratch.allocate(1, p.allocator)) {
+      p.release(plane);
       return;
     }
     // A block that does not decode exactly is zero-filled by the decoder (decode_all says so).
@@ -362,10 +375,12 @@ const uint16_t* ParallaxView::plane16(uint32_t bin) const noexcept {
 Status ParallaxView::decode_all() const noexcept {
   if (stream_ == nullptr) return {};
   const uint64_t n = info_.resolution, d = uint64_t(info_.dirs) * info_.dirs;
-  std::unique_ptr<uint16_t[]> plane(new (std::nothrow) uint16_t[n * n]);
-  std::unique_ptr<int32_t[]> diff(new (std::nothrow) int32_t[n * n]);
-  std::unique_ptr<ParallaxHierScratch> scratch(new (std::nothrow) ParallaxHierScratch);
-  if (!plane || !diff || !scratch)
+  model::Buffer<uint16_t> plane;
+  model::Buffer<int32_t> diff;
+  model::Buffer<ParallaxHierScratch> scratch;
+  const model::Allocator* allocator = packed_->allocator;
+  if (!plane.allocate(n * n, allocator) || !diff.allocate(n * n, allocator) ||
+      !scratch.allocate(1, allocator))
     return Status::error(ErrorCode::Unsupported, Check::None,
                          "parallax_entropy: cannot allocate a plane to decode");
   for (uint64_t i = 0; i < d; ++i) {
@@ -389,6 +404,7 @@ Status ParallaxView::decode_all() const noexcept {
   return {};
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 uint32_t ParallaxView::stored_dirs() const noexcept {
   if (!covered_) return info_.dirs * info_.dirs;
   uint32_t k = 0;
@@ -396,6 +412,7 @@ uint32_t ParallaxView::stored_dirs() const noexcept {
     k += covered_[b] != 0 ? 1u : 0u;
   return k;
 }
+#endif
 
 Status ParallaxView::out_of_plan(int bin) const noexcept {
   return Status::error(ErrorCode::OutOfPlan, Check::None,
@@ -413,7 +430,7 @@ bool ParallaxView::ensure_sat(uint32_t bin) const noexcept {
   Packed& p = *packed_;
   std::call_once(p.flags[bin], [&] {
     const uint64_t n = info_.resolution;
-    uint32_t* sat = new (std::nothrow) uint32_t[n * n];
+    uint32_t* sat = p.allocate<uint32_t>(n * n);
     if (!sat) return;  // stays null: the query reports it
     for (uint64_t y = 0; y < n; ++y) {
       uint32_t row = 0;  // wraps modulo 2^32 (exact differences, as for ParallaxSat)
@@ -434,6 +451,11 @@ const uint32_t* ParallaxView::bin_sat(uint32_t bin) const noexcept {
 }
 
 Status ParallaxView::open_raw(const Asset& asset) noexcept {
+#ifdef CLOTHBAKE_SINGLE_FILE
+  (void)asset;
+  return Status::error(ErrorCode::NotFound, Check::MissingSection,
+                       "the single-file build reads the compressed parallax only");
+#else
   ArrayView<uint8_t> info_bytes;
   ArrayView<uint16_t> codes;
   Status s = detail::view_required_pair(
@@ -490,17 +512,20 @@ Status ParallaxView::open_raw(const Asset& asset) noexcept {
   codes_ = codes.data;
   sat_ = sat;
   return {};
+#endif
 }
 
 uint32_t ParallaxView::bin_code(uint32_t bin, int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
-  return code(bin, uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n)));
+  return code(bin,
+              uint64_t(model::wrap_index(y, n)) * uint64_t(n) + uint64_t(model::wrap_index(x, n)));
 }
 
 double ParallaxView::bin_depth(uint32_t bin, int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
   if (!covers(bin)) return 0.0;
-  const uint64_t index = uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n));
+  const uint64_t index =
+      uint64_t(model::wrap_index(y, n)) * uint64_t(n) + uint64_t(model::wrap_index(x, n));
   return -double(code(bin, index)) * depth_step(bin);
 }
 
@@ -530,7 +555,8 @@ Status ParallaxView::view_direction(const double view[3], double o[3]) const noe
 double ParallaxView::weighted_depth(const int bin[4], const double weight[4], int64_t x,
                                     int64_t y) const noexcept {
   const uint64_t n = info_.resolution;
-  const uint64_t texel = uint64_t(wrap(y, int64_t(n))) * n + uint64_t(wrap(x, int64_t(n)));
+  const uint64_t texel =
+      uint64_t(model::wrap_index(y, int64_t(n))) * n + uint64_t(model::wrap_index(x, int64_t(n)));
   double r = 0.0;
   if (stream_) {
     for (int k = 0; k < 4; ++k)
@@ -567,9 +593,11 @@ Status ParallaxView::depth(int64_t x, int64_t y, const double view[3],
   return {};
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 uint64_t ParallaxView::code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
   return prefix_sum_of(bin_sat(bin), x, y);
 }
+#endif
 
 uint64_t ParallaxView::prefix_sum_of(const uint32_t* table, uint32_t x, uint32_t y) const noexcept {
   if (x == 0 || y == 0 || table == nullptr) return 0;

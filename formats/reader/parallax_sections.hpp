@@ -151,16 +151,22 @@ class ParallaxView {
   bool is_planned() const noexcept { return covered_ != nullptr; }
   // Whether direction bin `bin` (< dirs^2) is stored (always, except in a planned table).
   bool covers(uint32_t bin) const noexcept { return covered_ == nullptr || covered_[bin] != 0; }
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
   // Stored view directions (dirs^2, or the bin map's count in a planned table).
   uint32_t stored_dirs() const noexcept;
+#endif
   // Compressed form: its record (zero for the raw form).
-  const CompressedParallaxInfoRecord& compressed_info() const noexcept { return packed_info_; }
+  const CompressedParallaxInfoRecord& compressed_info() const noexcept {
+    return packed_info_;
+  }
+#ifndef CLOTHBAKE_SINGLE_FILE  // reports of the tools, not used by shading
   // Bytes of the SATs and decoded planes the compressed form has built so far (0 for raw).
   uint64_t decoded_bytes() const noexcept;
   // Compressed form: decodes the block of `bin` now (no-op for raw); false if it cannot be
   // allocated or the direction is not stored. A block that does not decode exactly reads as zero
   // codes (validate reports it: decode_all). Thread-safe. Precondition: bin < dirs^2.
   bool ensure_plane(uint32_t bin) const noexcept;
+#endif
   // Compressed form: decodes every stored block and reports the first that does not decode
   // exactly (CBK-E021) or cannot be allocated (Unsupported). OK for raw.
   Status decode_all() const noexcept;
@@ -173,9 +179,15 @@ class ParallaxView {
   // evaluator's samples) without a branch per texel. Thread-safe. Precondition: bin < dirs^2.
   const uint16_t* bin_codes(uint32_t bin) const noexcept;
 
-  const ParallaxInfoRecord& info() const noexcept { return info_; }
-  uint32_t resolution() const noexcept { return info_.resolution; }
-  uint32_t dirs() const noexcept { return info_.dirs; }
+  const ParallaxInfoRecord& info() const noexcept {
+    return info_;
+  }
+  uint32_t resolution() const noexcept {
+    return info_.resolution;
+  }
+  uint32_t dirs() const noexcept {
+    return info_.dirs;
+  }
 
   // The stored code of one bin at texel (x, y) (any integers: the tile wraps); the compressed
   // form decodes the bin's block first. Precondition: bin < dirs^2 and covers(bin).
@@ -210,10 +222,12 @@ class ParallaxView {
   Status footprint_depth(const Footprint& rect, const double view[3],
                          ParallaxSample* out) const noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
   // The exact sum of the codes of `bin` over texels [0, x) x [0, y), 0 <= x, y <= N (from the
   // SAT; exact for any N). Precondition: has_sat(), bin < dirs^2; compressed form: the bin's SAT
   // built (footprint_depth or ensure_sat did), else 0.
   uint64_t code_prefix_sum(uint32_t bin, uint32_t x, uint32_t y) const noexcept;
+#endif
   // Builds the compressed form's SAT of `bin` now (no-op for raw); false if it cannot be allocated
   // or the direction is not stored. Thread-safe. Precondition: bin < dirs^2.
   bool ensure_sat(uint32_t bin) const noexcept;

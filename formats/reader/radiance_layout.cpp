@@ -15,6 +15,7 @@ const char* radiance_kind_name(RadianceTableKind kind) noexcept {
   return nullptr;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 bool radiance_kind_of_lobe(const char* lobe_name, RadianceTableKind* out) noexcept {
   if (lobe_name == nullptr || out == nullptr) return false;
   if (std::strcmp(lobe_name, "specular_reflection") == 0 ||
@@ -28,5 +29,6 @@ bool radiance_kind_of_lobe(const char* lobe_name, RadianceTableKind* out) noexce
   }
   return false;
 }
+#endif
 
 }  // namespace clothbake::reader

@@ -98,9 +98,11 @@ static_assert(offsetof(RadianceTableInfoRecord, reserved) == 48);
 // "specular" / "gap", or nullptr.
 const char* radiance_kind_name(RadianceTableKind kind) noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 // The table kind that answers a lobe name of `clothbake bsdf` ("specular_reflection",
 // "specular_transmission" -> Specular; "delta_transmission" -> Gap). False for lobes without an
 // Integral-Radiance table (diffuse_*, sheen) and unknown names.
 bool radiance_kind_of_lobe(const char* lobe_name, RadianceTableKind* out) noexcept;
+#endif
 
 }  // namespace clothbake::reader

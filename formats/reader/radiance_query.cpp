@@ -122,6 +122,7 @@ Status radiance_bin_weights(uint32_t bins_per_side, const double h[3], BinWeight
                        "half vector must not be the zero vector");
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 Status RadianceTables::query(const Footprint& rect, const double h[3], uint32_t cluster,
                              double* out) const noexcept {
   if (try_query(rect, h, cluster, out)) return {};
@@ -156,5 +157,6 @@ Status RadianceTables::diagnose(const Footprint& rect, const double h[3], const 
                          "(bin_map instance 0)");
   return Status::error(ErrorCode::InvalidArgument, Check::None, "query: invalid arguments");
 }
+#endif
 
 }  // namespace clothbake::reader

@@ -97,6 +97,7 @@ class RadianceTables {
     return true;
   }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the single file makes no footprint queries
   // The same answers with a Status that says what was wrong: InvalidArgument naming the bad
   // argument (rect, h, cluster, null output) or "not open". One implementation for every
   // representation: the fast path, and only when it fails, the diagnosis.
@@ -109,6 +110,7 @@ class RadianceTables {
   // out of range when `cluster` is given, bad rect or h).
   Status diagnose(const Footprint& rect, const double h[3], const uint32_t* cluster,
                   const double* out) const noexcept;
+#endif
 };
 
 }  // namespace clothbake::reader

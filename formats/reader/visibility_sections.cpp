@@ -6,16 +6,9 @@
 #include <limits>
 
 #include "formats/reader/detail/open_sections.hpp"
+#include "model/tile.hpp"
 
 namespace clothbake::reader {
-namespace {
-
-int64_t wrap(int64_t i, int64_t n) noexcept {
-  int64_t r = i % n;
-  return r < 0 ? r + n : r;
-}
-
-}  // namespace
 
 Status VisibilityAsgView::open(const Asset& asset) noexcept {
   *this = VisibilityAsgView();
@@ -88,7 +81,8 @@ Status VisibilityAsgView::open(const Asset& asset) noexcept {
 
 model::AsgRecord VisibilityAsgView::record(int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
-  return record_at(uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n)));
+  return record_at(uint64_t(model::wrap_index(y, n)) * uint64_t(n) +
+                   uint64_t(model::wrap_index(x, n)));
 }
 
 model::AsgRecord VisibilityAsgView::record_at(uint64_t t) const noexcept {
@@ -114,7 +108,8 @@ model::AsgParams<double> VisibilityAsgView::lobe_at(uint64_t t) const noexcept {
 double VisibilityAsgView::fit_error(int64_t x, int64_t y) const noexcept {
   if (fit_error_ == nullptr) return std::numeric_limits<double>::quiet_NaN();
   const int64_t n = info_.resolution;
-  return double(fit_error_[uint64_t(wrap(y, n)) * uint64_t(n) + uint64_t(wrap(x, n))]);
+  return double(fit_error_[uint64_t(model::wrap_index(y, n)) * uint64_t(n) +
+                           uint64_t(model::wrap_index(x, n))]);
 }
 
 Status VisibilityAsgView::visibility(int64_t x, int64_t y, const double w[3],

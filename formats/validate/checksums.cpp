@@ -39,6 +39,7 @@ Status verify_section(const Asset& asset, const SectionInfo& section) noexcept {
       fresh.checksum, sum);
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 Status verify_checksums(const Asset& asset) noexcept {
   Status status = verify_header_checksum(asset);
   for (uint32_t i = 0; status.ok() && i < asset.section_count(); ++i) {
@@ -48,5 +49,6 @@ Status verify_checksums(const Asset& asset) noexcept {
   }
   return status;
 }
+#endif
 
 }  // namespace clothbake::reader

@@ -24,7 +24,9 @@ Status verify_header_checksum(const Asset& asset) noexcept;
 // the section and both values; InvalidArgument for a closed asset or an index out of range.
 Status verify_section(const Asset& asset, const SectionInfo& section) noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // used by the tools, not by shading
 // The header checksum, then every section's in table order; the first failure. O(file size).
 Status verify_checksums(const Asset& asset) noexcept;
+#endif
 
 }  // namespace clothbake::reader

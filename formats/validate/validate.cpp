@@ -14,9 +14,13 @@
 #include "formats/reader/parallax_entropy.hpp"
 #include "formats/reader/parallax_sections.hpp"
 #include "formats/reader/visibility_sections.hpp"
+#ifndef CLOTHBAKE_SINGLE_FILE  // the single file's shading reads no raw tables: it skips them
 #include "formats/reader_raw/radiance_tables.hpp"
+#endif
 #include "formats/validate/checksums.hpp"
+#ifndef CLOTHBAKE_SINGLE_FILE  // shading reads no metadata: the single file leaves its check out
 #include "formats/validate/metadata_limits.hpp"
+#endif
 #include "model/parameter_ranges.hpp"
 
 namespace clothbake::reader {
@@ -113,6 +117,7 @@ void check_finite(const SectionInfo& s, Reporter& r) {
   }
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE
 // Metadata: valid UTF-8 (no overlongs, surrogates or code points past U+10FFFF) and a JSON object
 // at the top level (first and last non-blank characters are braces; full JSON parsing is the
 // tool's job, `clothbake validate` does it).
@@ -151,6 +156,7 @@ void check_metadata(const Asset& asset, Reporter& r) {
   status = check_metadata_limits(text);
   if (!status.ok()) r.report_status(status, s.index);
 }
+#endif
 
 bool in_range(double v, double lo, double hi) {
   return v >= lo && v <= hi;
@@ -202,11 +208,13 @@ void check_fabric_records(const Asset& asset, Reporter& r, uint32_t* yarn_count,
         r.report(Check::SectionLayout, s.index,
                  "yarn_materials[%" PRIu64 "]: name is not NUL-terminated", i);
       } else {
+#ifndef CLOTHBAKE_SINGLE_FILE  // names are text for reports, never shaded
         const std::string_view name(y.name, std::strlen(y.name));
         const std::size_t bad = utf8_error_offset(name);
         if (bad != name.size())
           r.report(Check::MetadataSchema, s.index,
                    "yarn_materials[%" PRIu64 "]: name is not UTF-8 (byte %zu)", i, bad);
+#endif
       }
       uint64_t at;
       if (!all_zero(y.reserved, sizeof y.reserved, &at))
@@ -356,6 +364,7 @@ bool has_type(const Asset& asset, SectionType type, uint32_t first_instance = 0,
   return false;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the single file reads the compressed parallax only
 // The parallax SAT must be the inclusive SAT (mod 2^32) of the depth codes: O(D N^2).
 void check_parallax_sat(const Asset& asset, const ParallaxView& view, Reporter& r) {
   SectionInfo codes_info, sat_info;
@@ -383,6 +392,7 @@ void check_parallax_sat(const Asset& asset, const ParallaxView& view, Reporter& 
         }
       }
 }
+#endif
 
 // The compressed parallax: every stored block must decode exactly (CBK-E021); codes of an
 // all-zero direction (step 0) must be 0; beside a raw table it must decode to it within its
@@ -412,6 +422,7 @@ void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, R
           return;
         }
       }
+#ifndef CLOTHBAKE_SINGLE_FILE
   ParallaxView raw;
   if (!raw.open(asset, ParallaxSource::Raw).ok() || raw.resolution() != n ||
       raw.dirs() != packed.dirs())
@@ -429,6 +440,7 @@ void check_compressed_parallax(const Asset& asset, const ParallaxView& packed, R
         return;
       }
     }
+#endif
 }
 
 // Opens the baked tables as a renderer does and checks them against each other and the maps:
@@ -447,6 +459,7 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
                unsigned(resolution));
     }
   };
+#ifndef CLOTHBAKE_SINGLE_FILE
   if (has_type(asset, SectionType::ParallaxTable) || has_type(asset, SectionType::ParallaxSat)) {
     ParallaxView parallax;
     const Status s = parallax.open(asset, ParallaxSource::Raw);
@@ -457,6 +470,7 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
       if (parallax.has_sat()) check_parallax_sat(asset, parallax, r);
     }
   }
+#endif
   if (has_type(asset, SectionType::ParallaxEntropy)) {
     ParallaxView packed;
     const Status s = packed.open(asset, ParallaxSource::Compressed);
@@ -520,6 +534,7 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
                "the %s Integral-Radiance tables are present but there is no cluster_labels "
                "section to say which texels belong to which cluster",
                name);
+#ifndef CLOTHBAKE_SINGLE_FILE
     RawRadianceTables raw;
     bool raw_ok = false;
     if (raw_present) {
@@ -542,6 +557,7 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
         }
       }
     }
+#endif
     if (packed_present) {
       CompressedRadianceTables packed;
       const Status s = packed.open(asset, kind);
@@ -571,6 +587,7 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
             }
           }
       }
+#ifndef CLOTHBAKE_SINGLE_FILE
       if (raw_ok && (raw.resolution() != packed.resolution() ||
                      raw.bins_per_side() != packed.bins_per_side() ||
                      raw.cluster_count() != packed.cluster_count()))
@@ -580,6 +597,7 @@ void check_baked_tables(const Asset& asset, Reporter& r, int64_t reference_resol
                  name, unsigned(raw.resolution()), unsigned(raw.bins_per_side()),
                  unsigned(raw.cluster_count()), unsigned(packed.resolution()),
                  unsigned(packed.bins_per_side()), unsigned(packed.cluster_count()));
+#endif
     }
   }
 }
@@ -653,7 +671,9 @@ ValidationSummary validate_asset(const Asset& asset, FindingCallback callback,
   // Stop before semantic checks if the bytes cannot be trusted.
   if (r.summary().errors > 0) return r.summary();
 
+#ifndef CLOTHBAKE_SINGLE_FILE
   check_metadata(asset, r);
+#endif
   uint32_t yarn_count = 0;
   int64_t info_resolution = -1;  // -1: no fabric_info
   check_fabric_records(asset, r, &yarn_count, &info_resolution);

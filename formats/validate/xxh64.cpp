@@ -19,7 +19,7 @@ inline uint64_t rotl(uint64_t x, int r) {
 
 // The format is little-endian; the reader refuses big-endian hosts elsewhere, but keep the hash
 // itself portable.
-inline uint64_t load64(const unsigned char* p) {
+inline uint64_t load64_le(const unsigned char* p) {
   uint64_t v;
   std::memcpy(&v, p, 8);
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
@@ -27,7 +27,7 @@ inline uint64_t load64(const unsigned char* p) {
 #endif
   return v;
 }
-inline uint32_t load32(const unsigned char* p) {
+inline uint32_t load32_le(const unsigned char* p) {
   uint32_t v;
   std::memcpy(&v, p, 4);
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
@@ -53,10 +53,10 @@ inline std::size_t consume_stripes(uint64_t lanes[4], const unsigned char* p, st
   std::size_t done = 0;
   while (size - done >= 32) {
     const unsigned char* s = p + done;
-    v1 = round(v1, load64(s));
-    v2 = round(v2, load64(s + 8));
-    v3 = round(v3, load64(s + 16));
-    v4 = round(v4, load64(s + 24));
+    v1 = round(v1, load64_le(s));
+    v2 = round(v2, load64_le(s + 8));
+    v3 = round(v3, load64_le(s + 16));
+    v4 = round(v4, load64_le(s + 24));
     done += 32;
   }
   lanes[0] = v1, lanes[1] = v2, lanes[2] = v3, lanes[3] = v4;
@@ -80,12 +80,12 @@ inline uint64_t converge(const uint64_t lanes[4]) {
 // Remaining < 32 bytes, then the avalanche.
 inline uint64_t finish(uint64_t acc, const unsigned char* p, std::size_t size) {
   while (size >= 8) {
-    acc ^= round(0, load64(p));
+    acc ^= round(0, load64_le(p));
     acc = rotl(acc, 27) * kPrime1 + kPrime4;
     p += 8, size -= 8;
   }
   if (size >= 4) {
-    acc ^= uint64_t(load32(p)) * kPrime1;
+    acc ^= uint64_t(load32_le(p)) * kPrime1;
     acc = rotl(acc, 23) * kPrime2 + kPrime3;
     p += 4, size -= 4;
   }
