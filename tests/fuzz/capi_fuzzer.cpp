@@ -4,7 +4,9 @@
 // over it is a result, with finite, non-negative values where it succeeds. Built with
 // -fsanitize=fuzzer,address,undefined (tests/fuzz/CMakeLists.txt).
 //
-// The first byte selects: bit 0, repair; bit 1, a trusted open. An input whose first byte is odd
+// The first byte selects: bit 0, repair; bit 1, a trusted open; bits 2-3, the method (multiscale,
+// multiscale-paper, brute, reference: one evaluator an input, which keeps an execution to one
+// evaluator's creation and lets the fuzzer choose). An input whose first byte is odd
 // is first repaired as an adversary who knows the format would
 // repair it: if the structure opens, every section checksum and the header checksum are
 // recomputed, so that the mutation reaches validation's value checks and the evaluator instead of
@@ -64,6 +66,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // Bit 1: open trusted (CB_OPEN_TRUSTED: no validation), so that damaged values reach the
   // evaluator's own checks; its contract: a result or wrong values, never an out-of-bounds read.
   const uint32_t flags = CB_OPEN_BORROW | ((data[0] & 2) != 0 ? CB_OPEN_TRUSTED : 0u);
+  const uint32_t methods[] = {CB_METHOD_MULTISCALE, CB_METHOD_MULTISCALE_PAPER, CB_METHOD_BRUTE,
+                              CB_METHOD_REFERENCE};
+  const uint32_t method = methods[(data[0] >> 2) & 3];
   ++data, --size;
   // An exact-size, 8-byte aligned copy (operator new[]), so that AddressSanitizer sees any read
   // past `size`.
@@ -81,7 +86,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   cb_asset_info info;
   cb_asset_get_info(asset, &info, &error);
-  for (uint32_t method : {CB_METHOD_MULTISCALE, CB_METHOD_BRUTE, CB_METHOD_REFERENCE}) {
+  {
     cb_options options;
     cb_options_default(&options);
     options.method = method;
@@ -89,7 +94,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     cb_evaluator* evaluator = nullptr;
     if (cb_evaluator_create(asset, &options, nullptr, &evaluator, &error) != CB_OK) {
       if (evaluator != nullptr) __builtin_trap();
-      continue;
+      cb_asset_close(asset);
+      return 0;
     }
     // A point, a sub-texel footprint, a fraction of the tile and several tiles, lit and seen from
     // above, at grazing and from below.
@@ -104,7 +110,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       for (const auto& i : wi) {
         double rgb[3];
         if (cb_estimate(evaluator, &f, i, wo, CB_LOBES_ALL, &rng, rgb, &error) == CB_OK)
-          check_rgb(rgb, method == CB_METHOD_MULTISCALE);
+          check_rgb(rgb, method == CB_METHOD_MULTISCALE || method == CB_METHOD_MULTISCALE_PAPER);
         double pdf = -1;
         if (cb_direction_pdf(evaluator, &f, i, wo, &pdf, &error) == CB_OK &&
             (!std::isfinite(pdf) || pdf < 0))
