@@ -5160,6 +5160,11 @@ cb_result validate(const cb_asset& asset, uint32_t flags, const char* name, cb_e
   return fail(error, CB_ERROR_INVALID_ASSET, name, first.text);
 }
 
+// Three numbers in [0, 1) (NaN is not).
+bool unit3(const double u[3]) {
+  return u != nullptr && u[0] >= 0 && u[0] < 1 && u[1] >= 0 && u[1] < 1 && u[2] >= 0 && u[2] < 1;
+}
+
 bool finite3(const double v[3]) {
   return v != nullptr && std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
 }
@@ -5376,10 +5381,10 @@ cb_result cb_sample_direction(const cb_evaluator* evaluator, const cb_footprint*
                               cb_error* error) noexcept {
   if (out != nullptr) *out = cb_direction_sample{};
   reader::Footprint f;
-  if (evaluator == nullptr || out == nullptr || wo == nullptr || !finite3(u) ||
+  if (evaluator == nullptr || out == nullptr || wo == nullptr || !unit3(u) ||
       !texel_footprint(evaluator, footprint, &f))
     return fail(error, CB_ERROR_INVALID_ARGUMENT, "cb_sample_direction",
-                "evaluator, a finite footprint, wo, finite u and out are required");
+                "evaluator, a finite footprint, wo, u in [0, 1) and out are required");
   eval::Evaluator::DirectionSample sample;
   const reader::Status s = evaluator->evaluator.sample_direction(f, wo, u[0], u[1], u[2], &sample);
   if (!s.ok()) return fail_status(error, s, "cb_sample_direction");

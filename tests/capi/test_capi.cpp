@@ -197,6 +197,14 @@ TEST(CInterface, BadArgumentsAreInvalidArgumentWithAMessage) {
   cb_direction_sample sample;
   EXPECT_EQ(cb_sample_direction(o.evaluator, &kPixel, kWo, nan_u, &sample, &error),
             CB_ERROR_INVALID_ARGUMENT);
+  for (const double bad : {-0.25, 1.0, 3.0}) {  // outside [0, 1): not a uniform sample
+    const double u[3] = {0.5, 0.5, bad};
+    EXPECT_EQ(cb_sample_direction(o.evaluator, &kPixel, kWo, u, &sample, &error),
+              CB_ERROR_INVALID_ARGUMENT)
+        << bad;
+  }
+  const double edge_u[3] = {0.0, 0.0, 0.9999999999999999};  // the interval's ends that belong
+  EXPECT_EQ(cb_sample_direction(o.evaluator, &kPixel, kWo, edge_u, &sample, &error), CB_OK);
   cb_options options;
   cb_options_default(&options);
   options.method = 4;
