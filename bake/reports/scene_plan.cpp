@@ -55,6 +55,10 @@ constexpr double kParallaxRateScale = 0.245, kParallaxRateExponent = 1.095;
 // taken at its 256^2 equivalent h (N / 256)^kHeightResolutionExponent, the rate scaled by
 // (256 / N)^kParallaxResolutionExponent.
 constexpr double kHeightResolutionExponent = 1.151, kParallaxResolutionExponent = 0.126;
+// A coarser parallax error target e (planned_parallax_error) takes fewer bits a code: the stream
+// scales as (e / e_fabric)^-kParallaxErrorExponent, fitted to the 256^2 twill's far-swatch plan
+// (257 612 bytes at the fabric's 0.05 texels, 88 162 at 1 texel).
+constexpr double kParallaxErrorExponent = 0.358;
 constexpr double kCellsPerCluster = 0.75;
 constexpr double kRankAtReference = 8.64, kReferenceRoughness = 0.4;
 constexpr double kRankRoughnessExponent = 0.59, kRankBinExponent = 0.29;
@@ -89,6 +93,7 @@ int planned_visibility_dirs(int fabric_dirs, double footprint_min) {
 // kind, the visibility directions sampled, whether it is a plan.
 struct EstimateShape {
   double view_dirs = 0, bins = 0;
+  double parallax_error_ratio = 1;  // the planned parallax error over the fabric's
   bool gap_kind = false, planned = false;
   int visibility_dirs = 0;
 };
@@ -138,8 +143,10 @@ PlanEstimate estimate_bake(const Fabric& fabric, const EstimateShape& shape, con
   const double scale = double(fabric.maps.resolution) / 256;
   const double height_256 =
       maps.height / std::max(n2, 1.0) * std::pow(scale, kHeightResolutionExponent);
-  const double parallax_rate = kParallaxRateScale * std::pow(height_256, kParallaxRateExponent) *
-                               std::pow(1 / std::max(scale, 1e-3), kParallaxResolutionExponent);
+  const double parallax_rate =
+      kParallaxRateScale * std::pow(height_256, kParallaxRateExponent) *
+      std::pow(1 / std::max(scale, 1e-3), kParallaxResolutionExponent) *
+      std::pow(std::max(shape.parallax_error_ratio, 1.0), -kParallaxErrorExponent);
   const double fixed = 64 + 160.0 * double(fabric.yarns.size()) + maps.all  // records, maps
                        + 64 + n2 * 12                                       // visibility
                        + n2 + clusters * cluster_vis * 4                    // clusters
@@ -168,6 +175,11 @@ double planned_compression_target(double default_target, double budget) {
   const double loosest = std::sqrt(budget / 2) - default_target;
   if (loosest >= default_target) return default_target;
   return std::max(loosest, default_target / 4);
+}
+
+double planned_parallax_error(double default_error, double budget, double footprint_min) {
+  const double loosest = footprint_min * std::sqrt(budget / 16) / 4;
+  return std::max(default_error, std::min(loosest, 1.0));
 }
 
 FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, double max_error) {
@@ -212,6 +224,22 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
              "footprint, above the budget %.3g %%)",
              u.footprint_min, p.max_parallax_offset, 100 * p.max_parallax_offset / u.footprint_min,
              100 * max_error)});
+  // The parallax codes' precision: what the smallest footprint cannot see.
+  p.parallax_max_error =
+      planned_parallax_error(fabric.bake.parallax_max_error, max_error, u.footprint_min);
+  if (p.parallax_max_error > fabric.bake.parallax_max_error)
+    p.decisions.push_back(
+        {"parallax precision", "coarser",
+         fmt("RMS offset error %.3g texels instead of %.3g: footprints from %.3g texels see a "
+             "relMSE of at most %.3g from it (a sixteenth of the budget or less)",
+             p.parallax_max_error, fabric.bake.parallax_max_error, u.footprint_min,
+             std::pow(4 * p.parallax_max_error / u.footprint_min, 2))});
+  else
+    p.decisions.push_back({"parallax precision", "kept",
+                           fmt("RMS offset error %.3g texels: footprints from %.3g texels leave no "
+                               "room for a coarser "
+                               "one",
+                               p.parallax_max_error, u.footprint_min)});
   // Transmission: only light on the side opposite to the viewer uses the transmission lobes, the
   // gap table and the delta lobe.
   if (!u.back_lit())
@@ -307,13 +335,15 @@ FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& u, doubl
     const double dirs = double(fabric.bake.parallax_dirs) * fabric.bake.parallax_dirs;
     const double bins = double(p.half_vector_bins_total);
     const MapBytes maps = feature_map_bytes(fabric);
-    const PlanEstimate full =
-        estimate_bake(fabric, {dirs, bins, gaps, false, p.fabric_visibility_dirs}, maps, sigma);
+    const PlanEstimate full = estimate_bake(
+        fabric, {dirs, bins, 1.0, gaps, false, p.fabric_visibility_dirs}, maps, sigma);
     const PlanEstimate planned = estimate_bake(
         fabric,
         {p.usage.view_bins.empty() ? dirs : double(std::max<uint64_t>(p.usage.view_bins_used(), 1)),
-         double(std::max<uint64_t>(u.half_vector_bins_used(), 1)), gaps && u.back_lit(), true,
-         p.visibility_dirs},
+         double(std::max<uint64_t>(u.half_vector_bins_used(), 1)),
+         fabric.bake.parallax_max_error > 0 ? p.parallax_max_error / fabric.bake.parallax_max_error
+                                            : 1.0,
+         gaps && u.back_lit(), true, p.visibility_dirs},
         maps, sigma);
     p.estimate = {full.planned_bytes, planned.planned_bytes, full.planned_seconds,
                   planned.planned_seconds};
@@ -457,9 +487,13 @@ ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::str
   bool back_lit = false;
   nlohmann::json objects = nlohmann::json::array();
   const nlohmann::json all = plan_json(plan);
-  int visibility_dirs = 0;  // the most any object of this fabric that some pixel sees needs
+  int visibility_dirs = 0;    // the most any object of this fabric that some pixel sees needs
+  double parallax_error = 0;  // the tightest any object of this fabric that some pixel sees needs
   for (const FabricPlan* p : mine) {
     if (p->usage.pixels > 0) visibility_dirs = std::max(visibility_dirs, p->visibility_dirs);
+    if (p->usage.pixels > 0 && p->parallax_max_error > 0)
+      parallax_error = parallax_error > 0 ? std::min(parallax_error, p->parallax_max_error)
+                                          : p->parallax_max_error;
     out.visibility_dirs_total = p->fabric_visibility_dirs;
     pixels += p->usage.pixels;
     back_lit = back_lit || p->usage.back_lit();
@@ -503,6 +537,7 @@ ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::str
                            std::to_string(out.view_bins_total) + " parallax view directions");
   if (visibility_dirs == 0) visibility_dirs = out.visibility_dirs_total;  // no pixel: refused below
   out.visibility_dirs = visibility_dirs;
+  bake.parallax_max_error = parallax_error;
   if (visibility_dirs < out.visibility_dirs_total) {
     bake.visibility_dirs = visibility_dirs;
     const int total = out.visibility_dirs_total * out.visibility_dirs_total;
@@ -542,6 +577,7 @@ ScenePlanSeeds seed_scene_plan(const inputs::LoadedScene& loaded, const std::str
                   {"view_bins_total", out.view_bins_total},
                   {"visibility_dirs", out.visibility_dirs},
                   {"visibility_dirs_total", out.visibility_dirs_total},
+                  {"parallax_max_error", parallax_error},
                   {"transmission", back_lit},
                   {"objects", objects}};
   // The planned tables' target (planned_compression_target; unless the command line set one, or

@@ -39,6 +39,9 @@ struct FabricPlan {
   // where every footprint is wide; docs/scene-plans.md, "Visibility directions").
   int fabric_visibility_dirs = 0, visibility_dirs = 0;
   double max_parallax_offset = 0;  // texels, over the scene's views
+  // The planned parallax codes' RMS offset error (texels, planned_parallax_error); the fabric's
+  // [bake] parallax_max_error when the footprints do not allow a looser one.
+  double parallax_max_error = 0;
   // The planned tables' target (relative RMS per texel, planned_compression_target); 0 when the
   // fabric asks for a fixed C-PCA shape, which the plan keeps.
   double compression_target = 0;
@@ -60,6 +63,16 @@ struct ScenePlan {
 // default_target / 4. Looser than the default is never chosen: the unbiased estimate's expected
 // picture does not depend on the tables, its noise does. Pure.
 double planned_compression_target(double default_target, double budget);
+
+// The planned parallax codes' RMS offset error in texels (docs/scene-plans.md, "Parallax
+// precision"): quantising a depth moves a point's destination by at most the offset error e, so a
+// footprint of side s gains or loses at most the boundary strip 4 e s of its s^2 area, a relative
+// error 4 e / s, a relMSE (4 e / s)^2; the loosest e with (4 e / s_min)^2 <= budget / 16 (a
+// sixteenth of the budget: the bound is reached on oblique mid-field views, and the budget is
+// mostly the picture's, planned_compression_target takes up to half), but never tighter than the
+// fabric's `default_error` and never looser than one texel. `budget` is the scene's [render]
+// max_error (a relMSE), `footprint_min` the smallest footprint side in texels. Pure.
+double planned_parallax_error(double default_error, double budget, double footprint_min);
 
 // The rules on one fabric's usage (pure; documented in docs/scene-format.md).
 FabricPlan plan_fabric(const Fabric& fabric, const render::ObjectUsage& usage, double max_error);

@@ -73,7 +73,9 @@ void run_parallax(pipeline::StageContext& ctx) {
     const compress::ParallaxCodes raw{table.depth.data(), table.resolution,  table.dirs,
                                       table.min_cos,      table.depth_scale, table.reference_height,
                                       stats.max_sideways};
-    const double max_error = fabric.bake.parallax_max_error;
+    const double max_error = plan != nullptr && plan->parallax_max_error > 0
+                                 ? plan->parallax_max_error
+                                 : fabric.bake.parallax_max_error;
     compressed = true;
     // Format 1.5: 16-bit codes with steps from the error target, each direction predicted from up
     // to four others and entropy-coded (compress/parallax_hierarchy.hpp). A scene-planned bake

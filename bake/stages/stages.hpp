@@ -60,6 +60,9 @@ struct PlannedBake {
   std::vector<uint8_t> view_bins;         // parallax_dirs^2 entries, 1 = kept; empty: all
   bool transmission = true;               // false: the gap tables are left out
   int visibility_dirs = 0;  // light directions per side of the visibility sampling; 0: the fabric's
+  // The parallax codes' RMS offset error in texels (reports::planned_parallax_error); 0: the
+  // fabric's [bake] parallax_max_error.
+  double parallax_max_error = 0;
 };
 
 }  // namespace clothbake::stages

@@ -84,6 +84,24 @@ TEST(ScenePlanRules, TheCompressionTargetIsTheDefaultBakesUnlessTheBudgetNeedsAT
   EXPECT_EQ(reports::planned_compression_target(e, 1e-8), e / 4);  // the floor
 }
 
+// The planned parallax precision: the loosest RMS offset error e whose worst footprint error,
+// (4 e / s_min)^2 as a relMSE, is a sixteenth of the budget; never tighter than the fabric's, never
+// looser than a texel.
+TEST(ScenePlanRules, TheParallaxPrecisionIsWhatTheSmallestFootprintCannotSee) {
+  const double fabric = 0.05, budget = 0.008;
+  const double e = reports::planned_parallax_error(fabric, budget, 40.0);
+  EXPECT_NEAR(std::pow(4 * e / 40.0, 2), budget / 16, 1e-15);
+  EXPECT_EQ(reports::planned_parallax_error(fabric, budget, 2.0), fabric);  // never tighter
+  EXPECT_EQ(reports::planned_parallax_error(fabric, budget, 500.0), 1.0);   // at most a texel
+  EXPECT_EQ(reports::planned_parallax_error(fabric, 0.0, 500.0), fabric);   // no budget
+  const auto far =
+      plan_of(write_scene("far-precision.toml", plane_scene("[0, 0, 50]", kFrontLight, 100, 1.2)));
+  EXPECT_EQ(decisions(far)["parallax precision"], "coarser");
+  const auto near =
+      plan_of(write_scene("near-precision.toml", plane_scene("[0.6, 0, 1.2]", kFrontLight, 1, 40)));
+  EXPECT_EQ(decisions(near)["parallax precision"], "kept");
+}
+
 TEST(ScenePlanRules, AFarCameraNeedsNoPerTexelParallaxANearOneDoes) {
   const auto far =
       plan_of(write_scene("far.toml", plane_scene("[0, 0, 50]", kFrontLight, 100, 1.2)));
@@ -401,14 +419,16 @@ TEST_P(ExampleScenePlan, IsWithinItsBudget) {
       // low-rank and the residual grows (2.3 times the variance on this test's far swatch,
       // docs/scene-plans.md). Over this test's ~100 pixels the two relMSE estimates then scatter
       // by tens of per cent, so only a gross loss is an error here; the expected pictures are
-      // compared above, within the budget.
+      // compared above, within the budget. A coarser parallax precision may spend a sixteenth of
+      // the budget (reports::planned_parallax_error), which the planned render may add.
       bool fewer_visibility_directions = false;
       for (const auto& what : f["left_out"])
         fewer_visibility_directions |=
             what.get<std::string>().find("visibility light directions") != std::string::npos;
       EXPECT_LE(f["relmse"]["planned_vs_reference"].get<double>(),
                 f["relmse"]["full_vs_reference"].get<double>() *
-                    (fewer_visibility_directions ? 3.0 : 1.1))
+                        (fewer_visibility_directions ? 3.0 : 1.1) +
+                    f["budget"].get<double>() / 16)
           << name << ": " << f.dump();
       EXPECT_TRUE(f["relmse"].contains("full_vs_reference"));
       EXPECT_TRUE(f["relmse"].contains("planned_vs_reference"));
