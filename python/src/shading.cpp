@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "capi/clothbake.h"
+#include "model/splitmix64.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -47,10 +48,9 @@ struct Failure {
 // state far from every other chunk's stream. Pure.
 uint64_t chunk_seed(uint64_t seed, uint64_t chunk) noexcept {
   if (chunk == 0) return seed;
-  uint64_t z = seed ^ (chunk * 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
+  constexpr uint64_t kGamma = 0x9E3779B97F4A7C15ull;  // splitmix64_next adds it before mixing
+  uint64_t state = (seed ^ (chunk * kGamma)) - kGamma;
+  return clothbake::model::splitmix64_next(state);
 }
 
 // An open asset: owns the cb_asset, closed on destruction (evaluators keep their asset alive).
