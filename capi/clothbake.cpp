@@ -4726,6 +4726,13 @@ struct EvalOptions {
   // |P|) sqrt(spp (spp + 2))) of them, at least 1 when B is not empty, at most 65536. Any value > 0
   // keeps the estimate unbiased; this one balances their cost against their variance.
   double remainder_sample_scale = 32.0;
+  // The unbiased multi-scale form's visibility correction (docs/evaluator.md, "The visibility
+  // correction"): per residual sample, this many more samples of g with the texel's own visibility
+  // V(t, i) less g with its low-rank v(t), stratified over the footprint, and the residual taken
+  // against g with V. They need no BSDF evaluation, and V - v is most of f - g where the light
+  // grazes the relief. 0 disables it (the residual is f - g with v). Any value keeps the estimate
+  // unbiased; at most 1024.
+  uint32_t visibility_samples = 8;
   // The unbiased multi-scale form uses its control variate on a footprint P when the effective
   // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
   // the exactly integrated base, weighted by its integrand's spread) is at most this fraction of
@@ -4774,7 +4781,8 @@ struct Counters {
   uint32_t texel_evals = 0;        // per-texel BSDF evaluations (f^ V at one texel)
   uint32_t table_queries = 0;      // footprint queries on SATs (radiance, parallax, footprint sums)
   uint32_t remainder_samples = 0;  // multiscale: cheap samples of g outside its exact base
-  bool direct = false;             // answered by the exact sum (footprint below direct_max_side)
+  uint32_t visibility_samples = 0;  // multiscale: samples of the visibility correction
+  bool direct = false;              // answered by the exact sum (footprint below direct_max_side)
   bool without_control_variate = false;  // multiscale: sampled as brute force (a footprint below
                                          // EvalOptions::min_control_variate_tiles / _floats, or
                                          // its remainder above max_remainder_fraction)
@@ -6946,6 +6954,10 @@ struct TexelShading {
 void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>& f,
                      Rgb out[model::kLobeCount]) noexcept;
 
+// V(t, i) of texel index t (< N^2): its stored ASG at the frame's mirrored light, clamped to
+// [0, 1], the visibility the integrand uses. No allocation.
+double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
+
 // g(t) of texel (x, y) (any integers: the tile wraps).
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept;
@@ -7215,6 +7227,9 @@ uint32_t Evaluator::resolution() const noexcept {
 
 Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) noexcept {
   data_.reset();
+  if (options.visibility_samples > 1024)
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "visibility_samples must be at most 1024");
   if (!(options.remainder_sample_scale > 0.0) || !std::isfinite(options.remainder_sample_scale))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "remainder_sample_scale must be finite and > 0");
@@ -8061,6 +8076,7 @@ using model::Lobe;
 
 constexpr uint32_t kMaxRank = reader::kMaxVisibilityBasisRank;
 constexpr uint32_t kStackImages = 1024;
+constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's, at any spp
 
 // What g needs per estimate (docs/evaluator.md, "Unbiased multi-scale"):
 //   g(t) = sum over the lobes asked for of
@@ -8080,11 +8096,13 @@ struct PushforwardConstants : ActiveLobes {
   const double* image_at_h = nullptr;
 };
 
-// g of every lobe asked for at texel index t (< N^2), added to g[], and when `low` is not null
-// g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]: one packed
-// record (cv_texels.hpp) and the per-estimate constants.
+// g of every lobe asked for at texel index t (< N^2), added to g[]; when `low` is not null g_r,
+// the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is not
+// null g with the texel's own visibility V in place of v(t), added to exact[]: one packed record
+// (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
-                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr) {
+                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr,
+                     double visibility = 0.0, Rgb* exact = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -8098,6 +8116,7 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
   auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar) {
     g[int(lobe)] += factor * (scalar * v);
     if (low) low[int(lobe)] += factor * (scalar * v_low);
+    if (exact) exact[int(lobe)] += factor * (scalar * visibility);
   };
   const double gap = texel.gap;
   if (k.specular && texel.count > 0) {
@@ -8557,12 +8576,17 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   const int64_t n = int64_t(data.n);
+  // With the visibility correction the residual is f - g_V, g with the texel's own visibility
+  // (which shade_texel has just computed), and the correction below integrates g_V - g.
+  const bool correct_visibility = data.options.visibility_samples > 0;
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
-    Rgb g[model::kLobeCount];
-    control_variate(data, k, t, g);
+    Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
+    control_variate(data, k, t, g, 0, nullptr, shading.visibility,
+                    correct_visibility ? g_exact : nullptr);
+    const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
-      residual[l] += shading.lobes[l] - g[l];
+      residual[l] += shading.lobes[l] - against[l];
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
@@ -8618,9 +8642,26 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     for (int l = 0; l < model::kLobeCount; ++l)
       remainder[l] += piece[l] * scale;
   }
+  // The visibility correction: the mean of g_V - g over its own stratified points of P (no BSDF
+  // evaluation: the texel's ASG and its packed record).
+  Rgb correction[model::kLobeCount];
+  uint32_t corrections = 0;
+  if (correct_visibility) {
+    corrections = uint32_t(
+        std::min<uint64_t>(uint64_t(data.options.visibility_samples) * spp, kMaxVisibilitySamples));
+    visit_destinations(data, shift, p, corrections, rng, [&](uint64_t t, double, double) {
+      Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
+      control_variate(data, k, t, g, 0, nullptr, texel_visibility(data, frame, t), g_exact);
+      for (int l = 0; l < model::kLobeCount; ++l)
+        correction[l] += g_exact[l] - g[l];
+    });
+    for (Rgb& c : correction)
+      c = c / double(corrections);
+  }
   for (int l = 0; l < model::kLobeCount; ++l)
-    out->lobes[l] += (base[l] + remainder[l]) / area + residual[l] / double(spp);
+    out->lobes[l] += (base[l] + remainder[l]) / area + residual[l] / double(spp) + correction[l];
   out->counters.samples += spp;
+  out->counters.visibility_samples += corrections;
   out->counters.texel_evals += spp;
   out->counters.remainder_samples += m;
   return {};
@@ -8957,14 +8998,18 @@ void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>&
   }
 }
 
+double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept {
+  // V exactly as reader::VisibilityAsgView::visibility computes it, for the mirrored direction.
+  const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe_at(t));
+  const double v = model::asg_eval(lobe, frame.wi_light);
+  return v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
+}
+
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept {
   const uint64_t t = data.texel(x, y);
   const model::ClothBsdf<double> bsdf(data.texel_params(t));
-  // V exactly as reader::VisibilityAsgView::visibility computes it, for the mirrored direction.
-  const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe_at(t));
-  const double v = model::asg_eval(lobe, frame.wi_light);
-  const double visibility = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
+  const double visibility = texel_visibility(data, frame, t);
   integrand_lobes(frame, bsdf.eval(frame.wi, frame.wo, visibility), out->lobes);
   out->visibility = visibility;
   out->gap = bsdf.gap();

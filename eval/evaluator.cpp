@@ -106,6 +106,9 @@ uint64_t Evaluator::derived_bytes() const noexcept {
 
 Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) noexcept {
   data_.reset();
+  if (options.visibility_samples > 1024)
+    return Status::error(ErrorCode::InvalidArgument, Check::None,
+                         "visibility_samples must be at most 1024");
   if (!(options.remainder_sample_scale > 0.0) || !std::isfinite(options.remainder_sample_scale))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "remainder_sample_scale must be finite and > 0");

@@ -112,6 +112,13 @@ struct EvalOptions {
   // |P|) sqrt(spp (spp + 2))) of them, at least 1 when B is not empty, at most 65536. Any value > 0
   // keeps the estimate unbiased; this one balances their cost against their variance.
   double remainder_sample_scale = 32.0;
+  // The unbiased multi-scale form's visibility correction (docs/evaluator.md, "The visibility
+  // correction"): per residual sample, this many more samples of g with the texel's own visibility
+  // V(t, i) less g with its low-rank v(t), stratified over the footprint, and the residual taken
+  // against g with V. They need no BSDF evaluation, and V - v is most of f - g where the light
+  // grazes the relief. 0 disables it (the residual is f - g with v). Any value keeps the estimate
+  // unbiased; at most 1024.
+  uint32_t visibility_samples = 8;
   // The unbiased multi-scale form uses its control variate on a footprint P when the effective
   // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
   // the exactly integrated base, weighted by its integrand's spread) is at most this fraction of
@@ -160,7 +167,8 @@ struct Counters {
   uint32_t texel_evals = 0;        // per-texel BSDF evaluations (f^ V at one texel)
   uint32_t table_queries = 0;      // footprint queries on SATs (radiance, parallax, footprint sums)
   uint32_t remainder_samples = 0;  // multiscale: cheap samples of g outside its exact base
-  bool direct = false;             // answered by the exact sum (footprint below direct_max_side)
+  uint32_t visibility_samples = 0;  // multiscale: samples of the visibility correction
+  bool direct = false;              // answered by the exact sum (footprint below direct_max_side)
   bool without_control_variate = false;  // multiscale: sampled as brute force (a footprint below
                                          // EvalOptions::min_control_variate_tiles / _floats, or
                                          // its remainder above max_remainder_fraction)

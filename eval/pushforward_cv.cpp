@@ -16,6 +16,7 @@ using model::Lobe;
 
 constexpr uint32_t kMaxRank = reader::kMaxVisibilityBasisRank;
 constexpr uint32_t kStackImages = 1024;
+constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's, at any spp
 
 // What g needs per estimate (docs/evaluator.md, "Unbiased multi-scale"):
 //   g(t) = sum over the lobes asked for of
@@ -35,11 +36,13 @@ struct PushforwardConstants : ActiveLobes {
   const double* image_at_h = nullptr;
 };
 
-// g of every lobe asked for at texel index t (< N^2), added to g[], and when `low` is not null
-// g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]: one packed
-// record (cv_texels.hpp) and the per-estimate constants.
+// g of every lobe asked for at texel index t (< N^2), added to g[]; when `low` is not null g_r,
+// the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is not
+// null g with the texel's own visibility V in place of v(t), added to exact[]: one packed record
+// (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
-                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr) {
+                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr,
+                     double visibility = 0.0, Rgb* exact = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -53,6 +56,7 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
   auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar) {
     g[int(lobe)] += factor * (scalar * v);
     if (low) low[int(lobe)] += factor * (scalar * v_low);
+    if (exact) exact[int(lobe)] += factor * (scalar * visibility);
   };
   const double gap = texel.gap;
   if (k.specular && texel.count > 0) {
@@ -512,12 +516,17 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   const int64_t n = int64_t(data.n);
+  // With the visibility correction the residual is f - g_V, g with the texel's own visibility
+  // (which shade_texel has just computed), and the correction below integrates g_V - g.
+  const bool correct_visibility = data.options.visibility_samples > 0;
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
-    Rgb g[model::kLobeCount];
-    control_variate(data, k, t, g);
+    Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
+    control_variate(data, k, t, g, 0, nullptr, shading.visibility,
+                    correct_visibility ? g_exact : nullptr);
+    const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
-      residual[l] += shading.lobes[l] - g[l];
+      residual[l] += shading.lobes[l] - against[l];
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
@@ -573,9 +582,26 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     for (int l = 0; l < model::kLobeCount; ++l)
       remainder[l] += piece[l] * scale;
   }
+  // The visibility correction: the mean of g_V - g over its own stratified points of P (no BSDF
+  // evaluation: the texel's ASG and its packed record).
+  Rgb correction[model::kLobeCount];
+  uint32_t corrections = 0;
+  if (correct_visibility) {
+    corrections = uint32_t(
+        std::min<uint64_t>(uint64_t(data.options.visibility_samples) * spp, kMaxVisibilitySamples));
+    visit_destinations(data, shift, p, corrections, rng, [&](uint64_t t, double, double) {
+      Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
+      control_variate(data, k, t, g, 0, nullptr, texel_visibility(data, frame, t), g_exact);
+      for (int l = 0; l < model::kLobeCount; ++l)
+        correction[l] += g_exact[l] - g[l];
+    });
+    for (Rgb& c : correction)
+      c = c / double(corrections);
+  }
   for (int l = 0; l < model::kLobeCount; ++l)
-    out->lobes[l] += (base[l] + remainder[l]) / area + residual[l] / double(spp);
+    out->lobes[l] += (base[l] + remainder[l]) / area + residual[l] / double(spp) + correction[l];
   out->counters.samples += spp;
+  out->counters.visibility_samples += corrections;
   out->counters.texel_evals += spp;
   out->counters.remainder_samples += m;
   return {};

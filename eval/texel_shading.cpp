@@ -158,14 +158,18 @@ void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>&
   }
 }
 
+double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept {
+  // V exactly as reader::VisibilityAsgView::visibility computes it, for the mirrored direction.
+  const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe_at(t));
+  const double v = model::asg_eval(lobe, frame.wi_light);
+  return v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
+}
+
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept {
   const uint64_t t = data.texel(x, y);
   const model::ClothBsdf<double> bsdf(data.texel_params(t));
-  // V exactly as reader::VisibilityAsgView::visibility computes it, for the mirrored direction.
-  const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe_at(t));
-  const double v = model::asg_eval(lobe, frame.wi_light);
-  const double visibility = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
+  const double visibility = texel_visibility(data, frame, t);
   integrand_lobes(frame, bsdf.eval(frame.wi, frame.wo, visibility), out->lobes);
   out->visibility = visibility;
   out->gap = bsdf.gap();

@@ -120,6 +120,10 @@ struct TexelShading {
 void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>& f,
                      Rgb out[model::kLobeCount]) noexcept;
 
+// V(t, i) of texel index t (< N^2): its stored ASG at the frame's mirrored light, clamped to
+// [0, 1], the visibility the integrand uses. No allocation.
+double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
+
 // g(t) of texel (x, y) (any integers: the tile wraps).
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept;
