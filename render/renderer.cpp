@@ -64,7 +64,7 @@ uint64_t pixel_seed(uint64_t seed, uint32_t pass, uint64_t pixel) {
 
 struct Counters {
   std::atomic<uint64_t> estimates{0}, texel_evals{0}, samples{0}, direct{0}, cloth_pixels{0};
-  std::atomic<uint64_t> without_control_variate{0}, remainder_samples{0};
+  std::atomic<uint64_t> without_control_variate{0}, remainder_samples{0}, visibility_samples{0};
   std::atomic<uint64_t> out_of_plan{0}, fallback_brute{0}, fallback_zero{0};
   std::mutex mutex;
   double min_texels = INFINITY, max_texels = 0;
@@ -257,6 +257,8 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       if (e.counters.without_control_variate)
         counters.without_control_variate.fetch_add(1, std::memory_order_relaxed);
       counters.remainder_samples.fetch_add(e.counters.remainder_samples, std::memory_order_relaxed);
+      counters.visibility_samples.fetch_add(e.counters.visibility_samples,
+                                            std::memory_order_relaxed);
       return s.ok() ? e.value : Rgb();
     };
     // A BSDF-sampled direction and its density (continuous techniques only).
@@ -390,6 +392,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   st.direct = counters.direct;
   st.without_control_variate = counters.without_control_variate;
   st.remainder_samples = counters.remainder_samples;
+  st.visibility_samples = counters.visibility_samples;
   st.out_of_plan = counters.out_of_plan;
   st.fallback_brute = counters.fallback_brute;
   st.fallback_zero = counters.fallback_zero;

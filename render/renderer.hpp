@@ -49,6 +49,7 @@ struct RenderStats {
   uint64_t texel_evals = 0, samples = 0, direct = 0;
   uint64_t without_control_variate = 0;  // multiscale estimates sampled as brute force
   uint64_t remainder_samples = 0;  // multiscale: cheap samples of g over the footprints' remainders
+  uint64_t visibility_samples = 0;  // multiscale: samples of the visibility correction
   uint64_t cloth_pixels = 0;
   // Scene-planned assets: estimates refused as OutOfPlan, of which answered by brute force (the
   // fallback) and counted as 0 (refused again: a view bin or transmission left out).

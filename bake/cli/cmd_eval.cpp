@@ -142,7 +142,8 @@ int run_eval(const EvalCliOptions& o) {
                           {"without_control_variate", e.counters.without_control_variate},
                           {"texel_evals", e.counters.texel_evals},
                           {"samples", e.counters.samples},
-                          {"remainder_samples", e.counters.remainder_samples}};
+                          {"remainder_samples", e.counters.remainder_samples},
+                          {"visibility_samples", e.counters.visibility_samples}};
     print_json(out);
     return 0;
   }

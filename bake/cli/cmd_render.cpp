@@ -104,6 +104,7 @@ int run_render(const RenderCliOptions& o) {
                 {"direct_footprints", s.direct},
                 {"without_control_variate", s.without_control_variate},
                 {"remainder_samples", s.remainder_samples},
+                {"visibility_samples", s.visibility_samples},
                 {"out_of_plan", s.out_of_plan},
                 {"out_of_plan_brute_fallback", s.fallback_brute},
                 {"out_of_plan_zero", s.fallback_zero},
