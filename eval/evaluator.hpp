@@ -112,12 +112,12 @@ struct EvalOptions {
   // |P|) sqrt(spp (spp + 2))) of them, at least 1 when B is not empty, at most 65536. Any value > 0
   // keeps the estimate unbiased; this one balances their cost against their variance.
   double remainder_sample_scale = 32.0;
-  // The unbiased multi-scale form's visibility correction (docs/evaluator.md, "The visibility
-  // correction"): per residual sample, this many more samples of g with the texel's own visibility
-  // V(t, i) less g with its low-rank v(t), stratified over the footprint, and the residual taken
-  // against g with V. They need no BSDF evaluation, and V - v is most of f - g where the light
-  // grazes the relief. 0 disables it (the residual is f - g with v). Any value keeps the estimate
-  // unbiased; at most 1024.
+  // The unbiased multi-scale form's visibility correction (docs/evaluator.md, "Unbiased
+  // multi-scale", step 6): per residual sample, this many more samples of g with the texel's own
+  // visibility V(t, i) less g with its low-rank v(t), stratified over the footprint, and the
+  // residual taken against g with V. They need no BSDF evaluation, and V - v is most of f - g where
+  // the light grazes the relief. 0 disables it (the residual is f - g with v). Any value keeps the
+  // estimate unbiased; at most 1024.
   uint32_t visibility_samples = 8;
   // The unbiased multi-scale form uses its control variate on a footprint P when the effective
   // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
