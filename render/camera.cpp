@@ -34,46 +34,15 @@ CameraRay PinholeCamera::generate(double x, double y) const {
 }
 
 SurfaceDifferentials surface_differentials(const CameraRay& ray, const SurfaceHit& hit) {
-  SurfaceDifferentials out;
-  const Vec3& n = hit.normal;
-  const double dn = dot(ray.ray.direction, n);
-  if (!(std::abs(dn) > 1e-12)) return out;  // grazing: no finite footprint
-  // Transfer to the tangent plane: dP = t dD - ((t dD).n / (D.n)) D   (origin fixed).
-  auto transfer = [&](const Vec3& dd) {
-    const Vec3 m = dd * hit.t;
-    return m - ray.ray.direction * (dot(m, n) / dn);
-  };
-  const Vec3 px = transfer(ray.ddx), py = transfer(ray.ddy);
-  // Least squares dP = du dpdu + dv dpdv: the 2 x 2 Gram system.
-  const double a = dot(hit.dpdu, hit.dpdu), b = dot(hit.dpdu, hit.dpdv),
-               c = dot(hit.dpdv, hit.dpdv);
-  const double det = a * c - b * b;
-  if (!(std::abs(det) > 1e-300)) return out;
-  auto solve = [&](const Vec3& dp, double& du, double& dv) {
-    const double ru = dot(dp, hit.dpdu), rv = dot(dp, hit.dpdv);
-    du = (c * ru - b * rv) / det;
-    dv = (a * rv - b * ru) / det;
-  };
-  solve(px, out.du_dx, out.dv_dx);
-  solve(py, out.du_dy, out.dv_dy);
-  return out;
+  return model::uv_differentials(hit.t, ray.ray.direction, ray.ddx, ray.ddy, hit.normal, hit.dpdu,
+                                 hit.dpdv);
 }
 
 reader::Footprint footprint_rectangle(double u, double v, const SurfaceDifferentials& d,
                                       double texels_per_unit) {
   constexpr double kMaxSide = 1073741824.0;  // 2^30 texels
-  const double s = texels_per_unit;
-  double w = (std::abs(d.du_dx) + std::abs(d.du_dy)) * s;
-  double h = (std::abs(d.dv_dx) + std::abs(d.dv_dy)) * s;
-  const double area = std::abs(d.du_dx * d.dv_dy - d.du_dy * d.dv_dx) * s * s;
-  if (w > 0 && h > 0 && area > 0 && area < w * h) {
-    const double shrink = std::sqrt(area / (w * h));
-    w *= shrink;
-    h *= shrink;
-  }
-  if (!(w <= kMaxSide)) w = kMaxSide;  // NaN too
-  if (!(h <= kMaxSide)) h = kMaxSide;
-  return {u - 0.5 * w, v - 0.5 * h, u + 0.5 * w, v + 0.5 * h};
+  const model::FootprintRectangle r = model::pixel_footprint(u, v, d, texels_per_unit, kMaxSide);
+  return {r.u0, r.v0, r.u1, r.v1};
 }
 
 }  // namespace clothbake::render

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "formats/reader/radiance_query.hpp"
+#include "model/pixel_footprint.hpp"
 #include "render/scene.hpp"
 #include "render/shapes.hpp"
 
@@ -35,16 +36,16 @@ class PinholeCamera {
 
 // The surface-coordinate (u, v) derivatives of a pixel at a hit: dP/dx and dP/dy on the tangent
 // plane (the ray differentials transferred to the hit), expressed in the (dpdu, dpdv) basis by
-// least squares. Units: surface units per pixel.
-struct SurfaceDifferentials {
-  double du_dx = 0, dv_dx = 0, du_dy = 0, dv_dy = 0;
-};
+// least squares (model::uv_differentials, shared with the Mitsuba plug-in). Units: surface units
+// per pixel.
+using SurfaceDifferentials = model::UvDifferentials;
 SurfaceDifferentials surface_differentials(const CameraRay& ray, const SurfaceHit& hit);
 
 // The texel rectangle of a pixel: the axis-aligned box of the pixel's parallelogram (centred at
 // the hit, edges (du_dx, dv_dx) and (du_dy, dv_dy) times texels_per_unit), shrunk about its centre
 // to the parallelogram's area, so that the rectangle has the box's aspect ratio and the pixel's
-// true area (docs/rendering.md). Sides are clamped to [0, 2^30] texels.
+// true area (docs/rendering.md): model::pixel_footprint, the rule the Mitsuba plug-in shares, with
+// sides clamped to [0, 2^30] texels.
 reader::Footprint footprint_rectangle(double u_texels, double v_texels,
                                       const SurfaceDifferentials& d, double texels_per_unit);
 

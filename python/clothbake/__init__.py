@@ -54,6 +54,7 @@ from ._errors import (
 
 __all__ = [
     "CHUNK_SIZE",
+    "MAX_FOOTPRINT_TILES",
     "Asset",
     "AssetInfo",
     "BakeError",
@@ -75,6 +76,8 @@ __all__ = [
     "bake",
     "chunk_seed",
     "open_asset",
+    "pixel_footprints",
+    "uv_differentials",
 ]
 
 CHUNK_SIZE: int = _shading.CHUNK_SIZE
@@ -135,6 +138,83 @@ def chunk_seed(seed: int, chunk: int) -> int:
     ``chunk_seed(s, i // CHUNK_SIZE)``, whatever the thread count. Pure.
     """
     return int(_shading.chunk_seed(_check_uint64("seed", seed), _check_uint64("chunk", chunk)))
+
+
+MAX_FOOTPRINT_TILES: float = 2.0**24
+"""The widest footprint side the C interface accepts, in tiles (pixel_footprints clamps to it)."""
+
+
+def pixel_footprints(
+    uv: ArrayLike, duv_dx: ArrayLike, duv_dy: ArrayLike, tiles_per_uv: float
+) -> NDArray[np.float64]:
+    """The footprints of pixels from their surface coordinates and ray differentials.
+
+    The rule of clothbake's renderer (docs/rendering.md, "Pixel footprints"; the same C++ code,
+    model/pixel_footprint.hpp): the pixel's parallelogram, edges ``duv_dx`` and ``duv_dy`` (surface
+    uv units per pixel) around ``uv``, becomes the axis-aligned rectangle with its bounding box's
+    aspect ratio and its own area, all scaled by ``tiles_per_uv`` (tiles per uv unit). Rows of
+    shape (n, 2) each; returns (n, 4) rows (u0, v0, u1, v1) in tile units, ready for
+    Evaluator.estimate. Zero derivatives give points; sides are clamped to MAX_FOOTPRINT_TILES
+    (non-finite derivatives too). Raises ValueError for shapes that differ or tiles_per_uv that
+    is not finite and > 0. Pure.
+    """
+    if not (np.isfinite(tiles_per_uv) and tiles_per_uv > 0):
+        raise ValueError(f"tiles_per_uv must be finite and > 0, got {tiles_per_uv}")
+    arrays = []
+    for name, value in (("uv", uv), ("duv_dx", duv_dx), ("duv_dy", duv_dy)):
+        array = _real_array(name, value)
+        if array.ndim != 2 or array.shape[1] != 2:
+            raise ValueError(f"{name} must have shape (n, 2), got shape {array.shape}")
+        arrays.append(array)
+    n = arrays[0].shape[0]
+    for name, array in zip(("duv_dx", "duv_dy"), arrays[1:], strict=True):
+        if array.shape[0] != n:
+            raise ValueError(f"{name} has {array.shape[0]} rows, uv has {n}")
+    out = np.empty((n, 4), dtype=np.float64)
+    uv_rows, dx_rows, dy_rows = arrays
+    _shading.pixel_footprints(
+        uv_rows, dx_rows, dy_rows, float(tiles_per_uv), MAX_FOOTPRINT_TILES, out
+    )
+    return out
+
+
+def uv_differentials(
+    t: ArrayLike,
+    direction: ArrayLike,
+    ddx: ArrayLike,
+    ddy: ArrayLike,
+    normal: ArrayLike,
+    dpdu: ArrayLike,
+    dpdv: ArrayLike,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The uv derivatives of camera rays' hits, for pixel_footprints.
+
+    The transfer of clothbake's renderer (docs/rendering.md, "Pixel footprints"; the same C++
+    code, model/pixel_footprint.hpp): the derivatives ``ddx``, ``ddy`` of each ray's unit
+    ``direction`` per pixel (the origin fixed) carried to the tangent plane of its hit at distance
+    ``t`` with geometric ``normal``, dP = t dD - ((t dD).n / (D.n)) D, and solved for (du, dv) in
+    the basis ``dpdu``, ``dpdv`` by least squares. Rows: t of shape (n,), the others (n, 3).
+    Returns (duv_dx, duv_dy), each (n, 2); zero rows where a ray grazes its surface or the basis
+    is degenerate. Raises ValueError for shapes that differ. Pure.
+    """
+    times = _real_array("t", t).reshape(-1)
+    n = times.shape[0]
+    rows = [
+        _rows(name, value, n, broadcast=False, against="t")
+        for name, value in (
+            ("direction", direction),
+            ("ddx", ddx),
+            ("ddy", ddy),
+            ("normal", normal),
+            ("dpdu", dpdu),
+            ("dpdv", dpdv),
+        )
+    ]
+    out_dx = np.empty((n, 2), dtype=np.float64)
+    out_dy = np.empty((n, 2), dtype=np.float64)
+    d, dx, dy, normals, du, dv = rows
+    _shading.uv_differentials(times, d, dx, dy, normals, du, dv, out_dx, out_dy)
+    return out_dx, out_dy
 
 
 class Asset:
@@ -514,7 +594,9 @@ def _footprints(value: ArrayLike) -> NDArray[np.float64]:
     return array
 
 
-def _rows(name: str, value: ArrayLike, n: int, broadcast: bool = True) -> NDArray[np.float64]:
+def _rows(
+    name: str, value: ArrayLike, n: int, broadcast: bool = True, against: str = "footprints"
+) -> NDArray[np.float64]:
     array = _real_array(name, value)
     if broadcast and array.shape == (3,):
         return np.ascontiguousarray(np.broadcast_to(array, (n, 3)))
@@ -522,5 +604,5 @@ def _rows(name: str, value: ArrayLike, n: int, broadcast: bool = True) -> NDArra
         shapes = "(n, 3) or (3,)" if broadcast else "(n, 3)"
         raise ValueError(f"{name} must have shape {shapes}, got shape {array.shape}")
     if array.shape[0] != n:
-        raise ValueError(f"{name} has {array.shape[0]} rows, footprints has {n}")
+        raise ValueError(f"{name} has {array.shape[0]} rows, {against} has {n}")
     return array

@@ -16,6 +16,25 @@ class Asset:
     def source(self) -> str: ...
     def info(self) -> tuple[int, float, bool]: ...
 
+def pixel_footprints(
+    uv: NDArray[np.float64],
+    duv_dx: NDArray[np.float64],
+    duv_dy: NDArray[np.float64],
+    scale: float,
+    max_side: float,
+    out: NDArray[np.float64],
+) -> None: ...
+def uv_differentials(
+    t: NDArray[np.float64],
+    direction: NDArray[np.float64],
+    ddx: NDArray[np.float64],
+    ddy: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    dpdu: NDArray[np.float64],
+    dpdv: NDArray[np.float64],
+    out_dx: NDArray[np.float64],
+    out_dy: NDArray[np.float64],
+) -> None: ...
 def open_file(path: str, trusted: bool) -> Asset: ...
 def open_memory(data: bytes, trusted: bool) -> Asset: ...
 

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "capi/clothbake.h"
+#include "model/pixel_footprint.hpp"
 #include "model/splitmix64.hpp"
 
 namespace nb = nanobind;
@@ -176,6 +177,58 @@ cb_footprint footprint_at(const double* f, std::size_t i) {
   return cb_footprint{f[4 * i], f[4 * i + 1], f[4 * i + 2], f[4 * i + 3]};
 }
 
+using Pairs = nb::ndarray<const double, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu>;
+using OutFootprints = nb::ndarray<double, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu>;
+
+// out[i] = model::pixel_footprint(uv[i] * scale, (duv_dx[i], duv_dy[i]), scale, max_side): the
+// footprint rule of clothbake's renderer (docs/rendering.md, "Pixel footprints") for rows of
+// surface coordinates and their per-pixel derivatives. Pure; the GIL is held (a few ns a row).
+void pixel_footprints(const Pairs& uv, const Pairs& duv_dx, const Pairs& duv_dy, double scale,
+                      double max_side, OutFootprints& out) {
+  const std::size_t n = uv.shape(0);
+  if (duv_dx.shape(0) != n || duv_dy.shape(0) != n || out.shape(0) != n)
+    throw nb::value_error("uv, duv_dx, duv_dy and out must have the same number of rows");
+  const double *p = uv.data(), *dx = duv_dx.data(), *dy = duv_dy.data();
+  double* f = out.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    const clothbake::model::UvDifferentials d{dx[2 * i], dx[2 * i + 1], dy[2 * i], dy[2 * i + 1]};
+    const clothbake::model::FootprintRectangle r = clothbake::model::pixel_footprint(
+        p[2 * i] * scale, p[2 * i + 1] * scale, d, scale, max_side);
+    f[4 * i] = r.u0;
+    f[4 * i + 1] = r.v0;
+    f[4 * i + 2] = r.u1;
+    f[4 * i + 3] = r.v1;
+  }
+}
+
+using Scalars = nb::ndarray<const double, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
+using OutPairs = nb::ndarray<double, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu>;
+
+// Row i: model::uv_differentials(t[i], direction[i], ddx[i], ddy[i], normal[i], dpdu[i], dpdv[i])
+// into out_dx[i] = (du/dx, dv/dx) and out_dy[i] = (du/dy, dv/dy). Pure; the GIL is held.
+void uv_differentials(const Scalars& t, const Vectors& direction, const Vectors& ddx,
+                      const Vectors& ddy, const Vectors& normal, const Vectors& dpdu,
+                      const Vectors& dpdv, OutPairs& out_dx, OutPairs& out_dy) {
+  const std::size_t n = t.shape(0);
+  for (const std::size_t rows : {direction.shape(0), ddx.shape(0), ddy.shape(0), normal.shape(0),
+                                 dpdu.shape(0), dpdv.shape(0), out_dx.shape(0), out_dy.shape(0)})
+    if (rows != n) throw nb::value_error("every row array must have as many rows as t");
+  using clothbake::model::Vec3d;
+  const auto row = [](const Vectors& a, std::size_t i) {
+    const double* p = a.data() + 3 * i;
+    return Vec3d(p[0], p[1], p[2]);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const clothbake::model::UvDifferentials d =
+        clothbake::model::uv_differentials(t.data()[i], row(direction, i), row(ddx, i), row(ddy, i),
+                                           row(normal, i), row(dpdu, i), row(dpdv, i));
+    out_dx.data()[2 * i] = d.du_dx;
+    out_dx.data()[2 * i + 1] = d.dv_dx;
+    out_dy.data()[2 * i] = d.du_dy;
+    out_dy.data()[2 * i + 1] = d.dv_dy;
+  }
+}
+
 // An evaluator over an asset (which the binding keeps alive as long as the evaluator).
 class Evaluator {
  public:
@@ -329,6 +382,10 @@ NB_MODULE(_shading, m) {
       "result"_a);
 
   nb::class_<Asset>(m, "Asset").def_prop_ro("source", &Asset::source).def("info", &asset_info);
+  m.def("pixel_footprints", &pixel_footprints, "uv"_a, "duv_dx"_a, "duv_dy"_a, "scale"_a,
+        "max_side"_a, "out"_a.noconvert());
+  m.def("uv_differentials", &uv_differentials, "t"_a, "direction"_a, "ddx"_a, "ddy"_a, "normal"_a,
+        "dpdu"_a, "dpdv"_a, "out_dx"_a.noconvert(), "out_dy"_a.noconvert());
   m.def("open_file", &open_file, "path"_a, "trusted"_a);
   m.def("open_memory", &open_memory, "data"_a, "trusted"_a);
 
