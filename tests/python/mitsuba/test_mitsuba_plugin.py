@@ -294,3 +294,16 @@ def test_bad_properties_are_refused_naming_them(baked: Baked, tmp_path: Path) ->
         mi.load_dict({"type": "clothbake", "filename": str(missing)})
     with pytest.raises(Exception, match="method must be one of multiscale"):
         mi.load_dict(bsdf_dict(baked, "fastest"))
+
+
+def test_fabric_asset_bakes_once_per_toml(baked: Baked, tmp_path: Path) -> None:
+    fabric = tmp_path / "twill.toml"
+    fabric.write_bytes(baked.fabric.read_bytes())
+    first = mitsuba_plugin.fabric_asset(fabric, tmp_path / "cache")
+    stamp = first.stat().st_mtime_ns
+    assert mitsuba_plugin.fabric_asset(fabric, tmp_path / "cache") == first
+    assert first.stat().st_mtime_ns == stamp  # not baked again
+    clothbake.open_asset(first)  # a valid asset
+    fabric.write_text(fabric.read_text().replace('name = "twill 32"', 'name = "twill 32b"'))
+    second = mitsuba_plugin.fabric_asset(fabric, tmp_path / "cache")
+    assert second != first and second.exists()
