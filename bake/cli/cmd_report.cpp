@@ -138,14 +138,17 @@ Action setup_report(CLI::App& app) {
   (*et_cli)[1] = "1,2,4,8,16,32,64,128,256";
   auto* error_time = app.add_subcommand(
       "error-time",
-      "error against run time of the evaluator's methods on a scene, against its exact reference "
-      "(docs/rendering.md)");
+      "error against run time of the evaluator's methods on a scene, against its path-traced truth "
+      "and its exact footprint reference (docs/rendering.md)");
   add_scene_report_options(*error_time, et->scene, et->output, et->reference_spp, et->seed,
                            (*et_cli)[2]);
   error_time->add_option("--methods", (*et_cli)[0],
                          "methods to compare (default " + (*et_cli)[0] + ")");
   error_time->add_option("--spp", (*et_cli)[1], "spp sweep (default " + (*et_cli)[1] + ")");
   error_time->add_option("--cache", et->cache, "asset and reference cache folder");
+  error_time->add_option("--truth-spp", et->truth_spp,
+                         "spp of the path-traced truth (brute-path, two halves; even; 0 skips "
+                         "it; default 1024)");
   error_time->add_flag("--raw-tables", et->raw_tables,
                        "also render the multi-scale methods with the raw and the compressed tables "
                        "(fabrics baked with --keep-raw into the cache: 2 GB for a 256^2 twill)");

@@ -64,4 +64,10 @@ double relmse_between(const render::RenderResult& a, const render::RenderResult&
   return relmse_of_means(a, b, a, b, ref, mask).mean;
 }
 
+double relmse_against_noisy(const render::RenderResult& a, const render::RenderResult& t1,
+                            const render::RenderResult& t2, const render::RenderResult& t,
+                            const std::vector<uint8_t>& mask) {
+  return std::max(0.0, masked_relmse(a, t, mask) - 0.25 * relmse_between(t1, t2, t, mask));
+}
+
 }  // namespace clothbake::reports

@@ -43,4 +43,16 @@ double relmse_of_means_term(const render::RenderResult& a1, const render::Render
 double relmse_between(const render::RenderResult& a, const render::RenderResult& b,
                       const render::RenderResult& ref, const std::vector<uint8_t>& mask);
 
+// The relMSE of `a` against the expected value of a reference that is known only from two
+// independent renders t1, t2 of it at equal spp (the path-traced truth of `report error-time`),
+// with the reference's own noise removed: relMSE(a, t) - relmse_between(t1, t2, t) / 4, where
+// t = (t1 + t2) / 2 (the caller's, all four the same size) gives the weights. With a, t1, t2
+// independent, E[(a - t)^2] = E[(a - mu)^2] + var t and E[(t1 - t2)^2] = 4 var t. Clamped at 0
+// (below only by noise, when `a` is as converged as t). Its one bias is the weights' noise
+// (1 / (t^2 + eps^2) against 1 / (mu^2 + eps^2)): about 3 (sigma_t / mu)^2 relative, 0.3 % for a
+// truth whose pixels have 3 % noise.
+double relmse_against_noisy(const render::RenderResult& a, const render::RenderResult& t1,
+                            const render::RenderResult& t2, const render::RenderResult& t,
+                            const std::vector<uint8_t>& mask);
+
 }  // namespace clothbake::reports

@@ -39,6 +39,9 @@ struct Row {
   std::string method;
   uint32_t spp = 0;
   double seconds = 0, rmse = 0, relmse = 0, bias = 0;
+  // Against the path-traced truth (NaN without it), its own noise removed: over every pixel and
+  // over the compared (interior) pixels.
+  double relmse_truth = NAN, relmse_truth_interior = NAN;
   render::RenderResult image;
 };
 
@@ -78,6 +81,43 @@ double loglog_at(const std::vector<std::pair<double, double>>& pts, double x, bo
     }
   }
   return NAN;
+}
+
+// A render the report cached (the reference, a half of the truth), or an empty result when there
+// is none. A cache entry that is not what this report renders (not a regular file, unreadable,
+// another size, not three finite channels >= 0) is removed with a warning naming `what`.
+render::RenderResult load_cached_render(const fs::path& cached, int width, int height,
+                                        const char* what) {
+  render::RenderResult result;
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(cached, ec))) return result;
+  std::string problem;
+  try {
+    ImageReadLimits limits;
+    limits.max_side = width > height ? width : height;
+    inputs::require_regular_file(cached.string());
+    const Image img = read_image(cached.string(), limits);
+    if (img.width != width || img.height != height || img.channels != 3)
+      problem = fmt::format("{}x{} with {} channels, not {}x{} RGB", img.width, img.height,
+                            img.channels, width, height);
+    for (std::size_t i = 0; problem.empty() && i < img.pixels.size(); ++i)
+      if (!(img.pixels[i] >= 0.f) || !std::isfinite(img.pixels[i]))
+        problem = fmt::format("pixel ({}, {}) holds {}", i / 3 % img.width, i / 3 / img.width,
+                              img.pixels[i]);
+    if (problem.empty()) {
+      result.width = img.width;
+      result.height = img.height;
+      result.rgb = img.pixels;
+    }
+  } catch (const Error& e) {
+    problem = e.what();
+  }
+  if (!problem.empty()) {
+    warn(fmt::format("cached {} {} is unusable ({}): removed, rendering it again", what,
+                     cached.string(), problem));
+    fs::remove(cached, ec);
+  }
+  return result;
 }
 
 // The picture of one render as `clothbake render` previews it (the scene's exposure, tone map).
@@ -124,6 +164,11 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   if (o.spp.empty()) throw Error(ExitCode::Usage, "--spp: no spp given");
   for (uint32_t s : o.spp)
     if (s == 0) throw Error(ExitCode::Usage, "--spp: every spp must be at least 1");
+  if (o.truth_spp % 2 != 0)
+    throw Error(ExitCode::Usage,
+                "--truth-spp: 0 (no path-traced truth) or an even number (two independent halves), "
+                "not " +
+                    std::to_string(o.truth_spp));
   const fs::path out(o.output);
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
@@ -147,6 +192,9 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
     render::check_render_samples(scene.camera.width, scene.camera.height, spp, "--spp");
   render::check_render_samples(scene.camera.width, scene.camera.height,
                                environment ? o.reference_spp : 1, "--reference-spp");
+  if (o.truth_spp > 0)
+    render::check_render_samples(scene.camera.width, scene.camera.height, o.truth_spp / 2,
+                                 "--truth-spp");
   bake_scene_fabrics(loaded, o.cache, o.quiet);
   std::size_t near_field_object = scene.objects.size();
   if (o.near_field) {
@@ -166,26 +214,38 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   ref_options.method = eval::Method::Reference;
   ref_options.spp = environment ? o.reference_spp : 1;
   ref_options.seed = o.seed + 1000003;
-  std::string key = fmt::format("{} {} {}x{} spp {} seed {}", CLOTHBAKE_VERSION_STRING,
-                                inputs::hash_file(o.scene), scene.camera.width, scene.camera.height,
-                                ref_options.spp, ref_options.seed);
+  // The truth is keyed the same way, its spp and seeds in place of the reference's.
+  const std::string key_head =
+      fmt::format("{} {} {}x{}", CLOTHBAKE_VERSION_STRING, inputs::hash_file(o.scene),
+                  scene.camera.width, scene.camera.height);
+  std::string key_tail;
   std::map<std::string, std::string> asset_hashes;  // each file read once, however many objects
   for (const render::Object& obj : scene.objects)
     if (!obj.asset.empty()) {
       std::string& hash = asset_hashes[obj.asset];
       if (hash.empty()) hash = inputs::hash_file(obj.asset);
-      key += " " + hash;
+      key_tail += " " + hash;
     }
   for (const render::Light& l : scene.lights)
     if (l.type == render::LightType::Environment) {
       const render::EnvironmentMap& map = l.environment;
-      key += fmt::format(" env {}x{} scale {} ", map.width, map.height, map.scale) +
-             inputs::xxh64_hex(std::string_view(reinterpret_cast<const char*>(map.rgb.data()),
-                                                map.rgb.size() * sizeof(float)));
+      key_tail += fmt::format(" env {}x{} scale {} ", map.width, map.height, map.scale) +
+                  inputs::xxh64_hex(std::string_view(reinterpret_cast<const char*>(map.rgb.data()),
+                                                     map.rgb.size() * sizeof(float)));
     }
   const fs::path cache_dir = scene_cache_dir(o.cache);
   fs::create_directories(cache_dir, ec);
+  const std::string key =
+      fmt::format("{} spp {} seed {}", key_head, ref_options.spp, ref_options.seed) + key_tail;
   const fs::path cached = cache_dir / ("reference-" + inputs::xxh64_hex(key) + ".exr");
+  // The truth's two halves, brute-path at truth_spp / 2 each with their own seeds.
+  const uint64_t truth_seeds[2] = {o.seed + 2000003, o.seed + 3000017};
+  const std::string truth_key = fmt::format("{} truth spp {} seeds {} {}", key_head, o.truth_spp,
+                                            truth_seeds[0], truth_seeds[1]) +
+                                key_tail;
+  const fs::path truth_cached[2] = {
+      cache_dir / ("truth-" + inputs::xxh64_hex(truth_key) + "-a.exr"),
+      cache_dir / ("truth-" + inputs::xxh64_hex(truth_key) + "-b.exr")};
   // One renderer for every render of the report: its evaluators keep what they build on first use
   // (the parallax planes of the views met, per-bin tables), as a renderer keeps its assets between
   // frames, so that the timed renders measure shading, not the asset's one-time preparation.
@@ -212,39 +272,9 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
     form.tables = eval::TableChoice::Compressed;
     with_compressed = std::make_unique<render::Renderer>(raw_loaded.scene, form);
   }
-  render::RenderResult reference;
+  render::RenderResult reference =
+      load_cached_render(cached, scene.camera.width, scene.camera.height, "reference");
   double reference_seconds = 0;
-  // The cached reference is a cache entry: one that is not what this report renders (truncated,
-  // another size, not three finite channels >= 0) is removed with a warning and rendered again.
-  if (fs::exists(fs::symlink_status(cached, ec))) {
-    std::string problem;
-    try {
-      ImageReadLimits limits;
-      limits.max_side =
-          scene.camera.width > scene.camera.height ? scene.camera.width : scene.camera.height;
-      inputs::require_regular_file(cached.string());
-      const Image img = read_image(cached.string(), limits);
-      if (img.width != scene.camera.width || img.height != scene.camera.height || img.channels != 3)
-        problem = fmt::format("{}x{} with {} channels, not {}x{} RGB", img.width, img.height,
-                              img.channels, scene.camera.width, scene.camera.height);
-      for (std::size_t i = 0; problem.empty() && i < img.pixels.size(); ++i)
-        if (!(img.pixels[i] >= 0.f) || !std::isfinite(img.pixels[i]))
-          problem = fmt::format("pixel ({}, {}) holds {}", i / 3 % img.width, i / 3 / img.width,
-                                img.pixels[i]);
-      if (problem.empty()) {
-        reference.width = img.width;
-        reference.height = img.height;
-        reference.rgb = img.pixels;
-      }
-    } catch (const Error& e) {
-      problem = e.what();
-    }
-    if (!problem.empty()) {
-      warn("cached reference " + cached.string() + " is unusable (" + problem +
-           "): removed, rendering it again");
-      fs::remove(cached, ec);
-    }
-  }
   // On a terminal (not with --json) every render shows a bar, and the reference says what it
   // costs: it is the report's longest render by far.
   pipeline::ProgressBar bar(!o.quiet && pipeline::ProgressBar::stderr_is_terminal());
@@ -262,6 +292,36 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
     reference_seconds = reference.stats.seconds;
     render::write_render_images(cached.string(), reference, scene.preview);
   }
+  // The path-traced truth: what brute-path converges to (each sample its own camera ray through a
+  // uniform point of the pixel), as two independent halves whose difference measures the noise
+  // left in their average, which relmse_against_noisy removes from every error against it.
+  render::RenderResult truth_half[2], truth;
+  double truth_seconds = 0;
+  const std::vector<uint8_t> every_pixel(compared.size(), 1);
+  if (o.truth_spp > 0) {
+    for (int h = 0; h < 2; ++h) {
+      truth_half[h] = load_cached_render(truth_cached[h], scene.camera.width, scene.camera.height,
+                                         "path-traced truth");
+      if (!truth_half[h].rgb.empty()) continue;
+      render::RenderOptions ro;
+      ro.method = eval::Method::Brute;
+      ro.path_traced = true;
+      ro.spp = o.truth_spp / 2;
+      ro.seed = truth_seeds[h];
+      bar.begin(fmt::format("path-traced truth {}/2, {} spp", h + 1, ro.spp));
+      truth_half[h] = renderer.render(ro, progress);
+      bar.finish();
+      truth_seconds += truth_half[h].stats.seconds;
+      render::write_render_images(truth_cached[h].string(), truth_half[h], scene.preview);
+    }
+    truth = truth_half[0];
+    for (std::size_t k = 0; k < truth.rgb.size(); ++k)
+      truth.rgb[k] = 0.5f * (truth_half[0].rgb[k] + truth_half[1].rgb[k]);
+  }
+  // A render's relMSE against the truth, over `mask`, its noise removed.
+  auto against_truth = [&](const render::RenderResult& image, const std::vector<uint8_t>& mask) {
+    return relmse_against_noisy(image, truth_half[0], truth_half[1], truth, mask);
+  };
   // Each method's first render at 1 spp, untimed in the rows: it builds what the method reads on
   // first use (its time is reported as `warmup`).
   nlohmann::json warmup = nlohmann::json::object();
@@ -290,6 +350,10 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
       row.image = renderer.render(ro, progress);
       row.seconds = row.image.stats.seconds;
       errors(row.image, reference, compared, &row.relmse, &row.rmse);
+      if (o.truth_spp > 0) {
+        row.relmse_truth = against_truth(row.image, every_pixel);
+        row.relmse_truth_interior = against_truth(row.image, compared);
+      }
       rows.push_back(std::move(row));
     }
   // Each method's bias: its largest-spp render against a second one with another seed.
@@ -311,10 +375,11 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   bar.finish();
   fs::create_directories(out / "images", ec);
   if (ec) throw_input_error(o.output + ": cannot create it (" + ec.message() + ")");
-  auto curve = [&](const std::string& method) {
-    std::vector<std::pair<double, double>> pts;  // (seconds, relmse) by seconds
+  // `error` picks the judge: the reference (relmse) or the path-traced truth (relmse_truth).
+  auto curve = [&](const std::string& method, double Row::*error) {
+    std::vector<std::pair<double, double>> pts;  // (seconds, error) by seconds
     for (const Row& r : rows)
-      if (r.method == method) pts.push_back({r.seconds, r.relmse});
+      if (r.method == method) pts.push_back({r.seconds, r.*error});
     std::sort(pts.begin(), pts.end());
     return pts;
   };
@@ -325,7 +390,7 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
       operating = &r;
 
   nlohmann::json summary = nlohmann::json::object();
-  const auto brute = curve("brute");
+  const auto brute = curve("brute", &Row::relmse);
   nlohmann::json grid = nlohmann::json::array();
   // A baseline's cost at a target error: interpolated inside its sweep (log-log on the error axis);
   // outside, a bound: its cheapest render when even that is more accurate (an upper bound of the
@@ -335,10 +400,11 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
     double cost;
     const char* bound;  // "none", "upper" or "lower" (of the speedup)
   };
-  auto baseline_at = [&](const std::string& baseline, double target, bool spp) -> AtError {
-    std::vector<std::pair<double, double>> pts;  // (cost, relmse) by decreasing error
+  auto baseline_at = [&](const std::string& baseline, double Row::*error, double target,
+                         bool spp) -> AtError {
+    std::vector<std::pair<double, double>> pts;  // (cost, error) by decreasing error
     for (const Row& r : rows)
-      if (r.method == baseline) pts.push_back({spp ? double(r.spp) : r.seconds, r.relmse});
+      if (r.method == baseline) pts.push_back({spp ? double(r.spp) : r.seconds, r.*error});
     std::sort(pts.begin(), pts.end(),
               [](const auto& x, const auto& y) { return x.second > y.second; });
     const double c = loglog_at(pts, target, true);
@@ -352,7 +418,7 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
     return worst <= target ? AtError{cheapest, "upper"} : AtError{costliest, "lower"};
   };
   if (operating && !brute.empty()) {
-    const AtError at = baseline_at("brute", operating->relmse, false);
+    const AtError at = baseline_at("brute", &Row::relmse, operating->relmse, false);
     const double e_equal_time = loglog_at(brute, operating->seconds, false);
     summary["operating_point"] = {{"method", "multiscale"},
                                   {"spp", operating->spp},
@@ -360,27 +426,33 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
                                   {"relmse", operating->relmse}};
     // Every other method at the operating spp against each brute-force baseline present: the
     // equal-error ratio in time and in samples per pixel (the paper's Table 1 columns), and the
-    // error ratio at equal time.
+    // error ratio at equal time; judged by the path-traced truth first (over every pixel), then
+    // by the reference (over the compared pixels).
     summary["pairs"] = nlohmann::json::array();
-    for (const std::string& baseline : {std::string("brute"), std::string("brute-path")}) {
-      if (curve(baseline).empty()) continue;
-      for (const Row& r : rows) {
-        if (r.method == "brute" || r.method == "brute-path" || r.spp != operating->spp) continue;
-        const AtError t = baseline_at(baseline, r.relmse, false);
-        const AtError n = baseline_at(baseline, r.relmse, true);
-        const double e = loglog_at(curve(baseline), r.seconds, false);
-        summary["pairs"].push_back(
-            {{"method", r.method},
-             {"against", baseline},
-             {"spp", r.spp},
-             {"equal_error_speedup", t.cost / r.seconds},
-             {"equal_error_speedup_bound", t.bound},
-             {"equal_error_spp_ratio", n.cost / double(r.spp)},
-             {"equal_error_spp_ratio_bound", n.bound},
-             {"equal_time_error_ratio",
-              std::isfinite(e) ? nlohmann::json(e / r.relmse) : nlohmann::json(nullptr)}});
+    std::vector<std::pair<std::string, double Row::*>> judges;
+    if (o.truth_spp > 0) judges.push_back({"truth", &Row::relmse_truth});
+    judges.push_back({"reference", &Row::relmse});
+    for (const auto& [judge, error] : judges)
+      for (const std::string& baseline : {std::string("brute"), std::string("brute-path")}) {
+        if (curve(baseline, error).empty()) continue;
+        for (const Row& r : rows) {
+          if (r.method == "brute" || r.method == "brute-path" || r.spp != operating->spp) continue;
+          const AtError t = baseline_at(baseline, error, r.*error, false);
+          const AtError n = baseline_at(baseline, error, r.*error, true);
+          const double e = loglog_at(curve(baseline, error), r.seconds, false);
+          summary["pairs"].push_back(
+              {{"method", r.method},
+               {"against", baseline},
+               {"judge", judge},
+               {"spp", r.spp},
+               {"equal_error_speedup", t.cost / r.seconds},
+               {"equal_error_speedup_bound", t.bound},
+               {"equal_error_spp_ratio", n.cost / double(r.spp)},
+               {"equal_error_spp_ratio_bound", n.bound},
+               {"equal_time_error_ratio",
+                std::isfinite(e) ? nlohmann::json(e / (r.*error)) : nlohmann::json(nullptr)}});
+        }
       }
-    }
     summary["equal_error_speedup"] = at.cost / operating->seconds;
     // "none": interpolated; "lower": brute force never reached the error within the sweep (the
     // speedup is at least this); "upper": even its fastest render was more accurate (at most this).
@@ -407,6 +479,11 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
         if (r.method == "brute" && (!equal_error || r.relmse < equal_error->relmse))
           equal_error = &r;
     const double scale = std::max(0.05, 2 * std::sqrt(operating->relmse));
+    if (o.truth_spp > 0) {
+      write_png(out / "images" / "truth.png", truth, scene.preview);
+      grid.push_back({{"label", fmt::format("path-traced truth {} spp", o.truth_spp)},
+                      {"image", "images/truth.png"}});
+    }
     write_png(out / "images" / "reference.png", reference, scene.preview);
     grid.push_back({{"label", "reference"}, {"image", "images/reference.png"}});
     auto panel = [&](const Row* r, const std::string& name, const std::string& label) {
@@ -470,19 +547,41 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   }
 
   // CSV and JSON.
-  std::string csv = "scene,method,spp,seconds,rmse,relmse,bias_estimate\n";
+  std::string csv =
+      "scene,method,spp,seconds,rmse,relmse,bias_estimate,relmse_truth,relmse_truth_interior\n";
   nlohmann::json jrows = nlohmann::json::array();
+  auto or_null = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+  auto or_empty = [](double x) { return std::isfinite(x) ? fmt::format("{:.6g}", x) : ""; };
   for (const Row& r : rows) {
     csv +=
-        fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", fs::path(o.scene).filename().string(),
-                    r.method, r.spp, r.seconds, r.rmse, r.relmse, r.bias);
+        fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{},{}\n",
+                    fs::path(o.scene).filename().string(), r.method, r.spp, r.seconds, r.rmse,
+                    r.relmse, r.bias, or_empty(r.relmse_truth), or_empty(r.relmse_truth_interior));
     jrows.push_back({{"method", r.method},
                      {"spp", r.spp},
                      {"seconds", r.seconds},
                      {"rmse", r.rmse},
                      {"relmse", r.relmse},
-                     {"bias_estimate", r.bias}});
+                     {"bias_estimate", r.bias},
+                     {"relmse_truth", or_null(r.relmse_truth)},
+                     {"relmse_truth_interior", or_null(r.relmse_truth_interior)}});
   }
+  // The truth: its cost, the noise left in it, and what the footprint model (the reference, the
+  // multi-scale methods' limit) differs from it by.
+  nlohmann::json jtruth = nullptr;
+  if (o.truth_spp > 0)
+    jtruth = {
+        {"method", "brute-path"},
+        {"spp", o.truth_spp},
+        {"seeds", {truth_seeds[0], truth_seeds[1]}},
+        {"cached", truth_seconds == 0},
+        {"seconds", truth_seconds},
+        {"files", {truth_cached[0].string(), truth_cached[1].string()}},
+        {"noise_relmse", 0.25 * relmse_between(truth_half[0], truth_half[1], truth, every_pixel)},
+        {"noise_relmse_interior",
+         0.25 * relmse_between(truth_half[0], truth_half[1], truth, compared)},
+        {"reference_relmse", against_truth(reference, every_pixel)},
+        {"reference_relmse_interior", against_truth(reference, compared)}};
   nlohmann::json doc = {{"scene", o.scene},
                         {"resolution", {scene.camera.width, scene.camera.height}},
                         {"pixels_compared", pixels_compared},
@@ -492,6 +591,7 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
                           {"cached", reference_seconds == 0},
                           {"seconds", reference_seconds},
                           {"file", cached.string()}}},
+                        {"truth", jtruth},
                         {"warmup", warmup},
                         {"rows", jrows},
                         {"summary", summary},
@@ -522,13 +622,33 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
                        terminal_safe(o.scene).c_str(), scene.camera.width, scene.camera.height,
                        reference_seconds == 0 ? "from the cache"
                                               : fmt::format("{:.3g} s", reference_seconds).c_str());
-  text += fmt::sprintf("  errors over %zu of %d pixels (silhouettes and shadow edges left out)\n",
-                       pixels_compared, scene.camera.width * scene.camera.height);
-  text += fmt::sprintf("  %-17s %5s %10s %12s %12s\n", "method", "spp", "seconds", "relMSE",
-                       "bias est.");
-  for (const Row& r : rows)
-    text += fmt::sprintf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds,
-                         r.relmse, r.bias);
+  if (o.truth_spp > 0)
+    text += fmt::sprintf(
+        "  path-traced truth: brute-path at %u spp, %s; its noise relMSE %.3g; the reference "
+        "(the footprint model's limit) against it: relMSE %.4g (%.4g on the compared pixels)\n",
+        o.truth_spp,
+        truth_seconds == 0 ? "from the cache" : fmt::format("{:.3g} s", truth_seconds).c_str(),
+        jtruth["noise_relmse"].get<double>(), jtruth["reference_relmse"].get<double>(),
+        jtruth["reference_relmse_interior"].get<double>());
+  text += fmt::sprintf(
+      "  relMSE against the reference over %zu of %d pixels (silhouettes and shadow edges left "
+      "out)%s\n",
+      pixels_compared, scene.camera.width * scene.camera.height,
+      o.truth_spp > 0 ? "; against the truth over every pixel and over those" : "");
+  if (o.truth_spp > 0) {
+    text += fmt::sprintf("  %-17s %5s %10s %12s %12s %12s %12s\n", "method", "spp", "seconds",
+                         "vs truth", "(interior)", "vs ref.", "bias est.");
+    for (const Row& r : rows)
+      text +=
+          fmt::sprintf("  %-17s %5u %10.3g %12.4g %12.4g %12.4g %12.3g\n", r.method.c_str(), r.spp,
+                       r.seconds, r.relmse_truth, r.relmse_truth_interior, r.relmse, r.bias);
+  } else {
+    text += fmt::sprintf("  %-17s %5s %10s %12s %12s\n", "method", "spp", "seconds", "relMSE",
+                         "bias est.");
+    for (const Row& r : rows)
+      text += fmt::sprintf("  %-17s %5u %10.3g %12.4g %12.3g\n", r.method.c_str(), r.spp, r.seconds,
+                           r.relmse, r.bias);
+  }
   if (summary.contains("equal_error_speedup")) {
     const std::string bound = summary["equal_error_speedup_bound"].get<std::string>();
     text += fmt::sprintf(
@@ -550,9 +670,10 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
         return b == "lower" ? ">" : b == "upper" ? "<" : "";
       };
       text += fmt::sprintf(
-          "  multi-scale at %u spp against %s at equal error: %s%.3gx in time, %s%.3gx in "
-          "samples per pixel\n",
+          "  multi-scale at %u spp against %s at equal error (judged by the %s): %s%.3gx in time, "
+          "%s%.3gx in samples per pixel\n",
           pair["spp"].get<uint32_t>(), pair["against"].get<std::string>().c_str(),
+          pair["judge"] == "truth" ? "path-traced truth" : "reference",
           bound("equal_error_speedup_bound"), pair["equal_error_speedup"].get<double>(),
           bound("equal_error_spp_ratio_bound"), pair["equal_error_spp_ratio"].get<double>());
     }

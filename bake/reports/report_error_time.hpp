@@ -1,4 +1,5 @@
-// `clothbake report error-time SCENE.toml -o DIR`: renders the scene's reference once (cached by
+// `clothbake report error-time SCENE.toml -o DIR`: renders the scene's reference (the exact
+// footprint integrals) and its path-traced truth (brute-path converged) once each (cached by
 // content), then every method over an spp sweep, timing each render's wall time on this machine in
 // this run; writes DIR/error-time.csv, error-time.json (rows, and per method pair the equal-error
 // speedup and the equal-time error ratio), error-time.png/.svg and grid.png (via
@@ -21,7 +22,10 @@ struct ErrorTimeOptions {
   std::vector<std::string> methods = {"multiscale", "multiscale-paper", "brute", "brute-path"};
   std::vector<uint32_t> spp = {1, 2, 4, 8, 16, 32, 64, 128, 256};
   uint32_t reference_spp = 256;  // light samples of the reference with environment lights
-  int width = 0, height = 0;     // > 0: render at this size instead of the scene camera's
+  // The path-traced truth: brute-path at this many spp (two independent halves, to remove its own
+  // noise from the errors); 0 skips it. Even.
+  uint32_t truth_spp = 1024;
+  int width = 0, height = 0;  // > 0: render at this size instead of the scene camera's
   uint64_t seed = 1;
   bool no_plots = false;
   bool quiet = false;  // no progress bar and no baking messages on stderr (`--json`)

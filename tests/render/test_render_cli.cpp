@@ -343,11 +343,12 @@ TEST(ReportErrorTime, ProgressOnATerminal) {
   fs::remove_all(cache);
   const auto tty = test_support::run_clothbake_on_terminal(
       {"report", "error-time", path.string(), "-o", out.string(), "--spp", "1,2", "--methods",
-       "multiscale,brute", "--cache", cache.string(), "--no-plots"});
+       "multiscale,brute", "--cache", cache.string(), "--truth-spp", "4", "--no-plots"});
   ASSERT_EQ(tty.code, 0) << tty.err;
   EXPECT_NE(tty.err.find("rendering the reference once"), std::string::npos) << tty.err;
   EXPECT_NE(tty.err.find("--image-size W,H renders fewer"), std::string::npos) << tty.err;
-  for (const char* label : {"reference 16x12", "[1/4] multiscale 1 spp", "[4/4] brute 2 spp"})
+  for (const char* label : {"reference 16x12", "path-traced truth 2/2, 2 spp",
+                            "[1/4] multiscale 1 spp", "[4/4] brute 2 spp"})
     EXPECT_NE(tty.err.find(label), std::string::npos) << label << "\n" << tty.err;
   EXPECT_TRUE(fs::is_regular_file(out / "error-time.csv"));
 }
@@ -357,9 +358,9 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   scene.replace(scene.find("resolution = [16, 12]"), 21, "resolution = [64, 64]");
   const fs::path path = write_scene("tiny.toml", scene);
   const fs::path out = assets().dir / "error-time";
-  const auto run = test_support::run_clothbake({"report", "error-time", path.string(), "-o",
-                                                out.string(), "--spp", "1,2,4,8", "--cache",
-                                                (assets().dir / "cache").string(), "--json"});
+  const auto run = test_support::run_clothbake(
+      {"report", "error-time", path.string(), "-o", out.string(), "--spp", "1,2,4,8", "--cache",
+       (assets().dir / "cache").string(), "--truth-spp", "256", "--json"});
   ASSERT_EQ(run.code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(run.out);
   for (const char* f :
@@ -371,14 +372,34 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   EXPECT_EQ(info.code, 0) << info.err;
   EXPECT_EQ(j["rows"].size(), 4u * 4u);                 // four methods (brute-path too) at four spp
   EXPECT_EQ(j["pixels_compared"].get<int>(), 64 * 64);  // the plane fills the view: no silhouette
-  // Multi-scale against both brute-force baselines, in time and in samples per pixel.
-  int pairs = 0;
+  // Multi-scale against both brute-force baselines, in time and in samples per pixel, judged by
+  // the path-traced truth first, then by the reference.
+  std::vector<std::string> judges;
   for (const auto& p : j["summary"]["pairs"])
     if (p["method"] == "multiscale") {
-      ++pairs;
+      judges.push_back(p["judge"].get<std::string>() + " " + p["against"].get<std::string>());
       EXPECT_GT(p["equal_error_spp_ratio"].get<double>(), 0.0) << p.dump();
     }
-  EXPECT_EQ(pairs, 2);
+  EXPECT_EQ(judges, (std::vector<std::string>{"truth brute", "truth brute-path", "reference brute",
+                                              "reference brute-path"}));
+  // The truth: brute-path converged, in two halves whose noise is measured and removed. brute-path
+  // is unbiased against it, so its error is its variance, which falls as 1/spp (a ratio of 8 from
+  // 1 to 8 spp; 4096 pixels give the ratio to about 10 %); the footprint reference differs from it
+  // (the rectangle at the centre's directions against the pixel's true preimage) by far less than
+  // brute-path's 1-spp noise.
+  const nlohmann::json& truth = j["truth"];
+  EXPECT_EQ(truth["spp"].get<int>(), 256);
+  EXPECT_FALSE(truth["cached"].get<bool>());
+  std::map<std::pair<std::string, int>, double> truth_error;
+  for (const auto& row : j["rows"])
+    truth_error[{row["method"].get<std::string>(), row["spp"].get<int>()}] =
+        row["relmse_truth"].get<double>();
+  const double path_1 = truth_error[{"brute-path", 1}], path_8 = truth_error[{"brute-path", 8}];
+  EXPECT_GT(path_1 / path_8, 6.0) << path_1 << " " << path_8;
+  EXPECT_LT(path_1 / path_8, 10.5) << path_1 << " " << path_8;
+  const double noise = truth["noise_relmse"].get<double>();
+  EXPECT_NEAR(noise, path_1 / 256, 0.3 * path_1 / 256);
+  EXPECT_LT(truth["reference_relmse"].get<double>(), 0.1 * path_1);
   const double speedup = j["summary"]["equal_error_speedup"].get<double>();
   EXPECT_TRUE(std::isfinite(speedup) && speedup > 0) << speedup;
   for (const auto& row : j["rows"])
@@ -386,9 +407,11 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   // The reference is cached: a second report reuses it.
   const auto again = test_support::run_clothbake(
       {"report", "error-time", path.string(), "-o", out.string(), "--spp", "1,2", "--methods",
-       "multiscale,brute", "--cache", (assets().dir / "cache").string(), "--no-plots", "--json"});
+       "multiscale,brute", "--cache", (assets().dir / "cache").string(), "--truth-spp", "256",
+       "--no-plots", "--json"});
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_TRUE(nlohmann::json::parse(again.out)["reference"]["cached"].get<bool>());
+  EXPECT_TRUE(nlohmann::json::parse(again.out)["truth"]["cached"].get<bool>());
 }
 
 // A scene the report refuses leaves no output folder; the cached reference is keyed on everything
@@ -715,7 +738,9 @@ TEST(RenderHardening, SampleCountsAndTimeBudgetsAreBounded) {
       {"render", scene, "-o", out, "--spp", "1000000000"},
       {"render", scene, "-o", out, "--time-budget", "1e6"},
       {"report", "error-time", scene, "-o", out + "-report", "--spp", "4294967296"},
-      {"report", "error-time", scene, "-o", out + "-report", "--spp", "1,1000000000"}};
+      {"report", "error-time", scene, "-o", out + "-report", "--spp", "1,1000000000"},
+      {"report", "error-time", scene, "-o", out + "-report", "--truth-spp", "3"},
+      {"report", "error-time", scene, "-o", out + "-report", "--truth-spp", "4000000000"}};
   for (const auto& args : refused) {
     const auto run = run_clothbake(args);
     EXPECT_EQ(run.code, 1) << args[4] << " " << args.back() << ": " << run.err;
@@ -725,9 +750,10 @@ TEST(RenderHardening, SampleCountsAndTimeBudgetsAreBounded) {
   EXPECT_NE(run_clothbake(refused[1]).err.find("2^36"), std::string::npos);
 }
 
-// The cached reference is a cache entry: another channel count (4 was heap corruption, 1 read
-// past its end), NaN pixels (`nan` rows) or a truncated file (which left DIR/images/ behind the
-// failure) are warned about and rendered again. --no-plots lists no picture it did not draw.
+// The cached reference and the cached path-traced truth are cache entries: another channel count
+// (4 was heap corruption, 1 read past its end), NaN pixels (`nan` rows) or a truncated file (which
+// left DIR/images/ behind the failure) are warned about and rendered again. --no-plots lists no
+// picture it did not draw.
 TEST(RenderHardening, CachedReferenceIsCheckedLikeACacheEntry) {
   const fs::path cache = assets().dir / "cache-reference";
   fs::remove_all(cache);
@@ -735,8 +761,9 @@ TEST(RenderHardening, CachedReferenceIsCheckedLikeACacheEntry) {
   const fs::path out = assets().dir / "reference-report";
   auto report = [&](bool json) {
     std::vector<std::string> args = {
-        "report", "error-time", scene.string(), "-o",      out.string(),   "--spp",
-        "1",      "--methods",  "brute",        "--cache", cache.string(), "--no-plots"};
+        "report",       "error-time", scene.string(), "-o",    out.string(),
+        "--spp",        "1",          "--methods",    "brute", "--cache",
+        cache.string(), "--no-plots", "--truth-spp",  "8"};
     if (json) args.push_back("--json");
     return run_clothbake(args);
   };
@@ -744,37 +771,45 @@ TEST(RenderHardening, CachedReferenceIsCheckedLikeACacheEntry) {
   ASSERT_EQ(run.code, 0) << run.err;
   EXPECT_EQ(run.out.find(".png"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("{error-time.csv,error-time.json}"), std::string::npos) << run.out;
-  fs::path cached;
-  for (const auto& e : fs::directory_iterator(cache))
-    if (e.path().extension() == ".exr") cached = e.path();
-  ASSERT_FALSE(cached.empty());
-  std::ifstream in(cached, std::ios::binary);
-  const std::string good((std::istreambuf_iterator<char>(in)), {});
-  const auto image = [&](int w, int h, int channels, float value) {
-    Image img(w, h, channels);
-    for (float& v : img.pixels)
-      v = value;
-    write_image(cached.string(), img, PixelType::Float32);
-  };
-  const std::pair<const char*, std::function<void()>> damaged[] = {
-      {"4 channels", [&] { image(16, 12, 4, 0.5f); }},
-      {"1 channel", [&] { image(16, 12, 1, 0.5f); }},
-      {"NaN", [&] { image(16, 12, 3, std::nanf("")); }},
-      {"truncated", [&] {
-         std::ofstream(cached, std::ios::binary | std::ios::trunc)
-             << good.substr(0, good.size() / 2);
-       }}};
-  for (const auto& [what, damage] : damaged) {
-    damage();
-    run = report(true);
-    ASSERT_EQ(run.code, 0) << what << ": " << run.err;
-    EXPECT_NE(run.err.find("cached reference " + cached.string() + " is unusable"),
-              std::string::npos)
-        << what << ": " << run.err;
-    const nlohmann::json j = nlohmann::json::parse(run.out);
-    EXPECT_FALSE(j["reference"]["cached"].get<bool>()) << what;
-    for (const auto& row : j["rows"])
-      EXPECT_TRUE(std::isfinite(row["relmse"].get<double>())) << what;
+  // The reference and the first half of the path-traced truth, each damaged in turn.
+  for (const std::string prefix : {"reference-", "truth-"}) {
+    fs::path cached;
+    for (const auto& e : fs::directory_iterator(cache))
+      if (e.path().extension() == ".exr" && e.path().filename().string().rfind(prefix, 0) == 0 &&
+          (prefix == "reference-" || e.path().stem().string().back() == 'a'))
+        cached = e.path();
+    ASSERT_FALSE(cached.empty()) << prefix;
+    const std::string what = prefix == "reference-" ? "reference" : "path-traced truth";
+    std::ifstream in(cached, std::ios::binary);
+    const std::string good((std::istreambuf_iterator<char>(in)), {});
+    const auto image = [&](int w, int h, int channels, float value) {
+      Image img(w, h, channels);
+      for (float& v : img.pixels)
+        v = value;
+      write_image(cached.string(), img, PixelType::Float32);
+    };
+    const std::pair<const char*, std::function<void()>> damaged[] = {
+        {"4 channels", [&] { image(16, 12, 4, 0.5f); }},
+        {"1 channel", [&] { image(16, 12, 1, 0.5f); }},
+        {"NaN", [&] { image(16, 12, 3, std::nanf("")); }},
+        {"truncated", [&] {
+           std::ofstream(cached, std::ios::binary | std::ios::trunc)
+               << good.substr(0, good.size() / 2);
+         }}};
+    for (const auto& [damage_name, damage] : damaged) {
+      damage();
+      run = report(true);
+      ASSERT_EQ(run.code, 0) << damage_name << ": " << run.err;
+      EXPECT_NE(run.err.find("cached " + what + " " + cached.string() + " is unusable"),
+                std::string::npos)
+          << damage_name << ": " << run.err;
+      const nlohmann::json j = nlohmann::json::parse(run.out);
+      EXPECT_NE(j["reference"]["cached"].get<bool>(), what == "reference") << damage_name;
+      EXPECT_NE(j["truth"]["cached"].get<bool>(), what != "reference") << damage_name;
+      for (const auto& row : j["rows"])
+        for (const char* error : {"relmse", "relmse_truth", "relmse_truth_interior"})
+          EXPECT_TRUE(std::isfinite(row[error].get<double>())) << damage_name << " " << error;
+    }
   }
 }
 
