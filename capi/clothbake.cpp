@@ -4503,8 +4503,13 @@ class ClothBsdf {
 
   // Draws wi for wo (unit): u_lobe selects the technique, u1 and u2 drive it (all in [0, 1)).
   BsdfSample<T> sample(const Vec3<T>& wo, T u_lobe, T u1, T u2) const {
+    return sample(technique_probabilities(wo), wo, u_lobe, u1, u2);
+  }
+  // The same with the technique probabilities `pa` (normalised; p_a(l) > 0 only where technique l
+  // can draw for wo), whose pdf(pa, wi, wo) is then the density.
+  BsdfSample<T> sample(const TechniqueProbabilities<T>& pa, const Vec3<T>& wo, T u_lobe, T u1,
+                       T u2) const {
     BsdfSample<T> s;
-    const TechniqueProbabilities<T> pa = technique_probabilities(wo);
     // Choose the technique: the first whose cumulative probability exceeds u_lobe.
     int chosen = -1;
     T cumulative = T(0);
@@ -4828,7 +4833,11 @@ class Evaluator {
   // Importance sampling for a renderer's BSDF samples (Sec. 5.1, multiple importance sampling): the
   // lobe mixture of model::ClothBsdf at the footprint's representative texel, the one at the centre
   // of the footprint shifted by its mean parallax offset (the texel at x'(p0) for a zero-area
-  // footprint). Any density gives an unbiased estimate; this one follows the footprint's centre.
+  // footprint); for a footprint with area, in a tile with both yarn and gaps, its technique
+  // probabilities mixed 3:1 with those of the same texel half in a gap, so that a footprint
+  // centred on yarn can draw the delta lobe through the gaps it covers and one centred on a gap its
+  // yarns' lobes. A density gives unbiased estimates where it is positive wherever the footprint's
+  // f^ is; this one follows the footprint's centre.
   // u_lobe, u1, u2 uniform in [0, 1). out->valid is false when f^ is 0 for wo; a delta sample has
   // wi = -wo and pdf = the discrete probability of the delta technique. Errors as estimate().
   struct DirectionSample {
@@ -6805,6 +6814,9 @@ struct EvalData {
   // roughness) is nearest the yarn's mean; the unbiased form evaluates Eq. 10's attenuation there
   // with the tangent turned normal to h.
   model::Buffer<model::TexelParams<double>> yarn_fibre;
+  // Whether the tile has texels in gaps (I < 1) and on yarn (I > 0): importance sampling mixes
+  // the techniques of both for a footprint with area only when both exist.
+  bool has_gaps = false, has_yarn = false;
   model::Buffer<uint32_t> image_cluster;  // per compressed specular image: its cluster
   // Per cluster c: its compressed specular images are [cluster_image_begin[c], [c + 1]) (the
   // tables store them cluster by cluster); C + 1 entries.
@@ -7406,6 +7418,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
     for (int k = 0; k < 7; ++k)
       mean[y][k] += f[k];
     yarn_texels[y] += 1.0;
+    d->has_gaps |= d->maps.gap[t] < 1.0f;
+    d->has_yarn |= d->maps.gap[t] > 0.0f;
   }
   for (uint32_t y = 0; y < yarn_count; ++y)
     for (double& m : mean[y])
@@ -8019,6 +8033,29 @@ Status centre_texel(const EvalData& d, const Footprint& p, const model::Vec3d& o
   return {};
 }
 
+// The technique probabilities for a footprint whose representative texel has BSDF `bsdf`: its
+// own, and for a footprint with area in a tile with both yarn and gaps a mixture with weight
+// kOtherSide of the same texel's made half yarn, half gap (I = 1/2). At t alone a footprint centred
+// on a yarn could never draw the delta lobe through the gaps it covers, nor one centred on a gap
+// its yarns' continuous lobes: that light would be lost (docs/evaluator.md, "Importance sampling").
+constexpr double kOtherSide = 0.25;
+model::TechniqueProbabilities<double> techniques(const EvalData& d, const Footprint& p, uint64_t t,
+                                                 const model::Vec3d& o) {
+  model::TechniqueProbabilities<double> pa =
+      model::ClothBsdf<double>(d.texel_params(t)).technique_probabilities(o);
+  if (!(p.x1 > p.x0 && p.y1 > p.y0 && d.has_gaps && d.has_yarn)) return pa;
+  model::TexelParams<double> half = d.texel_params(t);
+  half.gap = 0.5;
+  const model::TechniqueProbabilities<double> q =
+      model::ClothBsdf<double>(half).technique_probabilities(o);
+  double sum = 0;
+  for (int k = 0; k < model::kTechniqueCount; ++k)
+    sum += (pa.p[k] = (1 - kOtherSide) * pa.p[k] + kOtherSide * q.p[k]);
+  for (double& v : pa.p)
+    v = sum > 0 ? v / sum : 0.0;  // one side without any technique: the other's alone
+  return pa;
+}
+
 }  // namespace
 
 Status Evaluator::sample_direction(const Footprint& footprint, const double wo[3], double u_lobe,
@@ -8033,7 +8070,8 @@ Status Evaluator::sample_direction(const Footprint& footprint, const double wo[3
   const Status s = centre_texel(*data_, footprint, o, &t);
   if (!s.ok()) return s;
   const model::ClothBsdf<double> bsdf(data_->texel_params(t));
-  const model::BsdfSample<double> b = bsdf.sample(o, u_lobe, u1, u2);
+  const model::BsdfSample<double> b =
+      bsdf.sample(techniques(*data_, footprint, t, o), o, u_lobe, u1, u2);
   *out = DirectionSample{};
   out->valid = b.valid;
   out->is_delta = b.is_delta;
@@ -8055,7 +8093,8 @@ Status Evaluator::direction_pdf(const Footprint& footprint, const double wi[3], 
   uint64_t t = 0;
   const Status s = centre_texel(*data_, footprint, o, &t);
   if (!s.ok()) return s;
-  *out = model::ClothBsdf<double>(data_->texel_params(t)).pdf(i, o);
+  *out = model::ClothBsdf<double>(data_->texel_params(t))
+             .pdf(techniques(*data_, footprint, t, o), i, o);
   return {};
 }
 

@@ -205,9 +205,10 @@ typedef struct cb_direction_sample {
 } cb_direction_sample;
 
 /* Samples wi for the view wo from the lobe mixture at the footprint's representative texel (its
- * centre shifted by the mean parallax offset; docs/evaluator.md, "Importance sampling"). u[0..2]
- * uniform in [0, 1). Any density gives unbiased estimates with cb_estimate's value at wi divided by
- * pdf. Errors: INVALID_ARGUMENT (NULLs, a bad footprint or wo, any u outside [0, 1) or NaN),
+ * centre shifted by the mean parallax offset; docs/evaluator.md, "Importance sampling"), for a
+ * footprint with area mixed 3:1 with that texel's half in a gap, so that every lobe the footprint
+ * covers can be drawn. u[0..2] uniform in [0, 1). cb_estimate's value at wi divided by pdf is
+ * an unbiased estimate. Errors: INVALID_ARGUMENT (NULLs, a bad footprint or wo, any u outside [0, 1) or NaN),
  * OUT_OF_PLAN, UNSUPPORTED (see the allocation). Thread-safe.
  * Allocates on a parallax direction's first use in an entropy-coded parallax table (the default
  * bake's): its decoded plane and SAT, kept for later calls; UNSUPPORTED when that fails. */

@@ -81,6 +81,9 @@ struct EvalData {
   // roughness) is nearest the yarn's mean; the unbiased form evaluates Eq. 10's attenuation there
   // with the tangent turned normal to h.
   model::Buffer<model::TexelParams<double>> yarn_fibre;
+  // Whether the tile has texels in gaps (I < 1) and on yarn (I > 0): importance sampling mixes
+  // the techniques of both for a footprint with area only when both exist.
+  bool has_gaps = false, has_yarn = false;
   model::Buffer<uint32_t> image_cluster;  // per compressed specular image: its cluster
   // Per cluster c: its compressed specular images are [cluster_image_begin[c], [c + 1]) (the
   // tables store them cluster by cluster); C + 1 entries.

@@ -318,6 +318,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
     for (int k = 0; k < 7; ++k)
       mean[y][k] += f[k];
     yarn_texels[y] += 1.0;
+    d->has_gaps |= d->maps.gap[t] < 1.0f;
+    d->has_yarn |= d->maps.gap[t] > 0.0f;
   }
   for (uint32_t y = 0; y < yarn_count; ++y)
     for (double& m : mean[y])

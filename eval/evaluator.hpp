@@ -229,7 +229,11 @@ class Evaluator {
   // Importance sampling for a renderer's BSDF samples (Sec. 5.1, multiple importance sampling): the
   // lobe mixture of model::ClothBsdf at the footprint's representative texel, the one at the centre
   // of the footprint shifted by its mean parallax offset (the texel at x'(p0) for a zero-area
-  // footprint). Any density gives an unbiased estimate; this one follows the footprint's centre.
+  // footprint); for a footprint with area, in a tile with both yarn and gaps, its technique
+  // probabilities mixed 3:1 with those of the same texel half in a gap, so that a footprint
+  // centred on yarn can draw the delta lobe through the gaps it covers and one centred on a gap its
+  // yarns' lobes. A density gives unbiased estimates where it is positive wherever the footprint's
+  // f^ is; this one follows the footprint's centre.
   // u_lobe, u1, u2 uniform in [0, 1). out->valid is false when f^ is 0 for wo; a delta sample has
   // wi = -wo and pdf = the discrete probability of the delta technique. Errors as estimate().
   struct DirectionSample {

@@ -30,6 +30,29 @@ Status centre_texel(const EvalData& d, const Footprint& p, const model::Vec3d& o
   return {};
 }
 
+// The technique probabilities for a footprint whose representative texel has BSDF `bsdf`: its
+// own, and for a footprint with area in a tile with both yarn and gaps a mixture with weight
+// kOtherSide of the same texel's made half yarn, half gap (I = 1/2). At t alone a footprint centred
+// on a yarn could never draw the delta lobe through the gaps it covers, nor one centred on a gap
+// its yarns' continuous lobes: that light would be lost (docs/evaluator.md, "Importance sampling").
+constexpr double kOtherSide = 0.25;
+model::TechniqueProbabilities<double> techniques(const EvalData& d, const Footprint& p, uint64_t t,
+                                                 const model::Vec3d& o) {
+  model::TechniqueProbabilities<double> pa =
+      model::ClothBsdf<double>(d.texel_params(t)).technique_probabilities(o);
+  if (!(p.x1 > p.x0 && p.y1 > p.y0 && d.has_gaps && d.has_yarn)) return pa;
+  model::TexelParams<double> half = d.texel_params(t);
+  half.gap = 0.5;
+  const model::TechniqueProbabilities<double> q =
+      model::ClothBsdf<double>(half).technique_probabilities(o);
+  double sum = 0;
+  for (int k = 0; k < model::kTechniqueCount; ++k)
+    sum += (pa.p[k] = (1 - kOtherSide) * pa.p[k] + kOtherSide * q.p[k]);
+  for (double& v : pa.p)
+    v = sum > 0 ? v / sum : 0.0;  // one side without any technique: the other's alone
+  return pa;
+}
+
 }  // namespace
 
 Status Evaluator::sample_direction(const Footprint& footprint, const double wo[3], double u_lobe,
@@ -44,7 +67,8 @@ Status Evaluator::sample_direction(const Footprint& footprint, const double wo[3
   const Status s = centre_texel(*data_, footprint, o, &t);
   if (!s.ok()) return s;
   const model::ClothBsdf<double> bsdf(data_->texel_params(t));
-  const model::BsdfSample<double> b = bsdf.sample(o, u_lobe, u1, u2);
+  const model::BsdfSample<double> b =
+      bsdf.sample(techniques(*data_, footprint, t, o), o, u_lobe, u1, u2);
   *out = DirectionSample{};
   out->valid = b.valid;
   out->is_delta = b.is_delta;
@@ -66,7 +90,8 @@ Status Evaluator::direction_pdf(const Footprint& footprint, const double wi[3], 
   uint64_t t = 0;
   const Status s = centre_texel(*data_, footprint, o, &t);
   if (!s.ok()) return s;
-  *out = model::ClothBsdf<double>(data_->texel_params(t)).pdf(i, o);
+  *out = model::ClothBsdf<double>(data_->texel_params(t))
+             .pdf(techniques(*data_, footprint, t, o), i, o);
   return {};
 }
 

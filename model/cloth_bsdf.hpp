@@ -294,8 +294,13 @@ class ClothBsdf {
 
   // Draws wi for wo (unit): u_lobe selects the technique, u1 and u2 drive it (all in [0, 1)).
   BsdfSample<T> sample(const Vec3<T>& wo, T u_lobe, T u1, T u2) const {
+    return sample(technique_probabilities(wo), wo, u_lobe, u1, u2);
+  }
+  // The same with the technique probabilities `pa` (normalised; p_a(l) > 0 only where technique l
+  // can draw for wo), whose pdf(pa, wi, wo) is then the density.
+  BsdfSample<T> sample(const TechniqueProbabilities<T>& pa, const Vec3<T>& wo, T u_lobe, T u1,
+                       T u2) const {
     BsdfSample<T> s;
-    const TechniqueProbabilities<T> pa = technique_probabilities(wo);
     // Choose the technique: the first whose cumulative probability exceeds u_lobe.
     int chosen = -1;
     T cumulative = T(0);

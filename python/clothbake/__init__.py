@@ -400,8 +400,9 @@ class Evaluator:
         threads: int | None = None,
     ) -> DirectionSamples:
         """A light direction per row, sampled for the view wo from the lobe mixture at the
-        footprint's representative texel (its centre shifted by the mean parallax offset), with its
-        density (cb_sample_direction).
+        footprint's representative texel (its centre shifted by the mean parallax offset; for a
+        footprint with area mixed 3:1 with that texel's half in a gap, so that every lobe the
+        footprint covers can be drawn), with its density (cb_sample_direction).
 
         ``u``: (n, 3) uniform random numbers in [0, 1). The result does not depend on ``threads``.
         Dividing estimate()'s value at wi by pdf gives unbiased estimates. Raises as estimate()

@@ -129,6 +129,34 @@ def test_the_density_of_a_sampled_direction_is_the_samples_pdf(asset: clothbake.
     assert (pdf > 0).all()
 
 
+def test_sampling_reaches_the_gaps_of_footprints_centred_on_yarn(asset: clothbake.Asset) -> None:
+    """BSDF sampling is the only way a path tracer reaches the delta lobe, so every footprint that
+    transmits through gaps must draw it: the sampling estimate of the delta weight, the mean of
+    W / p(delta) over delta draws and 0 otherwise, is unbiased for the footprint's W (the
+    reference's delta estimate). 4 x 4-texel footprints at every texel of the 32-texel tile, most
+    of them centred on yarn (where the representative texel alone has p(delta) = 0)."""
+    n, draws = 32, 2000
+    evaluator = clothbake.Evaluator(asset, method="reference")
+    corners = np.array([[x, y] for y in range(n) for x in range(n)], dtype=float) / n
+    footprints = np.concatenate([corners, corners + 4.0 / n], axis=1)
+    wo = np.array([0.2, 0.1, 0.97]) / np.linalg.norm([0.2, 0.1, 0.97])
+    weight = evaluator.estimate(footprints, -wo, wo, lobes=clothbake.Lobe.DELTA_TRANSMISSION)
+    u = np.random.default_rng(17).uniform(size=(n * n * draws, 3))
+    s = evaluator.sample(np.repeat(footprints, draws, axis=0), wo, u)
+    delta = (s.valid & s.is_delta).reshape(n * n, draws)
+    p_delta = np.where(delta, s.pdf.reshape(n * n, draws), 1.0)
+    terms = np.where(delta[..., None], weight[:, None, :] / p_delta[..., None], 0.0)
+    estimate = terms.mean(axis=1)
+    error = terms.std(axis=1, ddof=1) / np.sqrt(draws)
+    transmits = weight.mean(axis=1) > 1e-6
+    assert transmits.sum() > 100 and (~transmits).sum() > 100
+    assert delta[transmits].any(axis=1).all(), "footprints with gaps that never draw the delta lobe"
+    z = (estimate - weight)[transmits] / np.maximum(error[transmits], 1e-12)
+    assert np.abs(z).max() < 5.5, np.abs(z).max()
+    # Together the footprints' z-scores are a standard normal sample.
+    assert abs(z.mean()) < 4 / np.sqrt(z.size), z.mean()
+
+
 def test_one_direction_serves_every_row_and_any_real_dtype_is_converted(
     asset: clothbake.Asset,
 ) -> None:
