@@ -159,11 +159,12 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
     return seen;
   };
   std::vector<Seen> corner(std::size_t(w + 1) * std::size_t(h + 1));
-  for (int y = 0; y <= h; ++y)
+  tbb::parallel_for(0, h + 1, [&](int y) {
     for (int x = 0; x <= w; ++x)
       corner[std::size_t(y) * std::size_t(w + 1) + std::size_t(x)] = seen_at(x, y);
+  });
   std::vector<uint8_t> mask(std::size_t(w) * std::size_t(h));
-  for (int y = 0; y < h; ++y)
+  tbb::parallel_for(0, h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const Seen c = seen_at(x + 0.5, y + 0.5);
       const std::size_t k = std::size_t(y) * std::size_t(w + 1) + std::size_t(x);
@@ -171,6 +172,7 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
           corner[k] == c && corner[k + 1] == c && corner[k + std::size_t(w) + 1] == c &&
           corner[k + std::size_t(w) + 2] == c;
     }
+  });
   return mask;
 }
 
@@ -329,14 +331,21 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       radiance += bsdf(-wo_world, kDeltaBit, samples) * scene.background;
     return radiance;
   };
-  // One pixel of pass `pass`: the pixel centre's footprint, or spp jittered rays.
+  // The pixels a footprint method renders from spp jittered rays (RenderOptions::jitter_edges).
+  const std::vector<uint8_t> interior = !pass_options.path_traced && pass_options.jitter_edges
+                                            ? interior_pixels()
+                                            : std::vector<uint8_t>();
+  // One pixel of pass `pass`: the pixel centre's footprint, or spp jittered rays, each at its
+  // hit's point (path tracing) or over its own footprint (an edge pixel).
   auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
-    eval::Rng rng(pixel_seed(pass_options.seed, pass, uint64_t(py) * w + px));
-    if (!pass_options.path_traced) return shade_ray(px + 0.5, py + 0.5, spp, false, rng, pass == 0);
+    const uint64_t pixel = uint64_t(py) * w + px;
+    eval::Rng rng(pixel_seed(pass_options.seed, pass, pixel));
+    const bool jittered = pass_options.path_traced || (!interior.empty() && !interior[pixel]);
+    if (!jittered) return shade_ray(px + 0.5, py + 0.5, spp, false, rng, pass == 0);
     Rgb sum;
     for (uint32_t k = 0; k < spp; ++k) {
       const double u = rng.uniform(), v = rng.uniform();
-      sum += shade_ray(px + u, py + v, 1, true, rng, pass == 0 && k == 0);
+      sum += shade_ray(px + u, py + v, 1, pass_options.path_traced, rng, pass == 0 && k == 0);
     }
     return sum / double(spp);
   };

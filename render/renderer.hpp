@@ -36,6 +36,13 @@ struct RenderOptions {
   // sample: brute force then pays one BSDF evaluation per ray), as a path tracer without a
   // multi-scale model renders (docs/rendering.md, "Path-traced brute force").
   bool path_traced = false;
+  // Footprint methods: a pixel on a silhouette or a shadow edge (Renderer::interior_pixels() 0)
+  // takes spp camera rays jittered over its area, each with its own hit, shadow rays and footprint
+  // and one evaluator sample, instead of its centre's footprint, so that it converges to the
+  // pixel's area average as path tracing does (docs/rendering.md, "Edge pixels"). The edge test is
+  // part of each render's time. false: every pixel from its centre (the reference of the reports,
+  // which is compared off the edges only).
+  bool jitter_edges = true;
   eval::TableChoice tables = eval::TableChoice::Auto;
   bool parallax = true;  // false: the model without parallax offsets (near-field comparison)
   // The sheen table (docs/sheen.md): the published one by default, as other renderers use.
@@ -113,7 +120,7 @@ class Renderer {
   // directional lights (the first 64) are shadowed; 0 on silhouettes and shadow edges. A footprint
   // renders a pixel from its centre's hit and shadow rays while path tracing averages over the
   // pixel's area, so the two converge to different values there only (docs/rendering.md, "Error
-  // against run time"). Traces (1 + lights) rays per pixel and corner on the calling thread;
+  // against run time"). Traces (1 + lights) rays per pixel and corner, in parallel (TBB);
   // allocates the mask.
   std::vector<uint8_t> interior_pixels() const;
 

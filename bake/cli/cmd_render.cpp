@@ -1,6 +1,7 @@
 // clothbake render: renders a scene with the evaluator (docs/rendering.md, docs/scene-format.md).
 //
-//   clothbake render SCENE.toml -o OUT.exr [--method M] [--spp N] [--time-budget S] [--threads N]
+//   clothbake render SCENE.toml -o OUT.exr [--method M] [--spp N] [--edges jittered|centre]
+//   [--time-budget S] [--threads N]
 //                    [--seed S] [--tables auto|raw|compressed] [--exposure EV]
 //                    [--sheen-convention published|converged] [--cache DIR] [--json]
 //
@@ -41,6 +42,7 @@ struct RenderCliOptions {
   std::string scene, output, method = "multiscale", cache, image_size;
   eval::TableChoice tables = eval::TableChoice::Auto;
   std::string sheen_convention = "published";
+  std::string edges = "jittered";
   uint32_t spp = 2;
   double time_budget = 0;
   int threads = 0;
@@ -77,6 +79,7 @@ int run_render(const RenderCliOptions& o) {
   ro.spp = o.spp;
   ro.seed = o.seed;
   ro.time_budget = o.time_budget;
+  ro.jitter_edges = o.edges == "jittered";
   ro.tables = o.tables;
   model::parse_sheen_convention(o.sheen_convention, ro.sheen_convention);  // checked by IsMember
   const render::Renderer renderer(loaded.scene, ro);
@@ -144,6 +147,11 @@ const bool render_registered = register_command(
               "multiscale (default), multiscale-paper, brute or reference (docs/evaluator.md)")
            ->check(CLI::IsMember({"multiscale", "multiscale-paper", "brute", "reference"}));
        app.add_option("--spp", o->spp, "samples per pixel footprint and light (default 2)");
+       app.add_option("--edges", o->edges,
+                      "pixels on silhouettes and shadow edges: jittered (spp camera rays over the "
+                      "pixel, each with its footprint; default) or centre (the centre's footprint, "
+                      "as every other pixel; docs/rendering.md)")
+           ->check(CLI::IsMember({"jittered", "centre"}));
        app.add_option("--image-size", o->image_size,
                       "W,H: render at W x H pixels instead of the scene camera's resolution (the "
                       "vertical field of view is kept)");

@@ -214,6 +214,7 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   ref_options.method = eval::Method::Reference;
   ref_options.spp = environment ? o.reference_spp : 1;
   ref_options.seed = o.seed + 1000003;
+  ref_options.jitter_edges = false;  // the footprint integral at each pixel's centre
   // The truth is keyed the same way, its spp and seeds in place of the reference's.
   const std::string key_head =
       fmt::format("{} {} {}x{}", CLOTHBAKE_VERSION_STRING, inputs::hash_file(o.scene),

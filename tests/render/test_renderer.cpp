@@ -146,6 +146,46 @@ TEST(Render, InteriorPixelsLeaveOutExactlyTheSilhouettes) {
   EXPECT_EQ(left_out, 4 * (int(std::ceil(hi)) - int(std::floor(lo))) - 4);  // the ring of edges
 }
 
+// Footprint methods render silhouette pixels from jittered rays: the 0.5-wide Lambertian square of
+// the test above under a sun, seen head-on on black, projects to the image square [lo, hi]^2, so
+// a pixel's exact value is the square's radiance times the share of the pixel inside it. With
+// 1 024 jittered rays the edge pixels are within 5 binomial standard errors of it; the interior
+// ones are exact; from the centre alone (jitter_edges false) an edge pixel is 0 or the whole value.
+TEST(Render, EdgePixelsConvergeToThePixelsAreaAverage) {
+  Scene s = plane_scene(32, 32);
+  s.objects[0].size[0] = s.objects[0].size[1] = 0.5;
+  Light sun;
+  sun.type = LightType::Directional;
+  sun.direction = {0, 0, -1};
+  s.lights.push_back(sun);
+  RenderOptions o;
+  o.method = eval::Method::Reference;
+  o.spp = 1024;
+  const RenderResult r = Renderer(s, o).render();
+  o.jitter_edges = false;
+  const RenderResult centre = Renderer(s, o).render();
+  const double lo = 16 * (1 - 0.25 / (2 * std::tan(15 * kPi / 180))), hi = 32 - lo;
+  auto inside = [&](int k) { return std::max(0.0, std::min(k + 1.0, hi) - std::max(k + 0.0, lo)); };
+  int edges = 0, centre_exact = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const double share = inside(x) * inside(y);
+      const std::size_t k = 3 * (std::size_t(y) * 32 + std::size_t(x));
+      for (int c = 0; c < 3; ++c) {
+        const double full = s.objects[0].diffuse[c] / kPi;
+        const double error = 5 * full * std::sqrt(share * (1 - share) / 1024) + 1e-6;
+        EXPECT_NEAR(r.rgb[k + std::size_t(c)], full * share, error) << x << "," << y << " " << c;
+      }
+      if (share > 0 && share < 1) {
+        ++edges;
+        const double value = centre.rgb[k] / (s.objects[0].diffuse[0] / kPi);
+        centre_exact += std::abs(value - share) < 0.05;
+      }
+    }
+  EXPECT_EQ(edges, 4 * (int(std::ceil(hi)) - int(std::floor(lo))) - 4);
+  EXPECT_LT(centre_exact, edges / 4);  // the centre's value is 0 or 1, rarely the share
+}
+
 // A shadow edge is left out like a silhouette: a sun at 45 degrees over -x and an occluder out of
 // the camera's view (z = 1, x >= 0.6) shadow the plane for x >= -0.4, whose image is the column
 // x = 16 (1 - 0.4 / (2 tan 15deg)) = 4.06: pixel column 4 straddles it.

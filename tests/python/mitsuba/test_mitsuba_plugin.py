@@ -180,7 +180,8 @@ tiles_per_unit = {TILES_PER_UNIT}
     )
     out = folder / "plane.exr"
     done = subprocess.run(
-        [clothbake_exe, "render", str(scene), "-o", str(out), "--method", "reference"],
+        [clothbake_exe, "render", str(scene), "-o", str(out), "--method", "reference"]
+        + ["--edges", "centre"],
         capture_output=True,
         text=True,
     )
@@ -283,7 +284,8 @@ tiles_per_unit = {TILES_PER_UNIT}
     )
     out = folder / "sphere.exr"
     done = subprocess.run(
-        [clothbake_exe, "render", str(scene), "-o", str(out), "--method", "reference"],
+        [clothbake_exe, "render", str(scene), "-o", str(out), "--method", "reference"]
+        + ["--edges", "centre"],
         capture_output=True,
         text=True,
     )
