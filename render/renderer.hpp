@@ -37,11 +37,11 @@ struct RenderOptions {
   // multi-scale model renders (docs/rendering.md, "Path-traced brute force").
   bool path_traced = false;
   // Footprint methods: a pixel on a silhouette or a shadow edge (Renderer::interior_pixels() 0)
-  // takes spp camera rays jittered over its area, each with its own hit, shadow rays and footprint
-  // and one evaluator sample, instead of its centre's footprint, so that it converges to the
-  // pixel's area average as path tracing does (docs/rendering.md, "Edge pixels"). The edge test is
-  // part of each render's time. false: every pixel from its centre (the reference of the reports,
-  // which is compared off the edges only).
+  // takes s x s camera rays stratified over its area, s = max(4, ceil(sqrt(spp))), each with its
+  // own hit, shadow rays and footprint and one evaluator sample, instead of its centre's footprint,
+  // so that it converges to the pixel's area average as path tracing does (docs/rendering.md, "Edge
+  // pixels"). The edge test is part of each render's time. false: every pixel from its centre (the
+  // reference of the reports, which is compared off the edges only).
   bool jitter_edges = true;
   eval::TableChoice tables = eval::TableChoice::Auto;
   bool parallax = true;  // false: the model without parallax offsets (near-field comparison)

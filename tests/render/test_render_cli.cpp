@@ -412,6 +412,28 @@ TEST(ReportErrorTime, WritesTheCsvJsonAndPicturesOfATinyScene) {
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_TRUE(nlohmann::json::parse(again.out)["reference"]["cached"].get<bool>());
   EXPECT_TRUE(nlohmann::json::parse(again.out)["truth"]["cached"].get<bool>());
+  // Beyond brute-path's sweep (here 1-2 spp) its cost against the truth is extrapolated as
+  // 1 / error (it is the truth's own unbiased estimator): spp = 2 relMSE(2 spp) / target.
+  const auto short_sweep = test_support::run_clothbake(
+      {"report", "error-time", path.string(), "-o", out.string(), "--spp", "1,2", "--methods",
+       "multiscale,brute-path", "--cache", (assets().dir / "cache").string(), "--truth-spp", "256",
+       "--no-plots", "--json"});
+  ASSERT_EQ(short_sweep.code, 0) << short_sweep.err;
+  const nlohmann::json k = nlohmann::json::parse(short_sweep.out);
+  std::map<std::string, double> at_2;
+  for (const auto& row : k["rows"])
+    if (row["spp"] == 2) at_2[row["method"].get<std::string>()] = row["relmse_truth"].get<double>();
+  ASSERT_LT(at_2["multiscale"], at_2["brute-path"]);
+  int extrapolated = 0;
+  for (const auto& p : k["summary"]["pairs"])
+    if (p["judge"] == "truth" && p["against"] == "brute-path") {
+      ++extrapolated;
+      EXPECT_EQ(p["equal_error_spp_ratio_bound"], "extrapolated") << p.dump();
+      EXPECT_NEAR(p["equal_error_spp_ratio"].get<double>() * 2,
+                  2 * at_2["brute-path"] / at_2["multiscale"], 1e-9 * at_2["brute-path"])
+          << p.dump();
+    }
+  EXPECT_EQ(extrapolated, 1);
 }
 
 // A scene the report refuses leaves no output folder; the cached reference is keyed on everything
