@@ -152,41 +152,65 @@ def test_sampling_density_passes_mitsubas_chi_square_test(
     assert test.run(), test.messages
 
 
-def clothbake_reference(baked: Baked, clothbake_exe: str, folder: Path) -> NDArray[np.float64]:
-    """The plane rendered by clothbake's own renderer, --method reference, as linear RGB."""
-    scene = folder / "plane.toml"
+def clothbake_render(
+    clothbake_exe: str,
+    folder: Path,
+    name: str,
+    camera: tuple[float, float, float],
+    up: tuple[float, float, float],
+    light: tuple[float, float, float],
+    cloth: str,
+) -> NDArray[np.float64]:
+    """`cloth` (a TOML [[object]] body) rendered by clothbake's own renderer with the reference
+    method, every pixel from its centre, as linear RGB; the camera looks at the origin."""
+    scene = folder / f"{name}.toml"
     scene.write_text(
         f"""[camera]
-position = [0.0, 0.0, {CAMERA_Z}]
+position = [{camera[0]}, {camera[1]}, {camera[2]}]
 look_at = [0.0, 0.0, 0.0]
-up = [0.0, 1.0, 0.0]
+up = [{up[0]}, {up[1]}, {up[2]}]
 fov_deg = {FOV_DEG}
 resolution = [{RESOLUTION}, {RESOLUTION}]
 
 [[light]]
 type = "point"
-position = [{LIGHT[0]}, {LIGHT[1]}, {LIGHT[2]}]
+position = [{light[0]}, {light[1]}, {light[2]}]
 intensity = {INTENSITY}
 
 [[object]]
-shape = "plane"
-center = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-tangent = [1.0, 0.0, 0.0]
-size = [{PLANE_SIDE}, {PLANE_SIDE}]
-asset = "{baked.path}"
-tiles_per_unit = {TILES_PER_UNIT}
+{cloth}tiles_per_unit = {TILES_PER_UNIT}
 """
     )
-    out = folder / "plane.exr"
+    out = folder / f"{name}.exr"
+    command = [clothbake_exe, "render", str(scene), "-o", str(out), "--method", "reference"]
     done = subprocess.run(
-        [clothbake_exe, "render", str(scene), "-o", str(out), "--method", "reference"]
-        + ["--edges", "centre"],
+        [*command, "--edges", "centre"],
         capture_output=True,
         text=True,
     )
     assert done.returncode == 0, done.stdout + done.stderr
     return np.asarray(mi.Bitmap(str(out)), dtype=np.float64)[..., :3]
+
+
+def interior_pixels(expected: NDArray[np.float64], image: NDArray[np.float64]) -> Any:
+    """The pixels that are cloth in both renders, with their four neighbours."""
+    cloth = (expected.sum(axis=2) > 0) & (image.sum(axis=2) > 0)
+    interior = cloth.copy()
+    interior[1:-1, 1:-1] &= cloth[:-2, 1:-1] & cloth[2:, 1:-1] & cloth[1:-1, :-2] & cloth[1:-1, 2:]
+    interior[[0, -1], :] = False
+    interior[:, [0, -1]] = False
+    return interior
+
+
+def clothbake_reference(baked: Baked, clothbake_exe: str, folder: Path) -> NDArray[np.float64]:
+    """The plane rendered by clothbake's own renderer."""
+    plane = (
+        f'shape = "plane"\nnormal = [0.0, 0.0, 1.0]\ntangent = [1.0, 0.0, 0.0]\n'
+        f'size = [{PLANE_SIDE}, {PLANE_SIDE}]\nasset = "{baked.path}"\n'
+    )
+    return clothbake_render(
+        clothbake_exe, folder, "plane", (0.0, 0.0, CAMERA_Z), (0.0, 1.0, 0.0), LIGHT, plane
+    )
 
 
 def test_reference_at_pixel_centres_equals_clothbake_render(
@@ -199,11 +223,7 @@ def test_reference_at_pixel_centres_equals_clothbake_render(
     # Interior pixels: those whose footprint lies on the plane in both renders (the plane fills
     # the middle of the picture; a silhouette pixel's centre may fall on either side of the edge
     # in float32 and float64).
-    cloth = (expected.sum(axis=2) > 0) & (image.sum(axis=2) > 0)
-    interior = cloth.copy()
-    interior[1:-1, 1:-1] &= cloth[:-2, 1:-1] & cloth[2:, 1:-1] & cloth[1:-1, :-2] & cloth[1:-1, 2:]
-    interior[[0, -1], :] = False
-    interior[:, [0, -1]] = False
+    interior = interior_pixels(expected, image)
     assert interior.sum() > 100
     relative = np.abs(image - expected)[interior] / np.maximum(expected[interior], 1e-6)
     assert relative.max() < 1e-3, f"largest relative difference {relative.max():.3g}"
@@ -258,39 +278,11 @@ def sphere_scene(baked: Baked) -> Any:
 
 
 def clothbake_sphere(baked: Baked, clothbake_exe: str, folder: Path) -> NDArray[np.float64]:
-    """The sphere rendered by clothbake's own renderer, --method reference, as linear RGB."""
-    scene = folder / "sphere.toml"
-    scene.write_text(
-        f"""[camera]
-position = [{SPHERE_CAMERA[0]}, {SPHERE_CAMERA[1]}, {SPHERE_CAMERA[2]}]
-look_at = [0.0, 0.0, 0.0]
-up = [0.0, 0.0, 1.0]
-fov_deg = {FOV_DEG}
-resolution = [{RESOLUTION}, {RESOLUTION}]
-
-[[light]]
-type = "point"
-position = [{SPHERE_LIGHT[0]}, {SPHERE_LIGHT[1]}, {SPHERE_LIGHT[2]}]
-intensity = {INTENSITY}
-
-[[object]]
-shape = "sphere"
-center = [0.0, 0.0, 0.0]
-axis = [0.0, 0.0, 1.0]
-radius = 1.0
-asset = "{baked.path}"
-tiles_per_unit = {TILES_PER_UNIT}
-"""
+    """The sphere rendered by clothbake's own renderer."""
+    sphere = f'shape = "sphere"\naxis = [0.0, 0.0, 1.0]\nradius = 1.0\nasset = "{baked.path}"\n'
+    return clothbake_render(
+        clothbake_exe, folder, "sphere", SPHERE_CAMERA, (0.0, 0.0, 1.0), SPHERE_LIGHT, sphere
     )
-    out = folder / "sphere.exr"
-    done = subprocess.run(
-        [clothbake_exe, "render", str(scene), "-o", str(out), "--method", "reference"]
-        + ["--edges", "centre"],
-        capture_output=True,
-        text=True,
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
-    return np.asarray(mi.Bitmap(str(out)), dtype=np.float64)[..., :3]
 
 
 def test_reference_on_a_sphere_equals_clothbake_render(
@@ -300,11 +292,7 @@ def test_reference_on_a_sphere_equals_clothbake_render(
     image = render(sphere_scene(baked))
     assert image.shape == expected.shape
     # Interior pixels: the pixel and its four neighbours on the cloth in both renders.
-    cloth = (expected.sum(axis=2) > 0) & (image.sum(axis=2) > 0)
-    interior = cloth.copy()
-    interior[1:-1, 1:-1] &= cloth[:-2, 1:-1] & cloth[2:, 1:-1] & cloth[1:-1, :-2] & cloth[1:-1, 2:]
-    interior[[0, -1], :] = False
-    interior[:, [0, -1]] = False
+    interior = interior_pixels(expected, image)
     assert interior.sum() > 100
     relative = np.abs(image - expected)[interior] / np.maximum(expected[interior], 1e-6)
     assert relative.max() < 1e-3, f"largest relative difference {relative.max():.3g}"
