@@ -16,6 +16,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "formats/reader/scene_plan_sections.hpp"
 #include "formats/writer/open_asset.hpp"
 #include "formats/writer/valid_asset.hpp"
 #include "model/splitmix64.hpp"
@@ -80,6 +81,9 @@ struct Renderer::Impl {
   std::vector<Material> materials;
   std::vector<std::unique_ptr<Environment>> environments;  // per light (null if not environment)
   const Environment* background = nullptr;
+  // Some object's asset is scene-planned: it holds what the pixel centres query (the usage
+  // analysis traces centres), so edge pixels are not jittered (RenderOptions::jitter_edges).
+  bool planned = false;
   explicit Impl(const Camera& c) : camera(c) {}
 };
 
@@ -101,6 +105,9 @@ Renderer::Renderer(const Scene& scene, const RenderOptions& options)
                                  scene.path + ": " + o.name + ".asset: " + o.asset);
         shared = std::move(fresh);
       }
+      reader::ScenePlanRecord plan;
+      bool planned = false;
+      impl_->planned |= reader::read_scene_plan(shared->asset, &plan, &planned).ok() && planned;
       m.opened = shared;
       m.evaluator = &shared->evaluator;
       m.cloth = true;
@@ -335,9 +342,10 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     return radiance;
   };
   // The pixels a footprint method renders from spp jittered rays (RenderOptions::jitter_edges).
-  const std::vector<uint8_t> interior = !pass_options.path_traced && pass_options.jitter_edges
-                                            ? interior_pixels()
-                                            : std::vector<uint8_t>();
+  const std::vector<uint8_t> interior =
+      !pass_options.path_traced && pass_options.jitter_edges && !impl.planned
+          ? interior_pixels()
+          : std::vector<uint8_t>();
   // One pixel of pass `pass`: the pixel centre's footprint, or spp jittered rays, each at its
   // hit's point (path tracing) or over its own footprint (an edge pixel).
   auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
@@ -358,11 +366,16 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     // noisiest pixel of the image; strata over the pixel's area bring that noise down faster than
     // more rays alone would, and edges are a few percent of the pixels.
     const uint32_t s = std::max<uint32_t>(kEdgeStrata, uint32_t(std::ceil(std::sqrt(double(spp)))));
+    // Each stratum its own generator, so that what one ray's shading draws (which depends on the
+    // scene: a black backdrop skips the gaps' lobe) does not move the next ray's samples.
     Rgb sum;
     for (uint32_t j = 0; j < s; ++j)
       for (uint32_t i = 0; i < s; ++i) {
-        const double u = (i + rng.uniform()) / s, v = (j + rng.uniform()) / s;
-        sum += shade_ray(px + u, py + v, 1, false, rng, pass == 0 && i == 0 && j == 0);
+        uint64_t state =
+            pixel_seed(pass_options.seed, pass, pixel) ^ (uint64_t(j * s + i + 1) << 40);
+        eval::Rng stratum(model::splitmix64_next(state));
+        const double u = (i + stratum.uniform()) / s, v = (j + stratum.uniform()) / s;
+        sum += shade_ray(px + u, py + v, 1, false, stratum, pass == 0 && i == 0 && j == 0);
       }
     return sum / double(s * s);
   };

@@ -41,7 +41,8 @@ struct RenderOptions {
   // own hit, shadow rays and footprint and one evaluator sample, instead of its centre's footprint,
   // so that it converges to the pixel's area average as path tracing does (docs/rendering.md, "Edge
   // pixels"). The edge test is part of each render's time. false: every pixel from its centre (the
-  // reference of the reports, which is compared off the edges only).
+  // reference of the reports, which is compared off the edges only). Ignored (centres) when an
+  // object's asset is scene-planned: such an asset holds what the pixel centres query.
   bool jitter_edges = true;
   eval::TableChoice tables = eval::TableChoice::Auto;
   bool parallax = true;  // false: the model without parallax offsets (near-field comparison)

@@ -122,6 +122,9 @@ ReportOutput plan_report(const PlanReportOptions& o) {
   render::RenderOptions ro;
   ro.spp = o.spp;
   ro.seed = o.seed;
+  // Every pixel from its centre, the full assets' too: the planned ones hold what the centres
+  // query (edge pixels are not jittered over them), and the two renders must be alike.
+  ro.jitter_edges = false;
   const render::Renderer full_renderer(full_scene, ro);
   const render::RenderResult full_image = full_renderer.render();
   const render::RenderResult planned_image = render::Renderer(planned_scene, ro).render();
@@ -138,6 +141,7 @@ ReportOutput plan_report(const PlanReportOptions& o) {
   ref_options.method = eval::Method::Reference;
   ref_options.spp = environment ? o.reference_spp : 1;
   ref_options.seed = o.seed + 1000003;
+  ref_options.jitter_edges = false;
   const render::RenderResult reference = render::Renderer(full_scene, ref_options).render();
 
   // Per fabric: the pixels whose primary hit is one of its objects.
