@@ -341,13 +341,14 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       radiance += bsdf(-wo_world, kDeltaBit, samples) * scene.background;
     return radiance;
   };
-  // The pixels a footprint method renders from spp jittered rays (RenderOptions::jitter_edges).
+  // The interior pixels; a footprint method renders the others (the edges) from stratified rays
+  // (RenderOptions::jitter_edges). Computed in every render: its time is the render's.
   const std::vector<uint8_t> interior =
       !pass_options.path_traced && pass_options.jitter_edges && !impl.planned
           ? interior_pixels()
           : std::vector<uint8_t>();
-  // One pixel of pass `pass`: the pixel centre's footprint, or spp jittered rays, each at its
-  // hit's point (path tracing) or over its own footprint (an edge pixel).
+  // One pixel of pass `pass`: the pixel centre's footprint, or jittered rays, each at its hit's
+  // point (path tracing, spp rays) or over its own footprint (an edge pixel, s x s rays).
   auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
     const uint64_t pixel = uint64_t(py) * w + px;
     eval::Rng rng(pixel_seed(pass_options.seed, pass, pixel));
