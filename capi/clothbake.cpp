@@ -8033,18 +8033,20 @@ Status centre_texel(const EvalData& d, const Footprint& p, const model::Vec3d& o
   return {};
 }
 
-// The technique probabilities for a footprint whose representative texel has BSDF `bsdf`: its
-// own, and for a footprint with area in a tile with both yarn and gaps a mixture with weight
-// kOtherSide of the same texel's made half yarn, half gap (I = 1/2). At t alone a footprint centred
-// on a yarn could never draw the delta lobe through the gaps it covers, nor one centred on a gap
-// its yarns' continuous lobes: that light would be lost (docs/evaluator.md, "Importance sampling").
+// The technique probabilities for a footprint whose representative texel has parameters `params`
+// and BSDF `bsdf`: its own, and for a footprint with area in a tile with both yarn and gaps a
+// mixture with weight kOtherSide of the same texel's made half yarn, half gap (I = 1/2). At t alone
+// a footprint centred on a yarn could never draw the delta lobe through the gaps it covers, nor one
+// centred on a gap its yarns' continuous lobes: that light would be lost (docs/evaluator.md,
+// "Importance sampling").
 constexpr double kOtherSide = 0.25;
-model::TechniqueProbabilities<double> techniques(const EvalData& d, const Footprint& p, uint64_t t,
+model::TechniqueProbabilities<double> techniques(const EvalData& d, const Footprint& p,
+                                                 const model::TexelParams<double>& params,
+                                                 const model::ClothBsdf<double>& bsdf,
                                                  const model::Vec3d& o) {
-  model::TechniqueProbabilities<double> pa =
-      model::ClothBsdf<double>(d.texel_params(t)).technique_probabilities(o);
+  model::TechniqueProbabilities<double> pa = bsdf.technique_probabilities(o);
   if (!(p.x1 > p.x0 && p.y1 > p.y0 && d.has_gaps && d.has_yarn)) return pa;
-  model::TexelParams<double> half = d.texel_params(t);
+  model::TexelParams<double> half = params;
   half.gap = 0.5;
   const model::TechniqueProbabilities<double> q =
       model::ClothBsdf<double>(half).technique_probabilities(o);
@@ -8069,9 +8071,10 @@ Status Evaluator::sample_direction(const Footprint& footprint, const double wo[3
   uint64_t t = 0;
   const Status s = centre_texel(*data_, footprint, o, &t);
   if (!s.ok()) return s;
-  const model::ClothBsdf<double> bsdf(data_->texel_params(t));
+  const model::TexelParams<double> params = data_->texel_params(t);
+  const model::ClothBsdf<double> bsdf(params);
   const model::BsdfSample<double> b =
-      bsdf.sample(techniques(*data_, footprint, t, o), o, u_lobe, u1, u2);
+      bsdf.sample(techniques(*data_, footprint, params, bsdf, o), o, u_lobe, u1, u2);
   *out = DirectionSample{};
   out->valid = b.valid;
   out->is_delta = b.is_delta;
@@ -8093,8 +8096,9 @@ Status Evaluator::direction_pdf(const Footprint& footprint, const double wi[3], 
   uint64_t t = 0;
   const Status s = centre_texel(*data_, footprint, o, &t);
   if (!s.ok()) return s;
-  *out = model::ClothBsdf<double>(data_->texel_params(t))
-             .pdf(techniques(*data_, footprint, t, o), i, o);
+  const model::TexelParams<double> params = data_->texel_params(t);
+  const model::ClothBsdf<double> bsdf(params);
+  *out = bsdf.pdf(techniques(*data_, footprint, params, bsdf, o), i, o);
   return {};
 }
 

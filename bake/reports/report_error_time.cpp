@@ -395,11 +395,11 @@ ReportOutput error_time_report(const ErrorTimeOptions& o) {
   nlohmann::json grid = nlohmann::json::array();
   // A baseline's cost at a target error: interpolated inside its sweep (log-log on the error axis);
   // outside, a bound: its cheapest render when even that is more accurate (an upper bound of the
-  // speedup), its costliest when even that is less accurate (a lower bound). `field` picks the
-  // cost: seconds or spp.
+  // speedup), its costliest when even that is less accurate (a lower bound; or extrapolated,
+  // below). `error` picks the judge, `spp` the cost: samples per pixel, else seconds.
   struct AtError {
     double cost;
-    const char* bound;  // "none", "upper" or "lower" (of the speedup)
+    const char* bound;  // "none", "upper", "lower" (of the speedup) or "extrapolated"
   };
   auto baseline_at = [&](const std::string& baseline, double Row::*error, double target,
                          bool spp) -> AtError {
