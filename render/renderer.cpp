@@ -28,8 +28,14 @@
 namespace clothbake::render {
 namespace {
 
-// The least strata a side of an edge pixel's jittered rays (RenderOptions::jitter_edges).
-constexpr uint32_t kEdgeStrata = 4;
+// The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges): at 2
+// spp, 64 point evaluations cost about what 10 footprint estimates do, and bring the edges' error
+// near the interior's (docs/performance.md, "Edge pixels").
+constexpr uint32_t kEdgeStrata = 8;
+// An interior pixel's five view cosines are all at least this fraction of the largest
+// (Renderer::interior_pixels): below it, the centre's directions misstate the pixel's average
+// (docs/rendering.md, "Edge pixels").
+constexpr double kInteriorCosineRatio = 0.7;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr eval::LobeMask kDeltaBit = eval::lobe_bit(model::Lobe::DeltaTransmission);
@@ -152,14 +158,16 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
   struct Seen {
     int object = -1;
     uint64_t shadowed = 0;
-    bool operator==(const Seen&) const = default;
+    double cos_view = 0;  // |cos| between the ray and the geometric normal
+    bool same_surface(const Seen& o) const { return object == o.object && shadowed == o.shadowed; }
   };
   auto seen_at = [&](double x, double y) {
-    const SurfaceHit hit =
-        intersect_scene(impl_->camera.generate(x, y).ray, scene_.objects, 0.0, INFINITY);
+    const Ray ray = impl_->camera.generate(x, y).ray;
+    const SurfaceHit hit = intersect_scene(ray, scene_.objects, 0.0, INFINITY);
     Seen seen;
     if (!hit.hit()) return seen;
     seen.object = hit.object;
+    seen.cos_view = std::abs(dot(hit.normal, ray.direction)) / length(ray.direction);
     for (std::size_t li = 0; li < scene_.lights.size() && li < 64; ++li) {
       LightArrival arrival;
       if (scene_.lights[li].type != LightType::Environment &&
@@ -178,9 +186,17 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
     for (int x = 0; x < w; ++x) {
       const Seen c = seen_at(x + 0.5, y + 0.5);
       const std::size_t k = std::size_t(y) * std::size_t(w + 1) + std::size_t(x);
+      const Seen* corners[4] = {&corner[k], &corner[k + 1], &corner[k + std::size_t(w) + 1],
+                                &corner[k + std::size_t(w) + 2]};
+      bool interior = true;
+      double least = c.cos_view, most = c.cos_view;
+      for (const Seen* q : corners) {
+        interior = interior && q->same_surface(c);
+        least = std::min(least, q->cos_view);
+        most = std::max(most, q->cos_view);
+      }
       mask[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
-          corner[k] == c && corner[k + 1] == c && corner[k + std::size_t(w) + 1] == c &&
-          corner[k + std::size_t(w) + 2] == c;
+          interior && least >= kInteriorCosineRatio * most;
     }
   });
   return mask;
@@ -229,13 +245,18 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       fp = point ? reader::Footprint{tu, tv, tu, tv}
                  : footprint_rectangle(tu, tv, surface_differentials(cr, hit), m.texels_per_unit);
       counters.cloth_pixels.fetch_add(first_pass ? 1 : 0, std::memory_order_relaxed);
-      if (first_pass) {
+      if (first_pass && !point) {
         const double texels = (fp.x1 - fp.x0) * (fp.y1 - fp.y0);
         std::lock_guard lock(counters.mutex);
         counters.min_texels = std::min(counters.min_texels, texels);
         counters.max_texels = std::max(counters.max_texels, texels);
       }
     }
+    // At a point every method's estimate is the BSDF there; brute force's one sample is the
+    // cheapest (the reference's is exact too).
+    const eval::Method method = point && pass_options.method != eval::Method::Reference
+                                    ? eval::Method::Brute
+                                    : pass_options.method;
     auto shadow_origin = [&](const Vec3& wi) { return shadow_ray_origin(hit, wi); };
     // The integrand of the rendering equation for light from world direction wi: f^ V |cos|.
     auto bsdf = [&](const Vec3& wi_world, eval::LobeMask mask, uint32_t samples) -> Rgb {
@@ -246,15 +267,13 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       }
       const double wi_arr[3] = {wi.x, wi.y, wi.z};
       eval::Estimate e;
-      reader::Status s =
-          m.evaluator->estimate(fp, wi_arr, wo_arr, pass_options.method, samples, rng, mask, &e);
+      reader::Status s = m.evaluator->estimate(fp, wi_arr, wo_arr, method, samples, rng, mask, &e);
       if (s.code() == reader::ErrorCode::OutOfPlan) {
         // A scene-planned asset left out what this query needs (docs/scene-plans.md,
         // "Queries outside the plan"): brute force over the same footprint needs no table; when
         // it is refused too (a view bin or transmission left out), the light contributes 0.
         counters.out_of_plan.fetch_add(1, std::memory_order_relaxed);
-        if (pass_options.method != eval::Method::Brute &&
-            pass_options.method != eval::Method::Reference)
+        if (method != eval::Method::Brute && method != eval::Method::Reference)
           s = m.evaluator->estimate(fp, wi_arr, wo_arr, eval::Method::Brute, samples, rng, mask,
                                     &e);
         if (s.ok())
@@ -341,14 +360,14 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       radiance += bsdf(-wo_world, kDeltaBit, samples) * scene.background;
     return radiance;
   };
-  // The interior pixels; a footprint method renders the others (the edges) from stratified rays
-  // (RenderOptions::jitter_edges). Computed in every render: its time is the render's.
+  // The interior pixels; a footprint method path traces the others (the edges) from stratified
+  // rays (RenderOptions::jitter_edges). Computed in every render: its time is the render's.
   const std::vector<uint8_t> interior =
       !pass_options.path_traced && pass_options.jitter_edges && !impl.planned
           ? interior_pixels()
           : std::vector<uint8_t>();
-  // One pixel of pass `pass`: the pixel centre's footprint, or jittered rays, each at its hit's
-  // point (path tracing, spp rays) or over its own footprint (an edge pixel, s x s rays).
+  // One pixel of pass `pass`: the pixel centre's footprint, or jittered rays each evaluated at its
+  // hit's point (path tracing: spp rays; an edge pixel: s x s stratified rays).
   auto shade = [&](int px, int py, uint32_t pass) -> Rgb {
     const uint64_t pixel = uint64_t(py) * w + px;
     eval::Rng rng(pixel_seed(pass_options.seed, pass, pixel));
@@ -362,10 +381,13 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     }
     if (interior.empty() || interior[pixel])
       return shade_ray(px + 0.5, py + 0.5, spp, false, rng, pass == 0);
-    // An edge pixel: s x s stratified rays, s = max(4, ceil(sqrt(spp))). Its value jumps between
-    // surfaces (or light and shadow) across the pixel, so a few uniform rays would make it the
-    // noisiest pixel of the image; strata over the pixel's area bring that noise down faster than
-    // more rays alone would, and edges are a few percent of the pixels.
+    // An edge pixel: s x s stratified rays, s = max(8, ceil(sqrt(spp))). Its value jumps between
+    // surfaces (or light and shadow) across the pixel, or its directions turn, so the centre's
+    // footprint misstates it and a few uniform rays would make it the noisiest pixel of the image;
+    // strata over the pixel's area bring that noise down faster than more rays alone would. The
+    // footprint model has nothing to add where one ray's point is as good a sample of the pixel
+    // as its footprint is, and a point evaluation costs several times less than a footprint
+    // estimate.
     const uint32_t s = std::max<uint32_t>(kEdgeStrata, uint32_t(std::ceil(std::sqrt(double(spp)))));
     // Each stratum its own generator, so that what one ray's shading draws (which depends on the
     // scene: a black backdrop skips the gaps' lobe) does not move the next ray's samples.
@@ -376,7 +398,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
             pixel_seed(pass_options.seed, pass, pixel) ^ (uint64_t(j * s + i + 1) << 40);
         eval::Rng stratum(model::splitmix64_next(state));
         const double u = (i + stratum.uniform()) / s, v = (j + stratum.uniform()) / s;
-        sum += shade_ray(px + u, py + v, 1, false, stratum, pass == 0 && i == 0 && j == 0);
+        sum += shade_ray(px + u, py + v, 1, true, stratum, pass == 0 && i == 0 && j == 0);
       }
     return sum / double(s * s);
   };

@@ -36,13 +36,15 @@ struct RenderOptions {
   // sample: brute force then pays one BSDF evaluation per ray), as a path tracer without a
   // multi-scale model renders (docs/rendering.md, "Path-traced brute force").
   bool path_traced = false;
-  // Footprint methods: a pixel on a silhouette or a shadow edge (Renderer::interior_pixels() 0)
-  // takes s x s camera rays stratified over its area, s = max(4, ceil(sqrt(spp))), each with its
-  // own hit, shadow rays and footprint and one evaluator sample, instead of its centre's footprint,
-  // so that it converges to the pixel's area average as path tracing does (docs/rendering.md, "Edge
-  // pixels"). The edge test is part of each render's time. false: every pixel from its centre (the
-  // reference of the reports, which is compared off the edges only). Ignored (centres) when an
-  // object's asset is scene-planned: such an asset holds what the pixel centres query.
+  // Footprint methods: a pixel on a silhouette, a shadow edge or a strong bend of the surface
+  // (Renderer::interior_pixels() 0) is path traced, as `path_traced` renders every pixel, from
+  // s x s camera rays stratified over its area, s = max(8, ceil(sqrt(spp))), each evaluated at its
+  // hit's point with one brute-force sample (the reference method: exactly), instead of from its
+  // centre's footprint, so that it converges to the pixel's area average as path tracing does
+  // (docs/rendering.md, "Edge pixels"). The edge test is part of each render's time. false: every
+  // pixel from its centre (the reference of the reports, which is compared off the edges only).
+  // Ignored (centres) when an object's asset is scene-planned: such an asset holds what the pixel
+  // centres query.
   bool jitter_edges = true;
   eval::TableChoice tables = eval::TableChoice::Auto;
   bool parallax = true;  // false: the model without parallax offsets (near-field comparison)
@@ -117,12 +119,14 @@ class Renderer {
   PixelFootprint pixel_footprint(int x, int y) const;
 
   // One byte per pixel, row 0 at the top: 1 where the camera rays through the pixel's centre and
-  // its four corners all hit the same object (or all miss) and, at the hits, the same point and
-  // directional lights (the first 64) are shadowed; 0 on silhouettes and shadow edges. A footprint
-  // renders a pixel from its centre's hit and shadow rays while path tracing averages over the
-  // pixel's area, so the two converge to different values there only (docs/rendering.md, "Error
-  // against run time"). Traces (1 + lights) rays per pixel and corner, in parallel (TBB);
-  // allocates the mask.
+  // its four corners all hit the same object (or all miss), at the hits the same point and
+  // directional lights (the first 64) are shadowed, and the cosines between the rays and the
+  // surface's geometric normal at the five hits are all within kInteriorCosineRatio (0.7) of the
+  // largest; 0 on silhouettes, shadow edges and where the view turns across the pixel (near a
+  // curved object's outline). A footprint renders a pixel from its centre's hit, directions and
+  // shadow rays while path tracing averages them over the pixel's area, so the two converge to
+  // different values there only (docs/rendering.md, "Edge pixels"). Traces (1 + lights) rays per
+  // pixel and corner, in parallel (TBB); allocates the mask.
   std::vector<uint8_t> interior_pixels() const;
 
   const Scene& scene() const { return scene_; }

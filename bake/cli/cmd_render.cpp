@@ -148,9 +148,10 @@ const bool render_registered = register_command(
            ->check(CLI::IsMember({"multiscale", "multiscale-paper", "brute", "reference"}));
        app.add_option("--spp", o->spp, "samples per pixel footprint and light (default 2)");
        app.add_option("--edges", o->edges,
-                      "pixels on silhouettes and shadow edges: jittered (spp camera rays over the "
-                      "pixel, each with its footprint; default) or centre (the centre's footprint, "
-                      "as every other pixel; docs/rendering.md)")
+                      "pixels on silhouettes, shadow edges and turns of the view: jittered "
+                      "(path traced from at least 8 x 8 stratified camera rays, each evaluated at "
+                      "its hit; default) or centre (the centre's footprint, as every other pixel; "
+                      "docs/rendering.md)")
            ->check(CLI::IsMember({"jittered", "centre"}));
        app.add_option("--image-size", o->image_size,
                       "W,H: render at W x H pixels instead of the scene camera's resolution (the "

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -146,8 +147,8 @@ TEST(Render, InteriorPixelsLeaveOutExactlyTheSilhouettes) {
   EXPECT_EQ(left_out, 4 * (int(std::ceil(hi)) - int(std::floor(lo))) - 4);  // the ring of edges
 }
 
-// Footprint methods render silhouette pixels from jittered rays: the 0.5-wide Lambertian square of
-// the test above under a sun, seen head-on on black, projects to the image square [lo, hi]^2, so
+// Footprint methods path trace silhouette pixels from jittered rays: the 0.5-wide Lambertian square
+// of the test above under a sun, seen head-on on black, projects to the image square [lo, hi]^2, so
 // a pixel's exact value is the square's radiance times the share of the pixel inside it. With
 // 32 x 32 stratified rays the edge pixels are within 5 binomial standard errors of it (strata
 // only lower the error); the interior
@@ -207,6 +208,51 @@ TEST(Render, InteriorPixelsLeaveOutShadowEdges) {
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 32; ++x)
       EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], x == 4 ? 0 : 1) << x << "," << y;
+}
+
+// Where the view turns across a pixel its centre's directions misstate it: a sphere of radius 0.5
+// seen from 2 units on its axis, whose ray at angle a from the axis meets it at
+// |cos| = sqrt(1 - (2 sin a / 0.5)^2) (a closed form, not the renderer's intersection). A pixel is
+// interior when its centre and corners all hit (or all miss) and their cosines are within 0.7 of
+// the largest; near the outline the ring of pixels whose five rays all hit, but at cosines that
+// part, is left out.
+TEST(Render, InteriorPixelsLeaveOutWhereTheViewTurns) {
+  Scene s = plane_scene(32, 32);
+  s.objects[0].shape = ShapeType::Sphere;
+  s.objects[0].center = {0, 0, 0};
+  s.objects[0].axis = {0, 1, 0};
+  s.objects[0].radius = 0.5;
+  const std::vector<uint8_t> mask = Renderer(s, {}).interior_pixels();
+  const double t = std::tan(15 * kPi / 180);
+  // |cos| at image point (x, y), or -1 where the ray misses.
+  auto cos_view = [&](double x, double y) {
+    const double a = (2 * x / 32 - 1) * t, b = (1 - 2 * y / 32) * t;
+    const double sin_a = std::sqrt((a * a + b * b) / (1 + a * a + b * b));
+    const double q = 1 - std::pow(2 * sin_a / 0.5, 2);
+    return q > 0 ? std::sqrt(q) : -1.0;
+  };
+  int turned = 0, checked = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const double c[5] = {cos_view(x + 0.5, y + 0.5), cos_view(x, y), cos_view(x + 1, y),
+                           cos_view(x, y + 1), cos_view(x + 1, y + 1)};
+      const double least = *std::min_element(c, c + 5), most = *std::max_element(c, c + 5);
+      if (least < 0 && most >= 0) {  // a silhouette
+        EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], 0) << x << "," << y;
+        continue;
+      }
+      if (most < 0) {  // the backdrop
+        EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], 1) << x << "," << y;
+        continue;
+      }
+      if (std::abs(least - 0.7 * most) < 1e-9) continue;  // on the threshold
+      ++checked;
+      turned += least < 0.7 * most;
+      EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], least >= 0.7 * most ? 1 : 0)
+          << x << "," << y << " cosines " << least << " .. " << most;
+    }
+  EXPECT_GT(turned, 8);            // the rule leaves out a ring inside the outline
+  EXPECT_GT(checked - turned, 8);  // and keeps the middle
 }
 
 // The 24 x 24 plane scene with the twill at `tiles_per_unit` under a point light.
