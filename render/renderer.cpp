@@ -28,13 +28,14 @@
 namespace clothbake::render {
 namespace {
 
-// The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges): at 2
-// spp, 64 point evaluations cost about what 10 footprint estimates do, and bring the edges' error
-// near the interior's (docs/performance.md, "Edge pixels").
-constexpr uint32_t kEdgeStrata = 8;
-// An interior pixel's five view cosines are all at least this fraction of the largest
-// (Renderer::interior_pixels): below it, the centre's directions misstate the pixel's average
-// (docs/rendering.md, "Edge pixels").
+// The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges): 8 x 8
+// point rays measured the same 2-spp error as 8 x 8 rays with footprints in half their time, and
+// 12 x 12 or 16 x 16 gained nothing in time at equal error (within the runs' spread; docs/
+// performance.md, "Scenes against the path-traced truth").
+constexpr uint64_t kEdgeStrata = 8;
+// A cloth pixel is interior only if its five view cosines are all at least this fraction of the
+// largest (Renderer::interior_pixels): below it, the centre's directions misstate the pixel's
+// average (docs/rendering.md, "Edge pixels").
 constexpr double kInteriorCosineRatio = 0.7;
 
 constexpr double kPi = 3.14159265358979323846;
@@ -158,7 +159,7 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
   struct Seen {
     int object = -1;
     uint64_t shadowed = 0;
-    double cos_view = 0;  // |cos| between the ray and the geometric normal
+    double cos_view = 0;  // |cos| between the (unit) ray and the unit geometric normal
     bool same_surface(const Seen& o) const { return object == o.object && shadowed == o.shadowed; }
   };
   auto seen_at = [&](double x, double y) {
@@ -167,7 +168,7 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
     Seen seen;
     if (!hit.hit()) return seen;
     seen.object = hit.object;
-    seen.cos_view = std::abs(dot(hit.normal, ray.direction)) / length(ray.direction);
+    seen.cos_view = std::abs(dot(hit.normal, ray.direction));
     for (std::size_t li = 0; li < scene_.lights.size() && li < 64; ++li) {
       LightArrival arrival;
       if (scene_.lights[li].type != LightType::Environment &&
@@ -195,8 +196,11 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
         least = std::min(least, q->cos_view);
         most = std::max(most, q->cos_view);
       }
+      // The view's turn matters where a footprint takes the centre's directions: on cloth (a
+      // Lambertian object is shaded at the centre's hit whatever the view).
+      const bool cloth = c.object >= 0 && impl_->materials[std::size_t(c.object)].cloth;
       mask[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
-          interior && least >= kInteriorCosineRatio * most;
+          interior && (!cloth || least >= kInteriorCosineRatio * most);
     }
   });
   return mask;
@@ -227,8 +231,16 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   const bool backdrop_behind = !impl.background && scene.background.max_component() > 0;
   // The direct lighting at the primary hit of camera ray (x, y) (image coordinates), with `spp`
   // evaluator samples over the pixel's footprint, or at the hit's point when path tracing.
-  auto shade_ray = [&](double x, double y, uint32_t samples, bool point, eval::Rng& rng,
-                       bool first_pass) -> Rgb {
+  // The method that evaluates an edge pixel's rays at their points: brute force's one sample (one
+  // view bin drawn) where the method asked for would evaluate a point exactly (multiscale,
+  // multiscale-paper: all four view bins, up to four texel evaluations); at equal error it took
+  // less time (docs/performance.md, "Scenes against the path-traced truth"). The reference stays
+  // exact.
+  const eval::Method edge_method = pass_options.method == eval::Method::Reference
+                                       ? eval::Method::Reference
+                                       : eval::Method::Brute;
+  auto shade_ray = [&](double x, double y, uint32_t samples, bool point, eval::Method method,
+                       eval::Rng& rng, bool first_pass) -> Rgb {
     const CameraRay cr = impl.camera.generate(x, y);
     const SurfaceHit hit = intersect_scene(cr.ray, scene.objects, 0.0, INFINITY);
     if (!hit.hit())
@@ -252,11 +264,6 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
         counters.max_texels = std::max(counters.max_texels, texels);
       }
     }
-    // At a point every method's estimate is the BSDF there; brute force's one sample is the
-    // cheapest (the reference's is exact too).
-    const eval::Method method = point && pass_options.method != eval::Method::Reference
-                                    ? eval::Method::Brute
-                                    : pass_options.method;
     auto shadow_origin = [&](const Vec3& wi) { return shadow_ray_origin(hit, wi); };
     // The integrand of the rendering equation for light from world direction wi: f^ V |cos|.
     auto bsdf = [&](const Vec3& wi_world, eval::LobeMask mask, uint32_t samples) -> Rgb {
@@ -360,6 +367,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       radiance += bsdf(-wo_world, kDeltaBit, samples) * scene.background;
     return radiance;
   };
+  std::atomic<uint64_t> edge_pixels{0};
   // The interior pixels; a footprint method path traces the others (the edges) from stratified
   // rays (RenderOptions::jitter_edges). Computed in every render: its time is the render's.
   const std::vector<uint8_t> interior =
@@ -375,30 +383,30 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       Rgb sum;
       for (uint32_t k = 0; k < spp; ++k) {
         const double u = rng.uniform(), v = rng.uniform();
-        sum += shade_ray(px + u, py + v, 1, true, rng, pass == 0 && k == 0);
+        sum += shade_ray(px + u, py + v, 1, true, pass_options.method, rng, pass == 0 && k == 0);
       }
       return sum / double(spp);
     }
     if (interior.empty() || interior[pixel])
-      return shade_ray(px + 0.5, py + 0.5, spp, false, rng, pass == 0);
+      return shade_ray(px + 0.5, py + 0.5, spp, false, pass_options.method, rng, pass == 0);
     // An edge pixel: s x s stratified rays, s = max(8, ceil(sqrt(spp))). Its value jumps between
     // surfaces (or light and shadow) across the pixel, or its directions turn, so the centre's
     // footprint misstates it and a few uniform rays would make it the noisiest pixel of the image;
-    // strata over the pixel's area bring that noise down faster than more rays alone would. The
-    // footprint model has nothing to add where one ray's point is as good a sample of the pixel
-    // as its footprint is, and a point evaluation costs several times less than a footprint
-    // estimate.
-    const uint32_t s = std::max<uint32_t>(kEdgeStrata, uint32_t(std::ceil(std::sqrt(double(spp)))));
+    // strata over the pixel's area bring that noise down faster than more rays alone would. Each
+    // ray is evaluated at its point: a footprint per ray lowered the error a little at several
+    // times the cost (docs/performance.md). 64-bit: s reaches 65 536 at the largest spp.
+    edge_pixels.fetch_add(pass == 0 ? 1 : 0, std::memory_order_relaxed);
+    const uint64_t s = std::max<uint64_t>(kEdgeStrata, uint64_t(std::ceil(std::sqrt(double(spp)))));
     // Each stratum its own generator, so that what one ray's shading draws (which depends on the
     // scene: a black backdrop skips the gaps' lobe) does not move the next ray's samples.
     Rgb sum;
-    for (uint32_t j = 0; j < s; ++j)
-      for (uint32_t i = 0; i < s; ++i) {
-        uint64_t state =
-            pixel_seed(pass_options.seed, pass, pixel) ^ (uint64_t(j * s + i + 1) << 40);
+    for (uint64_t j = 0; j < s; ++j)
+      for (uint64_t i = 0; i < s; ++i) {
+        uint64_t state = pixel_seed(pass_options.seed, pass, pixel) ^ ((j * s + i + 1) << 40);
         eval::Rng stratum(model::splitmix64_next(state));
         const double u = (i + stratum.uniform()) / s, v = (j + stratum.uniform()) / s;
-        sum += shade_ray(px + u, py + v, 1, true, stratum, pass == 0 && i == 0 && j == 0);
+        sum +=
+            shade_ray(px + u, py + v, 1, true, edge_method, stratum, pass == 0 && i == 0 && j == 0);
       }
     return sum / double(s * s);
   };
@@ -459,6 +467,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   st.fallback_brute = counters.fallback_brute;
   st.fallback_zero = counters.fallback_zero;
   st.cloth_pixels = counters.cloth_pixels;
+  st.edge_pixels = edge_pixels;
   st.footprint_texels_min = std::isfinite(counters.min_texels) ? counters.min_texels : 0;
   st.footprint_texels_max = counters.max_texels;
   const NegativePixels negative = count_negative_pixels(result.rgb);

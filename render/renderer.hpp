@@ -1,5 +1,6 @@
 // A small direct-lighting renderer over the evaluator (docs/rendering.md): one primary ray through
-// each pixel centre, its footprint in texel space from ray differentials, every light sampled with
+// each pixel centre (path-traced rays over the pixel on edges, RenderOptions::jitter_edges), its
+// footprint in texel space from ray differentials, every light sampled with
 // a shadow ray, cloth shaded by eval::Evaluator::estimate over the pixel's footprint, Lambertian
 // surfaces where an object has no asset. Environment lights combine light sampling and BSDF
 // importance sampling (Sec. 5.1) by multiple importance sampling (balance heuristic, one sample of
@@ -36,7 +37,7 @@ struct RenderOptions {
   // sample: brute force then pays one BSDF evaluation per ray), as a path tracer without a
   // multi-scale model renders (docs/rendering.md, "Path-traced brute force").
   bool path_traced = false;
-  // Footprint methods: a pixel on a silhouette, a shadow edge or a strong bend of the surface
+  // Footprint methods: a pixel on a silhouette, a shadow edge or a turn of the view across cloth
   // (Renderer::interior_pixels() 0) is path traced, as `path_traced` renders every pixel, from
   // s x s camera rays stratified over its area, s = max(8, ceil(sqrt(spp))), each evaluated at its
   // hit's point with one brute-force sample (the reference method: exactly), instead of from its
@@ -61,10 +62,14 @@ struct RenderStats {
   uint64_t remainder_samples = 0;  // multiscale: cheap samples of g over the footprints' remainders
   uint64_t visibility_samples = 0;  // multiscale: samples of the visibility correction
   uint64_t cloth_pixels = 0;
+  // Pixels path traced as edges (RenderOptions::jitter_edges; 0 with centres or path tracing).
+  // Their rays' evaluations are in estimates, samples and texel_evals: one each a light and ray.
+  uint64_t edge_pixels = 0;
   // Scene-planned assets: estimates refused as OutOfPlan, of which answered by brute force (the
   // fallback) and counted as 0 (refused again: a view bin or transmission left out).
   uint64_t out_of_plan = 0, fallback_brute = 0, fallback_zero = 0;
-  double footprint_texels_min = 0, footprint_texels_max = 0;  // over the cloth pixels
+  // Over the cloth pixels shaded from a footprint (0 when none: path tracing).
+  double footprint_texels_min = 0, footprint_texels_max = 0;
   // Pixels with a channel below 0 and the least channel value (0 when none): the unbiased
   // multi-scale and brute-force estimates are noisy around the exact value, and a residual
   // f - g can push a dark pixel below 0 (docs/rendering.md, "Negative pixels").
@@ -120,13 +125,14 @@ class Renderer {
 
   // One byte per pixel, row 0 at the top: 1 where the camera rays through the pixel's centre and
   // its four corners all hit the same object (or all miss), at the hits the same point and
-  // directional lights (the first 64) are shadowed, and the cosines between the rays and the
-  // surface's geometric normal at the five hits are all within kInteriorCosineRatio (0.7) of the
-  // largest; 0 on silhouettes, shadow edges and where the view turns across the pixel (near a
-  // curved object's outline). A footprint renders a pixel from its centre's hit, directions and
-  // shadow rays while path tracing averages them over the pixel's area, so the two converge to
-  // different values there only (docs/rendering.md, "Edge pixels"). Traces (1 + lights) rays per
-  // pixel and corner, in parallel (TBB); allocates the mask.
+  // directional lights (the first 64) are shadowed, and, on cloth, the five |cosines| between the
+  // rays and the geometric normal are all at least kInteriorCosineRatio (0.7) times the largest;
+  // 0 on silhouettes, shadow edges and where the view turns across a cloth pixel (inside a curved
+  // object's outline, or a plane seen within a few pixels of its horizon). A footprint renders a
+  // pixel from its centre's hit, directions and shadow rays while path tracing averages them over
+  // the pixel's area, so the two converge to different values there (docs/rendering.md, "Edge
+  // pixels"; changes of the light's direction across a pixel are not tested). Traces (1 + lights)
+  // rays per pixel and corner, in parallel (TBB); allocates the mask.
   std::vector<uint8_t> interior_pixels() const;
 
   const Scene& scene() const { return scene_; }

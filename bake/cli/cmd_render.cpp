@@ -112,6 +112,7 @@ int run_render(const RenderCliOptions& o) {
                 {"out_of_plan_brute_fallback", s.fallback_brute},
                 {"out_of_plan_zero", s.fallback_zero},
                 {"cloth_pixels", s.cloth_pixels},
+                {"edge_pixels", s.edge_pixels},
                 {"negative_pixels", s.negative_pixels},
                 {"min_value", s.min_value},
                 {"footprint_side_texels",

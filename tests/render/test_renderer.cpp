@@ -210,49 +210,122 @@ TEST(Render, InteriorPixelsLeaveOutShadowEdges) {
       EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], x == 4 ? 0 : 1) << x << "," << y;
 }
 
-// Where the view turns across a pixel its centre's directions misstate it: a sphere of radius 0.5
-// seen from 2 units on its axis, whose ray at angle a from the axis meets it at
-// |cos| = sqrt(1 - (2 sin a / 0.5)^2) (a closed form, not the renderer's intersection). A pixel is
-// interior when its centre and corners all hit (or all miss) and their cosines are within 0.7 of
-// the largest; near the outline the ring of pixels whose five rays all hit, but at cosines that
-// part, is left out.
-TEST(Render, InteriorPixelsLeaveOutWhereTheViewTurns) {
+// Where the view turns across a cloth pixel its centre's directions misstate it: a sphere of
+// radius 0.5 seen from 2 units on its axis, whose ray through image-plane point (a, b) (at
+// tan-angle r = |(a, b)| from the axis) meets it at |cos| = sqrt(1 - (2 sin(atan r) / 0.5)^2) (a
+// closed form, not the renderer's intersection). A cloth pixel is interior when its centre and
+// corners all hit (or all miss) and their cosines are at least 0.7 times the largest; near the
+// outline the ring of pixels whose five rays all hit, but at cosines that part, is left out. The
+// same sphere in a Lambertian colour keeps that ring: it is shaded at the centre's hit whatever
+// the view.
+TEST(Render, InteriorPixelsLeaveOutWhereTheViewTurnsOnCloth) {
   Scene s = plane_scene(32, 32);
   s.objects[0].shape = ShapeType::Sphere;
   s.objects[0].center = {0, 0, 0};
   s.objects[0].axis = {0, 1, 0};
   s.objects[0].radius = 0.5;
+  const std::vector<uint8_t> lambertian = Renderer(s, {}).interior_pixels();
+  s.objects[0].asset = assets().twill;
   const std::vector<uint8_t> mask = Renderer(s, {}).interior_pixels();
   const double t = std::tan(15 * kPi / 180);
   // |cos| at image point (x, y), or -1 where the ray misses.
   auto cos_view = [&](double x, double y) {
     const double a = (2 * x / 32 - 1) * t, b = (1 - 2 * y / 32) * t;
-    const double sin_a = std::sqrt((a * a + b * b) / (1 + a * a + b * b));
-    const double q = 1 - std::pow(2 * sin_a / 0.5, 2);
+    const double sin_angle = std::sqrt((a * a + b * b) / (1 + a * a + b * b));
+    const double q = 1 - std::pow(2 * sin_angle / 0.5, 2);
     return q > 0 ? std::sqrt(q) : -1.0;
   };
   int turned = 0, checked = 0;
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 32; ++x) {
+      const std::size_t k = std::size_t(y) * 32 + std::size_t(x);
       const double c[5] = {cos_view(x + 0.5, y + 0.5), cos_view(x, y), cos_view(x + 1, y),
                            cos_view(x, y + 1), cos_view(x + 1, y + 1)};
       const double least = *std::min_element(c, c + 5), most = *std::max_element(c, c + 5);
       if (least < 0 && most >= 0) {  // a silhouette
-        EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], 0) << x << "," << y;
+        EXPECT_EQ(mask[k], 0) << x << "," << y;
+        EXPECT_EQ(lambertian[k], 0) << x << "," << y;
         continue;
       }
-      if (most < 0) {  // the backdrop
-        EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], 1) << x << "," << y;
+      EXPECT_EQ(lambertian[k], 1) << x << "," << y;  // the backdrop, or all five on the sphere
+      if (most < 0) {                                // the backdrop
+        EXPECT_EQ(mask[k], 1) << x << "," << y;
         continue;
       }
-      if (std::abs(least - 0.7 * most) < 1e-9) continue;  // on the threshold
+      if (std::abs(least - 0.7 * most) < 1e-9) continue;  // on the threshold (never, here)
       ++checked;
       turned += least < 0.7 * most;
-      EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], least >= 0.7 * most ? 1 : 0)
+      EXPECT_EQ(mask[k], least >= 0.7 * most ? 1 : 0)
           << x << "," << y << " cosines " << least << " .. " << most;
     }
-  EXPECT_GT(turned, 8);            // the rule leaves out a ring inside the outline
-  EXPECT_GT(checked - turned, 8);  // and keeps the middle
+  EXPECT_GT(turned, 60);             // the rule leaves out a ring inside the outline (104)
+  EXPECT_GT(checked - turned, 400);  // and keeps the middle (584)
+}
+
+// Edge pixels converge to what path tracing does: a twill sphere under a point light, its edge
+// pixels (silhouettes and the ring where the view turns) from multiscale at 2 spp (8 x 8
+// stratified rays evaluated at points) against path-traced brute force at 64 spp, 8 seeds each.
+// Per edge pixel p the means A_p, B_p and the variances of those means v_p (from the seeds): with
+// equal expectations sum (A_p - B_p)^2 / sum (v_A,p + v_B,p) is 1 up to its spread over ~100
+// pixels (about 0.2); it must stay under 2. The centre rule (jitter_edges false), biased on every
+// silhouette pixel, must exceed 4: the test can tell (measured 0.85 and 34.5; rays over a quarter
+// of each edge pixel gave 49).
+TEST(Render, EdgePixelsConvergeToPathTracing) {
+  Scene s = plane_scene(16, 16);
+  s.objects[0].shape = ShapeType::Sphere;
+  s.objects[0].center = {0, 0, 0};
+  s.objects[0].axis = {0, 1, 0};
+  s.objects[0].radius = 0.35;
+  s.objects[0].asset = assets().twill;
+  s.objects[0].tiles_per_unit = 4;
+  Light point;
+  point.position = {0.5, 0.5, 1.5};
+  point.intensity = Rgb(3);
+  s.lights.push_back(point);
+  const Renderer renderer(s, {});
+  const std::vector<uint8_t> mask = renderer.interior_pixels();
+  constexpr int kSeeds = 8;
+  // Per pixel, the sum and the sum of squares of its luminance over the seeds.
+  struct Series {
+    std::vector<double> sum = std::vector<double>(16 * 16), sum2 = std::vector<double>(16 * 16);
+    void add(const RenderResult& r) {
+      for (std::size_t p = 0; p < sum.size(); ++p) {
+        const double l = (r.rgb[3 * p] + r.rgb[3 * p + 1] + r.rgb[3 * p + 2]) / 3;
+        sum[p] += l, sum2[p] += l * l;
+      }
+    }
+    double mean(std::size_t p) const { return sum[p] / kSeeds; }
+    double variance_of_mean(std::size_t p) const {
+      return std::max(0.0, sum2[p] / kSeeds - mean(p) * mean(p)) / (kSeeds - 1);
+    }
+  };
+  Series jittered, centre, path;
+  for (uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    RenderOptions o;
+    o.seed = seed;
+    jittered.add(renderer.render(o));
+    o.jitter_edges = false;
+    centre.add(renderer.render(o));
+    o.method = eval::Method::Brute;
+    o.path_traced = true;
+    o.spp = 64;
+    path.add(renderer.render(o));
+  }
+  auto ratio = [&](const Series& a) {
+    double squares = 0, variances = 0;
+    for (std::size_t p = 0; p < mask.size(); ++p)
+      if (mask[p] == 0) {
+        squares += std::pow(a.mean(p) - path.mean(p), 2);
+        variances += a.variance_of_mean(p) + path.variance_of_mean(p);
+      }
+    return squares / variances;
+  };
+  int edges = 0;
+  for (uint8_t m : mask)
+    edges += m == 0;
+  ASSERT_GT(edges, 30);
+  EXPECT_LT(ratio(jittered), 2.0);
+  EXPECT_GT(ratio(centre), 4.0);
 }
 
 // The 24 x 24 plane scene with the twill at `tiles_per_unit` under a point light.
