@@ -210,8 +210,18 @@ TEST(Render, InteriorPixelsLeaveOutShadowEdges) {
       EXPECT_EQ(mask[std::size_t(y) * 32 + std::size_t(x)], x == 4 ? 0 : 1) << x << "," << y;
 }
 
+// plane_scene's camera and colour, square, centred on a sphere of `radius` at the origin.
+Scene sphere_scene(int size, double radius) {
+  Scene s = plane_scene(size, size);
+  s.objects[0].shape = ShapeType::Sphere;
+  s.objects[0].center = {0, 0, 0};
+  s.objects[0].axis = {0, 1, 0};
+  s.objects[0].radius = radius;
+  return s;
+}
+
 // Where the view turns across a cloth pixel its centre's directions misstate it: a sphere of
-// radius 0.5 seen from 2 units on its axis, whose ray through image-plane point (a, b) (at
+// radius 0.5 centred in the view from 2 units, whose ray through image-plane point (a, b) (at
 // tan-angle r = |(a, b)| from the axis) meets it at |cos| = sqrt(1 - (2 sin(atan r) / 0.5)^2) (a
 // closed form, not the renderer's intersection). A cloth pixel is interior when its centre and
 // corners all hit (or all miss) and their cosines are at least 0.7 times the largest; near the
@@ -219,11 +229,7 @@ TEST(Render, InteriorPixelsLeaveOutShadowEdges) {
 // same sphere in a Lambertian colour keeps that ring: it is shaded at the centre's hit whatever
 // the view.
 TEST(Render, InteriorPixelsLeaveOutWhereTheViewTurnsOnCloth) {
-  Scene s = plane_scene(32, 32);
-  s.objects[0].shape = ShapeType::Sphere;
-  s.objects[0].center = {0, 0, 0};
-  s.objects[0].axis = {0, 1, 0};
-  s.objects[0].radius = 0.5;
+  Scene s = sphere_scene(32, 0.5);
   const std::vector<uint8_t> lambertian = Renderer(s, {}).interior_pixels();
   s.objects[0].asset = assets().twill;
   const std::vector<uint8_t> mask = Renderer(s, {}).interior_pixels();
@@ -271,11 +277,7 @@ TEST(Render, InteriorPixelsLeaveOutWhereTheViewTurnsOnCloth) {
 // silhouette pixel, must exceed 4: the test can tell (measured 0.85 and 34.5; rays over a quarter
 // of each edge pixel gave 49).
 TEST(Render, EdgePixelsConvergeToPathTracing) {
-  Scene s = plane_scene(16, 16);
-  s.objects[0].shape = ShapeType::Sphere;
-  s.objects[0].center = {0, 0, 0};
-  s.objects[0].axis = {0, 1, 0};
-  s.objects[0].radius = 0.35;
+  Scene s = sphere_scene(16, 0.35);
   s.objects[0].asset = assets().twill;
   s.objects[0].tiles_per_unit = 4;
   Light point;
