@@ -19,6 +19,21 @@ import csv
 import json
 import os
 import sys
+from typing import Any
+
+
+def ring(ax: Any, seconds: float, relmse: float, marker: str, colour: str, text: str) -> None:
+    """An open marker of `marker` and `colour` at (seconds, relmse), labelled `text`."""
+    ax.scatter(
+        [seconds],
+        [relmse],
+        s=120,
+        marker=marker,
+        facecolors="none",
+        edgecolors=colour,
+        zorder=5,
+        label=text,
+    )
 
 
 def main():
@@ -64,27 +79,10 @@ def main():
                 ax.annotate(str(spp), (s, e), textcoords="offset points", xytext=(3, 3), fontsize=7)
         op = summary.get("operating_point")
         if op and column == "relmse":
-            ax.scatter(
-                [op["seconds"]],
-                [op["relmse"]],
-                s=120,
-                facecolors="none",
-                edgecolors="k",
-                zorder=5,
-                label="multiscale at 2 spp",
-            )
+            ring(ax, op["seconds"], op["relmse"], "o", "k", "multiscale at 2 spp")
             eq = summary.get("brute_at_equal_error")
             if eq and eq.get("seconds"):
-                ax.scatter(
-                    [eq["seconds"]],
-                    [op["relmse"]],
-                    s=120,
-                    marker="s",
-                    facecolors="none",
-                    edgecolors="r",
-                    zorder=5,
-                    label="brute force, equal error",
-                )
+                ring(ax, eq["seconds"], op["relmse"], "s", "r", "brute force, equal error")
         ax.set_xlabel("render time (s, wall, this machine)")
         ax.set_ylabel(label)
         ax.set_title(os.path.basename(doc.get("scene", "")) + ": error against run time")
