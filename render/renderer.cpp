@@ -31,9 +31,13 @@ namespace {
 // The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges): on the
 // far satin sphere 8 x 8 point rays took half the time of 8 x 8 rays with footprints for a third
 // more 2-spp error (0.00137 against 0.00100), and 12 x 12 or 16 x 16 gained nothing in time at
-// equal error (within the runs' spread; docs/performance.md, "Scenes against the path-traced
-// truth").
+// equal error (within the runs' spread).
 constexpr uint64_t kEdgeStrata = 8;
+// Its rays per spp beyond those: with 16, 32 or 64 the error-time curves of the satin sphere and
+// the room lay on one frontier from 4 to 256 spp; with spp rays (a side of sqrt(spp)) the edges
+// held the error at its 2-spp value up to 64 spp (docs/performance.md, "Scenes against the
+// path-traced truth").
+constexpr double kEdgeRaysPerSpp = 32;
 // A cloth pixel is interior only if its five view cosines are all at least this fraction of the
 // largest (Renderer::interior_pixels): below it, the centre's directions misstate the pixel's
 // average (docs/rendering.md, "Edge pixels").
@@ -390,14 +394,17 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     }
     if (interior.empty() || interior[pixel])
       return shade_ray(px + 0.5, py + 0.5, spp, false, pass_options.method, rng, pass == 0);
-    // An edge pixel: s x s stratified rays, s = max(8, ceil(sqrt(spp))). Its value jumps between
+    // An edge pixel: s x s stratified rays, s = max(8, ceil(sqrt(32 spp))): 32 point rays per
+    // spp keep its error falling with spp as the interior's does (with sqrt(spp) a side it stayed
+    // at its 8 x 8 error up to 64 spp; docs/performance.md). Its value jumps between
     // surfaces (or light and shadow) across the pixel, or its directions turn, so the centre's
     // footprint misstates it and a few uniform rays would make it the noisiest pixel of the image;
     // strata over the pixel's area bring that noise down faster than more rays alone would. Each
     // ray is evaluated at its point: a footprint per ray lowered the error a little at several
     // times the cost (docs/performance.md). 64-bit: s reaches 65 536 at the largest spp.
     edge_pixels.fetch_add(pass == 0 ? 1 : 0, std::memory_order_relaxed);
-    const uint64_t s = std::max<uint64_t>(kEdgeStrata, uint64_t(std::ceil(std::sqrt(double(spp)))));
+    const uint64_t s = std::max<uint64_t>(
+        kEdgeStrata, uint64_t(std::ceil(std::sqrt(kEdgeRaysPerSpp * double(spp)))));
     // Each stratum its own generator, so that what one ray's shading draws (which depends on the
     // scene: a black backdrop skips the gaps' lobe) does not move the next ray's samples.
     Rgb sum;
