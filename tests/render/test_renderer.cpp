@@ -150,9 +150,10 @@ TEST(Render, InteriorPixelsLeaveOutExactlyTheSilhouettes) {
 // Footprint methods path trace silhouette pixels from jittered rays: the 0.5-wide Lambertian square
 // of the test above under a sun, seen head-on on black, projects to the image square [lo, hi]^2, so
 // a pixel's exact value is the square's radiance times the share of the pixel inside it. With
-// 32 x 32 stratified rays the edge pixels are within 5 binomial standard errors of it (strata
-// only lower the error); the interior
-// ones are exact; from the centre alone (jitter_edges false) an edge pixel is 0 or the whole value.
+// 1 024 spp (182 x 182 stratified rays an edge pixel) the edge pixels are within 5 binomial
+// standard errors of 1 024 uniform rays of it (more rays and strata only lower the error); the
+// interior ones are exact; from the centre alone (jitter_edges false) an edge pixel is 0 or the
+// whole value.
 TEST(Render, EdgePixelsConvergeToThePixelsAreaAverage) {
   Scene s = plane_scene(32, 32);
   s.objects[0].size[0] = s.objects[0].size[1] = 0.5;
