@@ -402,7 +402,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     // strata over the pixel's area bring that noise down faster than more rays alone would. Each
     // ray is evaluated at its point: a footprint per ray lowered the error a little at several
     // times the cost (docs/performance.md). 64-bit: s reaches 65 536 at the largest spp.
-    edge_pixels.fetch_add(pass == 0 ? 1 : 0, std::memory_order_relaxed);
+    if (pass == 0) edge_pixels.fetch_add(1, std::memory_order_relaxed);
     const uint64_t s = std::max<uint64_t>(
         kEdgeStrata, uint64_t(std::ceil(std::sqrt(kEdgeRaysPerSpp * double(spp)))));
     // Each stratum its own generator, so that what one ray's shading draws (which depends on the

@@ -273,10 +273,10 @@ TEST(Render, InteriorPixelsLeaveOutWhereTheViewTurnsOnCloth) {
 // pixels (silhouettes and the ring where the view turns) from multiscale at 2 spp (8 x 8
 // stratified rays evaluated at points) against path-traced brute force at 64 spp, 8 seeds each.
 // Per edge pixel p the means A_p, B_p and the variances of those means v_p (from the seeds): with
-// equal expectations sum (A_p - B_p)^2 / sum (v_A,p + v_B,p) is 1 up to its spread over ~100
-// pixels (about 0.2); it must stay under 2. The centre rule (jitter_edges false), biased on every
-// silhouette pixel, must exceed 4: the test can tell (measured 0.85 and 34.5; rays over a quarter
-// of each edge pixel gave 49).
+// equal expectations sum (A_p - B_p)^2 / sum (v_A,p + v_B,p) is near 1 (its numerator alone,
+// a sum over the 68 edge pixels, spreads by about sqrt(2 / 68) = 0.17); it must stay under 2. The
+// centre rule (jitter_edges false), biased on every silhouette pixel, must exceed 4: the test can
+// tell (measured 0.85 and 34.5; rays over a quarter of each edge pixel gave 49).
 TEST(Render, EdgePixelsConvergeToPathTracing) {
   Scene s = sphere_scene(16, 0.35);
   s.objects[0].asset = assets().twill;
