@@ -4738,6 +4738,11 @@ struct EvalOptions {
   // the light grazes the relief. 0 disables it (the residual is f - g with v). Any value keeps the
   // estimate unbiased; at most 1024.
   uint32_t visibility_samples = 8;
+  // Whether open() decides, per band of light elevation, if the visibility correction pays for
+  // this asset (a pilot of fixed seed at open: the correction where it at least roughly halves the
+  // residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
+  // visibility_samples > 0. Either keeps the estimate unbiased.
+  bool visibility_pilot = true;
   // The unbiased multi-scale form uses its control variate on a footprint P when the effective
   // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
   // the exactly integrated base, weighted by its integrand's spread) is at most this fraction of
@@ -5182,10 +5187,6 @@ bool unit3(const double u[3]) {
   return u != nullptr && u[0] >= 0 && u[0] < 1 && u[1] >= 0 && u[1] < 1 && u[2] >= 0 && u[2] < 1;
 }
 
-bool finite3(const double v[3]) {
-  return v != nullptr && std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
-}
-
 // The footprint in texels, or false for a NULL or non-finite one (the evaluator checks the rest).
 bool texel_footprint(const cb_evaluator* e, const cb_footprint* f, reader::Footprint* out) {
   if (f == nullptr) return false;
@@ -5557,6 +5558,9 @@ struct FootprintCover {
   uint32_t region_count = 0;
   double remainder = 0;  // the effective remainder e of the form taken
 };
+
+// No base: the whole of P (positive area) as one region of cheap samples of g (remainder 1).
+FootprintCover no_base_cover(const Footprint& footprint) noexcept;
 
 // The cover of P (positive area) for `data`'s tables and options (EvalOptions::footprint_base):
 // the whole-period form, the block form when the evaluator has block sums, or the block form's
@@ -6829,6 +6833,15 @@ struct EvalData {
   // when the tile has one yarn. The scale below which a footprint holds too little of the weave
   // for the control variate to pay (EvalOptions::min_control_variate_floats).
   double yarn_run = 0;
+  // Per band of the light's elevation |i_z| (kVisibilityBands bands of equal width): whether the
+  // unbiased form's visibility correction runs there (visibility_pilot.cpp decides at open).
+  static constexpr int kVisibilityBands = 4;
+  bool visibility_pays[kVisibilityBands] = {true, true, true, true};
+  bool corrects_visibility(double cos_i) const {
+    const int band = int(cos_i * kVisibilityBands);
+    return options.visibility_samples > 0 &&
+           visibility_pays[band < 0 ? 0 : (band < kVisibilityBands ? band : kVisibilityBands - 1)];
+  }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;
   }
@@ -6992,9 +7005,13 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
 // prefix sums), over the cover's regions from remainder_samples() cheap samples
 // (footprint_cover.hpp). P has positive area; the compressed specular tables are open. Errors:
 // Unsupported when the bin's sums cannot be allocated.
+// When `moments` is not null and the visibility correction runs, each residual point is added to it
+// (visibility_pilot.hpp).
+struct ResidualMoments;
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
                                     const Footprint& footprint, const FootprintCover& cover,
-                                    uint32_t spp, Rng& rng, Estimate* out) noexcept;
+                                    uint32_t spp, Rng& rng, Estimate* out,
+                                    ResidualMoments* moments = nullptr) noexcept;
 
 }  // namespace clothbake::eval
 // ---- eval/brute_force.cpp (continued) ----
@@ -7128,13 +7145,6 @@ model::TexelParams<double> EvalData::texel_params(uint64_t t) const {
   return p;
 }
 
-double TableSource::texel_value(const reader::BinWeights& weights, uint32_t x, uint32_t y,
-                                uint32_t label, int* cluster) const noexcept {
-  if (is_compressed()) return compressed.texel_value(weights, x, y, cluster);
-  (void)weights, (void)x, (void)y, (void)label;
-  *cluster = -1;
-  return 0.0;  // unreachable: the single file opens compressed tables only
-}
 
 }  // namespace clothbake::eval
 // ---- eval/evaluator.cpp ----
@@ -7177,6 +7187,39 @@ Status exact_average(const EvalData& data, const ShadingFrame& frame, const Foot
 
 // Number of source texels (pieces of texels) the exact sum of `footprint` visits.
 double exact_source_count(const EvalData& data, const Footprint& footprint) noexcept;
+
+}  // namespace clothbake::eval
+// ---- eval/evaluator.cpp (continued) ----
+// ---- eval/visibility_pilot.hpp ----
+// Where the unbiased form's visibility correction pays: a pilot at open, per band of the light's
+// elevation (docs/evaluator.md, "Where the correction pays"). C++17, standard library only.
+
+
+namespace clothbake::eval {
+
+struct EvalData;
+
+// The residual points' moments that the pilot reads from an estimate (methods.hpp): per point x,
+// the sums of x and x^2 of f - g, f - g_V and g_V - g (a point's value: every lobe's mean of its
+// three channels, summed), and the number of points.
+struct ResidualMoments {
+  double sum[3] = {0, 0, 0}, square[3] = {0, 0, 0}, count = 0;
+  void add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept;
+};
+
+// Sets data->visibility_pays for every band of |i_z| (EvalData::kVisibilityBands): per band,
+// kPilotEstimates estimates of the unbiased form, each over a whole tile at a random offset with no
+// base (no view bin's sums are built), one cheap sample and no parallax (no plane decoded), spp
+// kPilotSpp, the correction on, a reflection light with |i_z| uniform over the band and a view of
+// o_z 1, 0.8, 0.55 or 0.3 in turn, azimuths from a generator of fixed seed. With V_1, V_2, V_3 an
+// estimate's sample variances over its residual points of f - g, f - g_V and g_V - g, the band
+// keeps the correction when the median over its estimates of (V_2 + V_3 / visibility_samples) / V_1
+// (the residual's variance with the correction against without, per estimate as a relative error
+// weighs it) is at most kCorrectionPays, when no estimate saw any variance, and when an estimate
+// fails. Deterministic for an asset and its options; needs the tables and texel records open
+// (open() calls it last, when visibility_samples > 0 and visibility_pilot). About 1-3 ms; allocates
+// only what the estimates allocate. Not thread safe.
+void run_visibility_pilot(EvalData* data) noexcept;
 
 }  // namespace clothbake::eval
 // ---- eval/evaluator.cpp (continued) ----
@@ -7471,6 +7514,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                              "cannot allocate the block sums' bookkeeping");
       break;
     }
+    if (d->options.visibility_samples > 0 && d->options.visibility_pilot)
+      run_visibility_pilot(d.get());
   }
   data_ = std::move(d);
   return {};
@@ -7786,6 +7831,16 @@ Status exact_average(const EvalData& data, const ShadingFrame& frame, const Foot
 
 namespace clothbake::eval {
 
+FootprintCover no_base_cover(const Footprint& p) noexcept {
+  FootprintCover cover;
+  cover.base = FootprintCover::Base::None;
+  cover.regions[0].rect = p;
+  cover.regions[0].area = (p.x1 - p.x0) * (p.y1 - p.y0);
+  cover.region_count = 1;
+  cover.remainder = 1.0;
+  return cover;
+}
+
 PeriodBlock period_block(uint32_t n, const Footprint& p) noexcept {
   const double t = double(n);
   const double w = p.x1 - p.x0, h = p.y1 - p.y0;
@@ -7849,24 +7904,13 @@ FootprintCover whole_periods(uint32_t n, const Footprint& p) {
   return cover;
 }
 
-// No base: the whole of P by cheap samples of g.
-FootprintCover no_base(const Footprint& p) {
-  FootprintCover cover;
-  cover.base = FootprintCover::Base::None;
-  cover.regions[0].rect = p;
-  cover.regions[0].area = (p.x1 - p.x0) * (p.y1 - p.y0);
-  cover.region_count = 1;
-  cover.remainder = 1.0;
-  return cover;
-}
-
 // The block form: A the block-aligned rectangle nearest to P (side B texels); no base when P
 // rounds to no whole block.
 FootprintCover blocks(const Footprint& p, double side, double interior_spread) {
   // Each edge to the nearest multiple of B (halves up): A in block units.
   const Footprint units{std::floor(p.x0 / side + 0.5), std::floor(p.y0 / side + 0.5),
                         std::floor(p.x1 / side + 0.5), std::floor(p.y1 / side + 0.5)};
-  if (!(units.x1 > units.x0) || !(units.y1 > units.y0)) return no_base(p);
+  if (!(units.x1 > units.x0) || !(units.y1 > units.y0)) return no_base_cover(p);
   FootprintCover cover;
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
   cover.base = FootprintCover::Base::Blocks;
@@ -7917,7 +7961,7 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
     case FootprintBase::Blocks:
       return have_blocks ? blocks(p, side, spread) : whole_periods(data.n, p);
     case FootprintBase::None:
-      return no_base(p);
+      return no_base_cover(p);
     case FootprintBase::Auto:
       break;
   }
@@ -7934,7 +7978,7 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
       best_cost = cost;
     }
   }
-  if (1.0 < best_cost) best = no_base(p);
+  if (1.0 < best_cost) best = no_base_cover(p);
   return best;
 }
 
@@ -8454,7 +8498,7 @@ BlockPoints block_points(const Footprint& units, uint32_t blocks) {
 
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
                                     const Footprint& p, const FootprintCover& cover, uint32_t spp,
-                                    Rng& rng, Estimate* out) noexcept {
+                                    Rng& rng, Estimate* out, ResidualMoments* moments) noexcept {
   const uint32_t clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
   // One view bin for the estimate.
@@ -8621,7 +8665,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const int64_t n = int64_t(data.n);
   // With the visibility correction the residual is f - g_V, g with the texel's own visibility
   // (which shade_texel has just computed), and the correction below integrates g_V - g.
-  const bool correct_visibility = data.options.visibility_samples > 0;
+  const bool correct_visibility = data.corrects_visibility(frame.cos_i);
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
@@ -8630,6 +8674,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
+    if (moments != nullptr && correct_visibility) moments->add(shading.lobes, g, g_exact);
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
@@ -9058,6 +9103,99 @@ void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int
   out->gap = bsdf.gap();
   out->sggx_d = bsdf.sggx().D(frame.h);
   out->label = data.clusters.label_at(t);
+}
+
+}  // namespace clothbake::eval
+// ---- eval/visibility_pilot.cpp ----
+// The visibility correction's pilot (visibility_pilot.hpp).
+
+#include <algorithm>
+#include <cmath>
+
+
+namespace clothbake::eval {
+namespace {
+
+constexpr uint32_t kPilotEstimates = 64;  // per band
+constexpr uint32_t kPilotSpp = 8;
+// The correction costs about as much as the rest of a 2-spp estimate (16 samples of 90-500 ns
+// against 2-3 us), so it must at least halve the residual's variance to pay; the measured assets
+// sit far on either side (docs/evaluator.md, "Where the correction pays").
+constexpr double kCorrectionPays = 0.5;
+constexpr uint64_t kPilotSeed = 0x5eed'0f'7153'b11fULL;
+
+// A direction with z uniform in [z0, z1] and a uniform azimuth.
+void direction(double z0, double z1, Rng& rng, double out[3]) {
+  const double z = z0 + (z1 - z0) * rng.uniform();
+  const double phi = 2.0 * model::kPi<double> * rng.uniform();
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  out[0] = r * std::cos(phi);
+  out[1] = r * std::sin(phi);
+  out[2] = z;
+}
+
+}  // namespace
+
+void ResidualMoments::add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept {
+  double value[3] = {0, 0, 0};  // f - g, f - g_V, g_V - g
+  for (int l = 0; l < model::kLobeCount; ++l) {
+    value[0] += (f[l] - g[l]).mean();
+    value[1] += (f[l] - g_visibility[l]).mean();
+    value[2] += (g_visibility[l] - g[l]).mean();
+  }
+  for (int i = 0; i < 3; ++i) {
+    sum[i] += value[i];
+    square[i] += value[i] * value[i];
+  }
+  count += 1.0;
+}
+
+void run_visibility_pilot(EvalData* data) noexcept {
+  const double n = double(data->n);
+  const double kappa = double(data->options.visibility_samples);
+  Rng rng(kPilotSeed);
+  // Without parallax: f and g are compared at the same texel either way, and the parallax table's
+  // planes are decoded only for the view bins a caller meets (decoding them here took 150 ms).
+  const bool parallax = data->options.parallax;
+  data->options.parallax = false;
+  for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
+    const double z0 = std::max(0.02, double(band) / EvalData::kVisibilityBands);
+    const double z1 = double(band + 1) / EvalData::kVisibilityBands;
+    double ratios[kPilotEstimates];  // per estimate: its residual's variance with / without
+    uint32_t count = 0;
+    bool failed = false;
+    for (uint32_t e = 0; e < kPilotEstimates && !failed; ++e) {
+      double wi[3], wo[3];
+      direction(z0, z1, rng, wi);
+      // Four views (z 1, 0.8, 0.55, 0.3) at azimuth 0: the lights' azimuths vary the pair.
+      const double view_z = (e % 4 == 0) ? 1.0 : (e % 4 == 1 ? 0.8 : (e % 4 == 2 ? 0.55 : 0.3));
+      direction(view_z, view_z, rng, wo);
+      const double x = n * rng.uniform(), y = n * rng.uniform();
+      ShadingFrame frame;
+      Status status;
+      Estimate estimate;
+      ResidualMoments moments;
+      if (!make_frame(*data, wi, wo, kAllLobes, &frame, &status)) continue;
+      // A scene-planned asset answers only the half vectors it kept.
+      const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
+      if (!data->specular.tables->covers_bins(h)) continue;
+      // One cheap sample: the pilot reads only the residual's points.
+      const Footprint tile{x, y, x + n, y + n};
+      FootprintCover cover = no_base_cover(tile);
+      cover.remainder = 1e-12;
+      failed = !pushforward_control_variates(*data, frame, tile, cover, kPilotSpp, rng, &estimate,
+                                             &moments)
+                    .ok();
+      double v[3];
+      for (int i = 0; i < 3; ++i)  // the sample variances, divisor n - 1
+        v[i] = (moments.square[i] - moments.sum[i] * moments.sum[i] / moments.count) /
+               (moments.count - 1.0);
+      if (moments.count > 1.0 && v[0] > 0.0) ratios[count++] = (v[1] + v[2] / kappa) / v[0];
+    }
+    std::nth_element(ratios, ratios + count / 2, ratios + count);
+    data->visibility_pays[band] = failed || count == 0 || ratios[count / 2] <= kCorrectionPays;
+  }
+  data->options.parallax = parallax;
 }
 
 }  // namespace clothbake::eval
@@ -10367,12 +10505,6 @@ Status Asset::find(SectionType type, uint32_t instance, SectionInfo* out) const 
                        unsigned(instance));
 }
 
-Status Asset::typed_section(SectionType type, uint32_t instance, ElementType element,
-                            SectionInfo* out) const noexcept {
-  Status status = find(type, instance, out);
-  if (!status.ok()) return status;
-  return check_view(*out, element);
-}
 
 Status Asset::check_view(const SectionInfo& info, ElementType element) const noexcept {
   char what[96];
@@ -10393,13 +10525,6 @@ Status Asset::check_view(const SectionInfo& info, ElementType element) const noe
   return {};
 }
 
-Status Asset::metadata_json(std::string_view* out) const noexcept {
-  SectionInfo info;
-  Status status = typed_section(SectionType::Metadata, 0, ElementType::U8, &info);
-  if (!status.ok()) return status;
-  *out = std::string_view(reinterpret_cast<const char*>(info.data), std::size_t(info.raw_size));
-  return {};
-}
 
 }  // namespace clothbake::reader
 // ---- formats/reader/cluster_sections.cpp ----
@@ -10586,26 +10711,6 @@ uint32_t VisibilityClusterView::label(int64_t x, int64_t y) const noexcept {
   return labels_[uint64_t(ym) * n_ + uint64_t(xm)];
 }
 
-Status VisibilityClusterView::mean_visibility(uint32_t cluster, const double w[3],
-                                              double* out) const noexcept {
-  if (!is_open() || out == nullptr || w == nullptr)
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "mean_visibility: not open");
-  if (cluster >= clusters_)
-    return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "mean_visibility: cluster %u out of range (%u clusters)",
-                         unsigned(cluster), unsigned(clusters_));
-  if (!std::isfinite(w[0]) || !std::isfinite(w[1]) || !std::isfinite(w[2]) ||
-      !(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] > 0.0))
-    return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "mean_visibility: direction must be finite and non-zero");
-  const model::DirectionGrid<double> grid{int(dirs_), 0.0};
-  const model::BinBilinear<double> b = grid.bilinear(model::Vec3d(w[0], w[1], w[2]));
-  double v = 0.0;
-  for (int k = 0; k < 4; ++k)
-    v += b.weight[k] * mean_visibility_bin(cluster, uint32_t(b.index[k]));
-  *out = v;
-  return {};
-}
 
 }  // namespace clothbake::reader
 // ---- formats/reader/compressed_coefficients.cpp ----
@@ -11246,10 +11351,6 @@ int CompressedRadianceTables::cluster_of_texel(uint32_t x, uint32_t y) const noe
   return g == kNoCell ? -1 : int(cell_cluster_[g]);
 }
 
-CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights(
-    uint32_t x, uint32_t y) const noexcept {
-  return texel_weights_at(uint64_t(y) * n_ + x);
-}
 
 CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights_at(
     uint64_t t) const noexcept {
@@ -11262,42 +11363,7 @@ CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights_a
   return tw;
 }
 
-double CompressedRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
-  if (!is_open() || x >= n_ || y >= n_ || bin >= bins_per_side_ * bins_per_side_) return 0.0;
-  const TexelWeights tw = texel_weights(x, y);
-  if (tw.rank < 0) return 0.0;
-  double v = 0.0;
-  const float* row = basis_.get() + uint64_t(bin) * images_ + tw.first_image;
-  for (int j = 0; j <= tw.rank; ++j) {
-    const int64_t w = tw.weight(j);
-    if (w != 0) v += double(w) * double(row[j]);
-  }
-  return v;
-}
 
-double CompressedRadianceTables::texel_value(const BinWeights& weights, uint32_t x, uint32_t y,
-                                             int* cluster) const noexcept {
-  if (cluster != nullptr) *cluster = -1;
-  const uint32_t bins = bins_per_side_ * bins_per_side_;
-  if (!is_open() || x >= n_ || y >= n_ || weights.count > 4) return 0.0;
-  for (uint32_t k = 0; k < weights.count; ++k)
-    if (weights.bin[k] >= bins) return 0.0;
-  const int c = cluster_of_texel(x, y);
-  if (cluster != nullptr) *cluster = c;
-  if (c < 0) return 0.0;
-  const TexelWeights tw = texel_weights(x, y);
-  double v = 0.0;
-  for (int j = 0; j <= tw.rank; ++j) {
-    const int64_t w = tw.weight(j);
-    if (w == 0) continue;
-    const uint32_t i = tw.first_image + uint32_t(j);
-    double basis = 0.0;
-    for (uint32_t k = 0; k < weights.count; ++k)
-      basis += weights.weight[k] * double(basis_[uint64_t(weights.bin[k]) * images_ + i]);
-    v += double(w) * basis;
-  }
-  return v;
-}
 
 uint32_t CompressedRadianceTables::texel_image_weights(uint32_t x, uint32_t y,
                                                        uint32_t* first_image,
@@ -13270,11 +13336,6 @@ Status VisibilityAsgView::open(const Asset& asset) noexcept {
   return {};
 }
 
-model::AsgRecord VisibilityAsgView::record(int64_t x, int64_t y) const noexcept {
-  const int64_t n = info_.resolution;
-  return record_at(uint64_t(model::wrap_index(y, n)) * uint64_t(n) +
-                   uint64_t(model::wrap_index(x, n)));
-}
 
 model::AsgRecord VisibilityAsgView::record_at(uint64_t t) const noexcept {
   const uint16_t* f = records_ + t * kAsgRecordFields;
@@ -13288,36 +13349,11 @@ model::AsgRecord VisibilityAsgView::record_at(uint64_t t) const noexcept {
   return r;
 }
 
-model::AsgParams<double> VisibilityAsgView::lobe(int64_t x, int64_t y) const noexcept {
-  return model::unpack_asg<double>(record(x, y));
-}
 
 model::AsgParams<double> VisibilityAsgView::lobe_at(uint64_t t) const noexcept {
   return model::unpack_asg<double>(record_at(t));
 }
 
-double VisibilityAsgView::fit_error(int64_t x, int64_t y) const noexcept {
-  if (fit_error_ == nullptr) return std::numeric_limits<double>::quiet_NaN();
-  const int64_t n = info_.resolution;
-  return double(fit_error_[uint64_t(model::wrap_index(y, n)) * uint64_t(n) +
-                           uint64_t(model::wrap_index(x, n))]);
-}
 
-Status VisibilityAsgView::visibility(int64_t x, int64_t y, const double w[3],
-                                     double* out) const noexcept {
-  if (!is_open() || out == nullptr)
-    return Status::error(ErrorCode::InvalidArgument, Check::None, "visibility view is not open");
-  if (w == nullptr || !std::isfinite(w[0]) || !std::isfinite(w[1]) || !std::isfinite(w[2]))
-    return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "light direction must have finite components");
-  const double len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-  if (!(len > 0.0) || !std::isfinite(len))
-    return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "light direction must be non-zero");
-  const model::Asg<double> g = model::asg_from_params(lobe(x, y));
-  const double v = model::asg_eval(g, model::Vec3d(w[0] / len, w[1] / len, w[2] / len));
-  *out = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
-  return {};
-}
 
 }  // namespace clothbake::reader

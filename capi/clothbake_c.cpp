@@ -144,10 +144,6 @@ bool unit3(const double u[3]) {
   return u != nullptr && u[0] >= 0 && u[0] < 1 && u[1] >= 0 && u[1] < 1 && u[2] >= 0 && u[2] < 1;
 }
 
-bool finite3(const double v[3]) {
-  return v != nullptr && std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
-}
-
 // The footprint in texels, or false for a NULL or non-finite one (the evaluator checks the rest).
 bool texel_footprint(const cb_evaluator* e, const cb_footprint* f, reader::Footprint* out) {
   if (f == nullptr) return false;

@@ -31,6 +31,7 @@ model::TexelParams<double> EvalData::texel_params(uint64_t t) const {
   return p;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 double TableSource::texel_value(const reader::BinWeights& weights, uint32_t x, uint32_t y,
                                 uint32_t label, int* cluster) const noexcept {
   if (is_compressed()) return compressed.texel_value(weights, x, y, cluster);
@@ -48,5 +49,6 @@ double TableSource::texel_value(const reader::BinWeights& weights, uint32_t x, u
   return v;
 #endif
 }
+#endif
 
 }  // namespace clothbake::eval

@@ -96,6 +96,15 @@ struct EvalData {
   // when the tile has one yarn. The scale below which a footprint holds too little of the weave
   // for the control variate to pay (EvalOptions::min_control_variate_floats).
   double yarn_run = 0;
+  // Per band of the light's elevation |i_z| (kVisibilityBands bands of equal width): whether the
+  // unbiased form's visibility correction runs there (visibility_pilot.cpp decides at open).
+  static constexpr int kVisibilityBands = 4;
+  bool visibility_pays[kVisibilityBands] = {true, true, true, true};
+  bool corrects_visibility(double cos_i) const {
+    const int band = int(cos_i * kVisibilityBands);
+    return options.visibility_samples > 0 &&
+           visibility_pays[band < 0 ? 0 : (band < kVisibilityBands ? band : kVisibilityBands - 1)];
+  }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;
   }

@@ -10,6 +10,7 @@
 #include "eval/eval_data.hpp"
 #include "eval/exact_sum.hpp"
 #include "eval/methods.hpp"
+#include "eval/visibility_pilot.hpp"
 
 namespace clothbake::eval {
 namespace {
@@ -371,6 +372,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                              "cannot allocate the block sums' bookkeeping");
       break;
     }
+    if (d->options.visibility_samples > 0 && d->options.visibility_pilot)
+      run_visibility_pilot(d.get());
   }
   data_ = std::move(d);
   return {};

@@ -119,6 +119,11 @@ struct EvalOptions {
   // the light grazes the relief. 0 disables it (the residual is f - g with v). Any value keeps the
   // estimate unbiased; at most 1024.
   uint32_t visibility_samples = 8;
+  // Whether open() decides, per band of light elevation, if the visibility correction pays for
+  // this asset (a pilot of fixed seed at open: the correction where it at least roughly halves the
+  // residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
+  // visibility_samples > 0. Either keeps the estimate unbiased.
+  bool visibility_pilot = true;
   // The unbiased multi-scale form uses its control variate on a footprint P when the effective
   // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
   // the exactly integrated base, weighted by its integrand's spread) is at most this fraction of

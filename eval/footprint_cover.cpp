@@ -8,6 +8,16 @@
 
 namespace clothbake::eval {
 
+FootprintCover no_base_cover(const Footprint& p) noexcept {
+  FootprintCover cover;
+  cover.base = FootprintCover::Base::None;
+  cover.regions[0].rect = p;
+  cover.regions[0].area = (p.x1 - p.x0) * (p.y1 - p.y0);
+  cover.region_count = 1;
+  cover.remainder = 1.0;
+  return cover;
+}
+
 PeriodBlock period_block(uint32_t n, const Footprint& p) noexcept {
   const double t = double(n);
   const double w = p.x1 - p.x0, h = p.y1 - p.y0;
@@ -71,24 +81,13 @@ FootprintCover whole_periods(uint32_t n, const Footprint& p) {
   return cover;
 }
 
-// No base: the whole of P by cheap samples of g.
-FootprintCover no_base(const Footprint& p) {
-  FootprintCover cover;
-  cover.base = FootprintCover::Base::None;
-  cover.regions[0].rect = p;
-  cover.regions[0].area = (p.x1 - p.x0) * (p.y1 - p.y0);
-  cover.region_count = 1;
-  cover.remainder = 1.0;
-  return cover;
-}
-
 // The block form: A the block-aligned rectangle nearest to P (side B texels); no base when P
 // rounds to no whole block.
 FootprintCover blocks(const Footprint& p, double side, double interior_spread) {
   // Each edge to the nearest multiple of B (halves up): A in block units.
   const Footprint units{std::floor(p.x0 / side + 0.5), std::floor(p.y0 / side + 0.5),
                         std::floor(p.x1 / side + 0.5), std::floor(p.y1 / side + 0.5)};
-  if (!(units.x1 > units.x0) || !(units.y1 > units.y0)) return no_base(p);
+  if (!(units.x1 > units.x0) || !(units.y1 > units.y0)) return no_base_cover(p);
   FootprintCover cover;
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
   cover.base = FootprintCover::Base::Blocks;
@@ -139,7 +138,7 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
     case FootprintBase::Blocks:
       return have_blocks ? blocks(p, side, spread) : whole_periods(data.n, p);
     case FootprintBase::None:
-      return no_base(p);
+      return no_base_cover(p);
     case FootprintBase::Auto:
       break;
   }
@@ -156,7 +155,7 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
       best_cost = cost;
     }
   }
-  if (1.0 < best_cost) best = no_base(p);
+  if (1.0 < best_cost) best = no_base_cover(p);
   return best;
 }
 

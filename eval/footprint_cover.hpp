@@ -79,6 +79,9 @@ struct FootprintCover {
   double remainder = 0;  // the effective remainder e of the form taken
 };
 
+// No base: the whole of P (positive area) as one region of cheap samples of g (remainder 1).
+FootprintCover no_base_cover(const Footprint& footprint) noexcept;
+
 // The cover of P (positive area) for `data`'s tables and options (EvalOptions::footprint_base):
 // the whole-period form, the block form when the evaluator has block sums, or the block form's
 // fallback without a base.

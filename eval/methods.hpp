@@ -31,8 +31,12 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame,
 // prefix sums), over the cover's regions from remainder_samples() cheap samples
 // (footprint_cover.hpp). P has positive area; the compressed specular tables are open. Errors:
 // Unsupported when the bin's sums cannot be allocated.
+// When `moments` is not null and the visibility correction runs, each residual point is added to it
+// (visibility_pilot.hpp).
+struct ResidualMoments;
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
                                     const Footprint& footprint, const FootprintCover& cover,
-                                    uint32_t spp, Rng& rng, Estimate* out) noexcept;
+                                    uint32_t spp, Rng& rng, Estimate* out,
+                                    ResidualMoments* moments = nullptr) noexcept;
 
 }  // namespace clothbake::eval

@@ -7,6 +7,7 @@
 
 #include "eval/footprint_samples.hpp"
 #include "eval/methods.hpp"
+#include "eval/visibility_pilot.hpp"
 #include "model/spongecake.hpp"
 
 namespace clothbake::eval {
@@ -351,7 +352,7 @@ BlockPoints block_points(const Footprint& units, uint32_t blocks) {
 
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
                                     const Footprint& p, const FootprintCover& cover, uint32_t spp,
-                                    Rng& rng, Estimate* out) noexcept {
+                                    Rng& rng, Estimate* out, ResidualMoments* moments) noexcept {
   const uint32_t clusters = data.cluster_count();
   const double area = (p.x1 - p.x0) * (p.y1 - p.y0);
   // One view bin for the estimate.
@@ -518,7 +519,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const int64_t n = int64_t(data.n);
   // With the visibility correction the residual is f - g_V, g with the texel's own visibility
   // (which shade_texel has just computed), and the correction below integrates g_V - g.
-  const bool correct_visibility = data.options.visibility_samples > 0;
+  const bool correct_visibility = data.corrects_visibility(frame.cos_i);
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
@@ -527,6 +528,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
+    if (moments != nullptr && correct_visibility) moments->add(shading.lobes, g, g_exact);
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)

@@ -49,6 +49,7 @@ SOURCES: list[str] = (
             "pushforward_sums",
             "subperiod_sums",
             "texel_shading",
+            "visibility_pilot",
         )
     ]
     + [f"formats/validate/{name}.cpp" for name in ("validate", "checksums", "xxh64")]

@@ -364,12 +364,14 @@ Status Asset::find(SectionType type, uint32_t instance, SectionInfo* out) const 
                        unsigned(instance));
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 Status Asset::typed_section(SectionType type, uint32_t instance, ElementType element,
                             SectionInfo* out) const noexcept {
   Status status = find(type, instance, out);
   if (!status.ok()) return status;
   return check_view(*out, element);
 }
+#endif
 
 Status Asset::check_view(const SectionInfo& info, ElementType element) const noexcept {
   char what[96];
@@ -390,6 +392,7 @@ Status Asset::check_view(const SectionInfo& info, ElementType element) const noe
   return {};
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 Status Asset::metadata_json(std::string_view* out) const noexcept {
   SectionInfo info;
   Status status = typed_section(SectionType::Metadata, 0, ElementType::U8, &info);
@@ -397,5 +400,6 @@ Status Asset::metadata_json(std::string_view* out) const noexcept {
   *out = std::string_view(reinterpret_cast<const char*>(info.data), std::size_t(info.raw_size));
   return {};
 }
+#endif
 
 }  // namespace clothbake::reader

@@ -126,6 +126,7 @@ uint32_t VisibilityClusterView::label(int64_t x, int64_t y) const noexcept {
   return labels_[uint64_t(ym) * n_ + uint64_t(xm)];
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 Status VisibilityClusterView::mean_visibility(uint32_t cluster, const double w[3],
                                               double* out) const noexcept {
   if (!is_open() || out == nullptr || w == nullptr)
@@ -146,5 +147,6 @@ Status VisibilityClusterView::mean_visibility(uint32_t cluster, const double w[3
   *out = v;
   return {};
 }
+#endif
 
 }  // namespace clothbake::reader

@@ -400,10 +400,12 @@ int CompressedRadianceTables::cluster_of_texel(uint32_t x, uint32_t y) const noe
   return g == kNoCell ? -1 : int(cell_cluster_[g]);
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights(
     uint32_t x, uint32_t y) const noexcept {
   return texel_weights_at(uint64_t(y) * n_ + x);
 }
+#endif
 
 CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights_at(
     uint64_t t) const noexcept {
@@ -416,6 +418,7 @@ CompressedRadianceTables::TexelWeights CompressedRadianceTables::texel_weights_a
   return tw;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 double CompressedRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t y) const noexcept {
   if (!is_open() || x >= n_ || y >= n_ || bin >= bins_per_side_ * bins_per_side_) return 0.0;
   const TexelWeights tw = texel_weights(x, y);
@@ -428,7 +431,9 @@ double CompressedRadianceTables::texel_value(uint32_t bin, uint32_t x, uint32_t 
   }
   return v;
 }
+#endif
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 double CompressedRadianceTables::texel_value(const BinWeights& weights, uint32_t x, uint32_t y,
                                              int* cluster) const noexcept {
   if (cluster != nullptr) *cluster = -1;
@@ -452,6 +457,7 @@ double CompressedRadianceTables::texel_value(const BinWeights& weights, uint32_t
   }
   return v;
 }
+#endif
 
 uint32_t CompressedRadianceTables::texel_image_weights(uint32_t x, uint32_t y,
                                                        uint32_t* first_image,

@@ -79,11 +79,13 @@ Status VisibilityAsgView::open(const Asset& asset) noexcept {
   return {};
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 model::AsgRecord VisibilityAsgView::record(int64_t x, int64_t y) const noexcept {
   const int64_t n = info_.resolution;
   return record_at(uint64_t(model::wrap_index(y, n)) * uint64_t(n) +
                    uint64_t(model::wrap_index(x, n)));
 }
+#endif
 
 model::AsgRecord VisibilityAsgView::record_at(uint64_t t) const noexcept {
   const uint16_t* f = records_ + t * kAsgRecordFields;
@@ -97,21 +99,26 @@ model::AsgRecord VisibilityAsgView::record_at(uint64_t t) const noexcept {
   return r;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 model::AsgParams<double> VisibilityAsgView::lobe(int64_t x, int64_t y) const noexcept {
   return model::unpack_asg<double>(record(x, y));
 }
+#endif
 
 model::AsgParams<double> VisibilityAsgView::lobe_at(uint64_t t) const noexcept {
   return model::unpack_asg<double>(record_at(t));
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 double VisibilityAsgView::fit_error(int64_t x, int64_t y) const noexcept {
   if (fit_error_ == nullptr) return std::numeric_limits<double>::quiet_NaN();
   const int64_t n = info_.resolution;
   return double(fit_error_[uint64_t(model::wrap_index(y, n)) * uint64_t(n) +
                            uint64_t(model::wrap_index(x, n))]);
 }
+#endif
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // not used by shading
 Status VisibilityAsgView::visibility(int64_t x, int64_t y, const double w[3],
                                      double* out) const noexcept {
   if (!is_open() || out == nullptr)
@@ -128,5 +135,6 @@ Status VisibilityAsgView::visibility(int64_t x, int64_t y, const double w[3],
   *out = v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
   return {};
 }
+#endif
 
 }  // namespace clothbake::reader

@@ -13,8 +13,10 @@
 
 #include "eval/eval_data.hpp"
 #include "eval/evaluator.hpp"
+#include "eval/footprint_cover.hpp"
 #include "eval/methods.hpp"
 #include "eval/texel_shading.hpp"
+#include "eval/visibility_pilot.hpp"
 #include "formats/reader/visibility_sections.hpp"
 #include "tests/eval/eval_fixtures.hpp"
 #include "tests/eval/eval_stats.hpp"
@@ -315,6 +317,7 @@ TEST(Multiscale, VisibilityCorrectionIsUnbiasedAndTightensGrazingLight) {
     EvalOptions options;
     options.tables = TableChoice::Compressed;
     options.visibility_samples = settings[k];
+    options.visibility_pilot = false;  // the correction in every band: what this test measures
     Evaluator ev;
     ASSERT_TRUE(ev.open(asset, options).ok());
     for (int d = 0; d < 2; ++d)
@@ -342,6 +345,88 @@ TEST(Multiscale, VisibilityCorrectionIsUnbiasedAndTightensGrazingLight) {
   too_many.visibility_samples = 1025;
   Evaluator refused;
   EXPECT_EQ(refused.open(asset, too_many).code(), reader::ErrorCode::InvalidArgument);
+}
+
+// The visibility pilot (eval/visibility_pilot.hpp) against an independent measurement of what it
+// estimates: per band of |i_z|, 96 whole-tile estimates of another seed with the correction on, the
+// median of their ratios (V_2 + V_3 / kappa_V) / V_1 of the residual's variance with the correction
+// to without. A
+// band measured below 0.35 must keep the correction and one above 0.7 must drop it (between, the
+// pilot's 16 estimates may go either way). On the 64^2 satin, kappa_V = 8 pays (V_2 is a few
+// percent of V_1) and kappa_V = 1 does not (V_3, about V_1, is no longer divided away), so both
+// decisions are exercised. Then the plumbing: with the pilot, every estimate is bit for bit the
+// estimate of the correction everywhere (a band that keeps it) or of visibility_samples = 0 (a
+// band that drops it), the generator's draws included.
+TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
+  reader::Asset asset;
+  ASSERT_TRUE(asset.open_file(assets().satin.c_str()).ok());
+  int kept = 0, dropped = 0;
+  for (const uint32_t kappa : {8u, 1u}) {
+    EvalOptions options;
+    options.tables = TableChoice::Compressed;
+    options.visibility_samples = kappa;
+    Evaluator piloted, everywhere, nowhere;
+    ASSERT_TRUE(piloted.open(asset, options).ok());
+    options.visibility_pilot = false;
+    ASSERT_TRUE(everywhere.open(asset, options).ok());
+    options.visibility_samples = 0;
+    ASSERT_TRUE(nowhere.open(asset, options).ok());
+    const EvalData& d = *evaluator_data(everywhere);
+    const EvalData& pilot = *evaluator_data(piloted);
+    Rng rng(77);
+    for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
+      std::vector<double> ratios;
+      double wi[3], wo[3];
+      for (int e = 0; e < 96; ++e) {
+        const double z = std::max(0.02, (band + rng.uniform()) / EvalData::kVisibilityBands);
+        const double phi = 6.283185307179586 * rng.uniform();
+        const double zo = 0.2 + 0.8 * rng.uniform(), phio = 6.283185307179586 * rng.uniform();
+        const double r = std::sqrt(1 - z * z), ro = std::sqrt(1 - zo * zo);
+        wi[0] = r * std::cos(phi), wi[1] = r * std::sin(phi), wi[2] = z;
+        wo[0] = ro * std::cos(phio), wo[1] = ro * std::sin(phio), wo[2] = zo;
+        ShadingFrame frame;
+        Status status;
+        ASSERT_TRUE(make_frame(d, wi, wo, kAllLobes, &frame, &status));
+        const double x = 64 * rng.uniform(), y = 64 * rng.uniform();
+        const Footprint p{x, y, x + 64, y + 64};
+        Estimate estimate;
+        eval::ResidualMoments m;
+        ASSERT_TRUE(eval::pushforward_control_variates(d, frame, p, eval::no_base_cover(p), 8, rng,
+                                                       &estimate, &m)
+                        .ok());
+        ASSERT_EQ(m.count, 8.0);
+        double v[3];
+        for (int i = 0; i < 3; ++i)
+          v[i] = (m.square[i] - m.sum[i] * m.sum[i] / m.count) / (m.count - 1.0);
+        ratios.push_back((v[1] + v[2] / kappa) / v[0]);
+      }
+      std::sort(ratios.begin(), ratios.end());
+      const double ratio = ratios[ratios.size() / 2];
+      std::printf("kappa_V %u, |i_z| band %d: measured ratio %.3f, pilot %s\n", kappa, band, ratio,
+                  pilot.visibility_pays[band] ? "keeps" : "drops");
+      if (ratio < 0.35) {
+        EXPECT_TRUE(pilot.visibility_pays[band]) << kappa << " " << band;
+      }
+      if (ratio > 0.7) {
+        EXPECT_FALSE(pilot.visibility_pays[band]) << kappa << " " << band;
+      }
+      kept += ratio < 0.35;
+      dropped += ratio > 0.7;
+      // The plumbing, at the last directions of the band (their |i_z| is in it).
+      const Footprint p{3.1, 40.2, 35.1, 72.2};
+      for (uint64_t seed = 1; seed <= 4; ++seed) {
+        Rng a(seed), b(seed);
+        Estimate with, expected;
+        ASSERT_TRUE(piloted.estimate(p, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
+        const Evaluator& same = pilot.visibility_pays[band] ? everywhere : nowhere;
+        ASSERT_TRUE(same.estimate(p, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected).ok());
+        EXPECT_EQ(with.value.g, expected.value.g) << kappa << " " << band;
+        EXPECT_EQ(a.next(), b.next());
+      }
+    }
+  }
+  EXPECT_GE(kept, 2);
+  EXPECT_GE(dropped, 2);
 }
 
 // A remainder so thin that the sample count formula asks for one cheap sample (|B|/|P| = 1.5 % at

@@ -1,0 +1,97 @@
+// The visibility correction's pilot (visibility_pilot.hpp).
+#include "eval/visibility_pilot.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "eval/eval_data.hpp"
+#include "eval/footprint_cover.hpp"
+#include "eval/methods.hpp"
+#include "eval/texel_shading.hpp"
+
+namespace clothbake::eval {
+namespace {
+
+constexpr uint32_t kPilotEstimates = 64;  // per band
+constexpr uint32_t kPilotSpp = 8;
+// The correction costs about as much as the rest of a 2-spp estimate (16 samples of 90-500 ns
+// against 2-3 us), so it must at least halve the residual's variance to pay; the measured assets
+// sit far on either side (docs/evaluator.md, "Where the correction pays").
+constexpr double kCorrectionPays = 0.5;
+constexpr uint64_t kPilotSeed = 0x5eed'0f'7153'b11fULL;
+
+// A direction with z uniform in [z0, z1] and a uniform azimuth.
+void direction(double z0, double z1, Rng& rng, double out[3]) {
+  const double z = z0 + (z1 - z0) * rng.uniform();
+  const double phi = 2.0 * model::kPi<double> * rng.uniform();
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  out[0] = r * std::cos(phi);
+  out[1] = r * std::sin(phi);
+  out[2] = z;
+}
+
+}  // namespace
+
+void ResidualMoments::add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept {
+  double value[3] = {0, 0, 0};  // f - g, f - g_V, g_V - g
+  for (int l = 0; l < model::kLobeCount; ++l) {
+    value[0] += (f[l] - g[l]).mean();
+    value[1] += (f[l] - g_visibility[l]).mean();
+    value[2] += (g_visibility[l] - g[l]).mean();
+  }
+  for (int i = 0; i < 3; ++i) {
+    sum[i] += value[i];
+    square[i] += value[i] * value[i];
+  }
+  count += 1.0;
+}
+
+void run_visibility_pilot(EvalData* data) noexcept {
+  const double n = double(data->n);
+  const double kappa = double(data->options.visibility_samples);
+  Rng rng(kPilotSeed);
+  // Without parallax: f and g are compared at the same texel either way, and the parallax table's
+  // planes are decoded only for the view bins a caller meets (decoding them here took 150 ms).
+  const bool parallax = data->options.parallax;
+  data->options.parallax = false;
+  for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
+    const double z0 = std::max(0.02, double(band) / EvalData::kVisibilityBands);
+    const double z1 = double(band + 1) / EvalData::kVisibilityBands;
+    double ratios[kPilotEstimates];  // per estimate: its residual's variance with / without
+    uint32_t count = 0;
+    bool failed = false;
+    for (uint32_t e = 0; e < kPilotEstimates && !failed; ++e) {
+      double wi[3], wo[3];
+      direction(z0, z1, rng, wi);
+      // Four views (z 1, 0.8, 0.55, 0.3) at azimuth 0: the lights' azimuths vary the pair.
+      const double view_z = (e % 4 == 0) ? 1.0 : (e % 4 == 1 ? 0.8 : (e % 4 == 2 ? 0.55 : 0.3));
+      direction(view_z, view_z, rng, wo);
+      const double x = n * rng.uniform(), y = n * rng.uniform();
+      ShadingFrame frame;
+      Status status;
+      Estimate estimate;
+      ResidualMoments moments;
+      if (!make_frame(*data, wi, wo, kAllLobes, &frame, &status)) continue;
+      // A scene-planned asset answers only the half vectors it kept.
+      const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
+      if (!data->specular.tables->covers_bins(h)) continue;
+      // One cheap sample: the pilot reads only the residual's points.
+      const Footprint tile{x, y, x + n, y + n};
+      FootprintCover cover = no_base_cover(tile);
+      cover.remainder = 1e-12;
+      failed = !pushforward_control_variates(*data, frame, tile, cover, kPilotSpp, rng, &estimate,
+                                             &moments)
+                    .ok();
+      double v[3];
+      for (int i = 0; i < 3; ++i)  // the sample variances, divisor n - 1
+        v[i] = (moments.square[i] - moments.sum[i] * moments.sum[i] / moments.count) /
+               (moments.count - 1.0);
+      if (moments.count > 1.0 && v[0] > 0.0) ratios[count++] = (v[1] + v[2] / kappa) / v[0];
+    }
+    std::nth_element(ratios, ratios + count / 2, ratios + count);
+    data->visibility_pays[band] = failed || count == 0 || ratios[count / 2] <= kCorrectionPays;
+  }
+  data->options.parallax = parallax;
+}
+
+}  // namespace clothbake::eval
