@@ -6838,9 +6838,9 @@ struct EvalData {
   static constexpr int kVisibilityBands = 4;
   bool visibility_pays[kVisibilityBands] = {true, true, true, true};
   bool corrects_visibility(double cos_i) const {
-    const int band = int(cos_i * kVisibilityBands);
+    const int band = int(cos_i * kVisibilityBands);  // cos_i = |i_z| in [0, 1]
     return options.visibility_samples > 0 &&
-           visibility_pays[band < 0 ? 0 : (band < kVisibilityBands ? band : kVisibilityBands - 1)];
+           visibility_pays[band < kVisibilityBands ? band : kVisibilityBands - 1];
   }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;
@@ -7205,20 +7205,26 @@ struct EvalData;
 struct ResidualMoments {
   double sum[3] = {0, 0, 0}, square[3] = {0, 0, 0}, count = 0;
   void add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept;
+  // The sample variance of quantity i (divisor count - 1); needs count >= 2.
+  double variance(int i) const noexcept {
+    return (square[i] - sum[i] * sum[i] / count) / (count - 1.0);
+  }
 };
 
-// Sets data->visibility_pays for every band of |i_z| (EvalData::kVisibilityBands): per band,
+// Sets data->visibility_pays for every band of |i_z| (EvalData::kVisibilityBands): per band, up to
 // kPilotEstimates estimates of the unbiased form, each over a whole tile at a random offset with no
 // base (no view bin's sums are built), one cheap sample and no parallax (no plane decoded), spp
 // kPilotSpp, the correction on, a reflection light with |i_z| uniform over the band and a view of
-// o_z 1, 0.8, 0.55 or 0.3 in turn, azimuths from a generator of fixed seed. With V_1, V_2, V_3 an
-// estimate's sample variances over its residual points of f - g, f - g_V and g_V - g, the band
-// keeps the correction when the median over its estimates of (V_2 + V_3 / visibility_samples) / V_1
-// (the residual's variance with the correction against without, per estimate as a relative error
-// weighs it) is at most kCorrectionPays, when no estimate saw any variance, and when an estimate
-// fails. Deterministic for an asset and its options; needs the tables and texel records open
-// (open() calls it last, when visibility_samples > 0 and visibility_pilot). About 1-3 ms; allocates
-// only what the estimates allocate. Not thread safe.
+// o_z 1, 0.8, 0.55 or 0.3 in turn, azimuths and offsets from a generator of fixed seed; pairs whose
+// half vector a scene-planned asset left out are drawn again, up to kPilotAttempts in all. With
+// V_1, V_2, V_3 an estimate's sample variances over its residual points of f - g, f - g_V and
+// g_V - g, the band keeps the correction when the median over its estimates with V_1 > 0 of
+// (V_2 + V_3 / visibility_samples) / V_1 (the residual's variance with the correction against
+// without, per estimate as a relative error weighs it) is at most kCorrectionPays, when fewer than
+// a quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails. Deterministic for
+// an asset and its options; needs the tables and texel records open (open() calls it last, when
+// visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes; allocates only
+// what the estimates allocate. Not thread safe.
 void run_visibility_pilot(EvalData* data) noexcept;
 
 }  // namespace clothbake::eval
@@ -9117,7 +9123,11 @@ namespace clothbake::eval {
 namespace {
 
 constexpr uint32_t kPilotEstimates = 64;  // per band
+// Directions drawn per band at most: a scene-planned asset answers only the half vectors it kept
+// (those of its scene), and the pilot measures it there.
+constexpr uint32_t kPilotAttempts = 32 * kPilotEstimates;
 constexpr uint32_t kPilotSpp = 8;
+constexpr double kViewZ[4] = {1.0, 0.8, 0.55, 0.3};  // the views' o_z, in turn
 // The correction costs about as much as the rest of a 2-spp estimate (16 samples of 90-500 ns
 // against 2-3 us), so it must at least halve the residual's variance to pay; the measured assets
 // sit far on either side (docs/evaluator.md, "Where the correction pays").
@@ -9155,7 +9165,7 @@ void run_visibility_pilot(EvalData* data) noexcept {
   const double kappa = double(data->options.visibility_samples);
   Rng rng(kPilotSeed);
   // Without parallax: f and g are compared at the same texel either way, and the parallax table's
-  // planes are decoded only for the view bins a caller meets (decoding them here took 150 ms).
+  // planes are decoded only for the view bins a caller meets (decoding them here took 135-175 ms).
   const bool parallax = data->options.parallax;
   data->options.parallax = false;
   for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
@@ -9164,36 +9174,34 @@ void run_visibility_pilot(EvalData* data) noexcept {
     double ratios[kPilotEstimates];  // per estimate: its residual's variance with / without
     uint32_t count = 0;
     bool failed = false;
-    for (uint32_t e = 0; e < kPilotEstimates && !failed; ++e) {
+    for (uint32_t e = 0; e < kPilotAttempts && count < kPilotEstimates; ++e) {
       double wi[3], wo[3];
       direction(z0, z1, rng, wi);
-      // Four views (z 1, 0.8, 0.55, 0.3) at azimuth 0: the lights' azimuths vary the pair.
-      const double view_z = (e % 4 == 0) ? 1.0 : (e % 4 == 1 ? 0.8 : (e % 4 == 2 ? 0.55 : 0.3));
-      direction(view_z, view_z, rng, wo);
+      direction(kViewZ[e % 4], kViewZ[e % 4], rng, wo);
       const double x = n * rng.uniform(), y = n * rng.uniform();
       ShadingFrame frame;
       Status status;
       Estimate estimate;
       ResidualMoments moments;
       if (!make_frame(*data, wi, wo, kAllLobes, &frame, &status)) continue;
-      // A scene-planned asset answers only the half vectors it kept.
       const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
       if (!data->specular.tables->covers_bins(h)) continue;
       // One cheap sample: the pilot reads only the residual's points.
       const Footprint tile{x, y, x + n, y + n};
       FootprintCover cover = no_base_cover(tile);
       cover.remainder = 1e-12;
-      failed = !pushforward_control_variates(*data, frame, tile, cover, kPilotSpp, rng, &estimate,
-                                             &moments)
-                    .ok();
-      double v[3];
-      for (int i = 0; i < 3; ++i)  // the sample variances, divisor n - 1
-        v[i] = (moments.square[i] - moments.sum[i] * moments.sum[i] / moments.count) /
-               (moments.count - 1.0);
-      if (moments.count > 1.0 && v[0] > 0.0) ratios[count++] = (v[1] + v[2] / kappa) / v[0];
+      if (!pushforward_control_variates(*data, frame, tile, cover, kPilotSpp, rng, &estimate,
+                                        &moments)
+               .ok()) {
+        failed = true;
+        break;
+      }
+      if (moments.count >= 2.0 && moments.variance(0) > 0.0)
+        ratios[count++] = (moments.variance(1) + moments.variance(2) / kappa) / moments.variance(0);
     }
     std::nth_element(ratios, ratios + count / 2, ratios + count);
-    data->visibility_pays[band] = failed || count == 0 || ratios[count / 2] <= kCorrectionPays;
+    data->visibility_pays[band] =
+        failed || count < kPilotEstimates / 4 || ratios[count / 2] <= kCorrectionPays;
   }
   data->options.parallax = parallax;
 }

@@ -101,9 +101,9 @@ struct EvalData {
   static constexpr int kVisibilityBands = 4;
   bool visibility_pays[kVisibilityBands] = {true, true, true, true};
   bool corrects_visibility(double cos_i) const {
-    const int band = int(cos_i * kVisibilityBands);
+    const int band = int(cos_i * kVisibilityBands);  // cos_i = |i_z| in [0, 1]
     return options.visibility_samples > 0 &&
-           visibility_pays[band < 0 ? 0 : (band < kVisibilityBands ? band : kVisibilityBands - 1)];
+           visibility_pays[band < kVisibilityBands ? band : kVisibilityBands - 1];
   }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;

@@ -13,7 +13,11 @@ namespace clothbake::eval {
 namespace {
 
 constexpr uint32_t kPilotEstimates = 64;  // per band
+// Directions drawn per band at most: a scene-planned asset answers only the half vectors it kept
+// (those of its scene), and the pilot measures it there.
+constexpr uint32_t kPilotAttempts = 32 * kPilotEstimates;
 constexpr uint32_t kPilotSpp = 8;
+constexpr double kViewZ[4] = {1.0, 0.8, 0.55, 0.3};  // the views' o_z, in turn
 // The correction costs about as much as the rest of a 2-spp estimate (16 samples of 90-500 ns
 // against 2-3 us), so it must at least halve the residual's variance to pay; the measured assets
 // sit far on either side (docs/evaluator.md, "Where the correction pays").
@@ -51,7 +55,7 @@ void run_visibility_pilot(EvalData* data) noexcept {
   const double kappa = double(data->options.visibility_samples);
   Rng rng(kPilotSeed);
   // Without parallax: f and g are compared at the same texel either way, and the parallax table's
-  // planes are decoded only for the view bins a caller meets (decoding them here took 150 ms).
+  // planes are decoded only for the view bins a caller meets (decoding them here took 135-175 ms).
   const bool parallax = data->options.parallax;
   data->options.parallax = false;
   for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
@@ -60,36 +64,34 @@ void run_visibility_pilot(EvalData* data) noexcept {
     double ratios[kPilotEstimates];  // per estimate: its residual's variance with / without
     uint32_t count = 0;
     bool failed = false;
-    for (uint32_t e = 0; e < kPilotEstimates && !failed; ++e) {
+    for (uint32_t e = 0; e < kPilotAttempts && count < kPilotEstimates; ++e) {
       double wi[3], wo[3];
       direction(z0, z1, rng, wi);
-      // Four views (z 1, 0.8, 0.55, 0.3) at azimuth 0: the lights' azimuths vary the pair.
-      const double view_z = (e % 4 == 0) ? 1.0 : (e % 4 == 1 ? 0.8 : (e % 4 == 2 ? 0.55 : 0.3));
-      direction(view_z, view_z, rng, wo);
+      direction(kViewZ[e % 4], kViewZ[e % 4], rng, wo);
       const double x = n * rng.uniform(), y = n * rng.uniform();
       ShadingFrame frame;
       Status status;
       Estimate estimate;
       ResidualMoments moments;
       if (!make_frame(*data, wi, wo, kAllLobes, &frame, &status)) continue;
-      // A scene-planned asset answers only the half vectors it kept.
       const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
       if (!data->specular.tables->covers_bins(h)) continue;
       // One cheap sample: the pilot reads only the residual's points.
       const Footprint tile{x, y, x + n, y + n};
       FootprintCover cover = no_base_cover(tile);
       cover.remainder = 1e-12;
-      failed = !pushforward_control_variates(*data, frame, tile, cover, kPilotSpp, rng, &estimate,
-                                             &moments)
-                    .ok();
-      double v[3];
-      for (int i = 0; i < 3; ++i)  // the sample variances, divisor n - 1
-        v[i] = (moments.square[i] - moments.sum[i] * moments.sum[i] / moments.count) /
-               (moments.count - 1.0);
-      if (moments.count > 1.0 && v[0] > 0.0) ratios[count++] = (v[1] + v[2] / kappa) / v[0];
+      if (!pushforward_control_variates(*data, frame, tile, cover, kPilotSpp, rng, &estimate,
+                                        &moments)
+               .ok()) {
+        failed = true;
+        break;
+      }
+      if (moments.count >= 2.0 && moments.variance(0) > 0.0)
+        ratios[count++] = (moments.variance(1) + moments.variance(2) / kappa) / moments.variance(0);
     }
     std::nth_element(ratios, ratios + count / 2, ratios + count);
-    data->visibility_pays[band] = failed || count == 0 || ratios[count / 2] <= kCorrectionPays;
+    data->visibility_pays[band] =
+        failed || count < kPilotEstimates / 4 || ratios[count / 2] <= kCorrectionPays;
   }
   data->options.parallax = parallax;
 }

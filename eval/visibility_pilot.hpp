@@ -14,20 +14,26 @@ struct EvalData;
 struct ResidualMoments {
   double sum[3] = {0, 0, 0}, square[3] = {0, 0, 0}, count = 0;
   void add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept;
+  // The sample variance of quantity i (divisor count - 1); needs count >= 2.
+  double variance(int i) const noexcept {
+    return (square[i] - sum[i] * sum[i] / count) / (count - 1.0);
+  }
 };
 
-// Sets data->visibility_pays for every band of |i_z| (EvalData::kVisibilityBands): per band,
+// Sets data->visibility_pays for every band of |i_z| (EvalData::kVisibilityBands): per band, up to
 // kPilotEstimates estimates of the unbiased form, each over a whole tile at a random offset with no
 // base (no view bin's sums are built), one cheap sample and no parallax (no plane decoded), spp
 // kPilotSpp, the correction on, a reflection light with |i_z| uniform over the band and a view of
-// o_z 1, 0.8, 0.55 or 0.3 in turn, azimuths from a generator of fixed seed. With V_1, V_2, V_3 an
-// estimate's sample variances over its residual points of f - g, f - g_V and g_V - g, the band
-// keeps the correction when the median over its estimates of (V_2 + V_3 / visibility_samples) / V_1
-// (the residual's variance with the correction against without, per estimate as a relative error
-// weighs it) is at most kCorrectionPays, when no estimate saw any variance, and when an estimate
-// fails. Deterministic for an asset and its options; needs the tables and texel records open
-// (open() calls it last, when visibility_samples > 0 and visibility_pilot). About 1-3 ms; allocates
-// only what the estimates allocate. Not thread safe.
+// o_z 1, 0.8, 0.55 or 0.3 in turn, azimuths and offsets from a generator of fixed seed; pairs whose
+// half vector a scene-planned asset left out are drawn again, up to kPilotAttempts in all. With
+// V_1, V_2, V_3 an estimate's sample variances over its residual points of f - g, f - g_V and
+// g_V - g, the band keeps the correction when the median over its estimates with V_1 > 0 of
+// (V_2 + V_3 / visibility_samples) / V_1 (the residual's variance with the correction against
+// without, per estimate as a relative error weighs it) is at most kCorrectionPays, when fewer than
+// a quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails. Deterministic for
+// an asset and its options; needs the tables and texel records open (open() calls it last, when
+// visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes; allocates only
+// what the estimates allocate. Not thread safe.
 void run_visibility_pilot(EvalData* data) noexcept;
 
 }  // namespace clothbake::eval

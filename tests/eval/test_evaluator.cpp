@@ -395,10 +395,7 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
                                                        &estimate, &m)
                         .ok());
         ASSERT_EQ(m.count, 8.0);
-        double v[3];
-        for (int i = 0; i < 3; ++i)
-          v[i] = (m.square[i] - m.sum[i] * m.sum[i] / m.count) / (m.count - 1.0);
-        ratios.push_back((v[1] + v[2] / kappa) / v[0]);
+        ratios.push_back((m.variance(1) + m.variance(2) / kappa) / m.variance(0));
       }
       std::sort(ratios.begin(), ratios.end());
       const double ratio = ratios[ratios.size() / 2];
