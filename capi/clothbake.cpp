@@ -6836,11 +6836,14 @@ struct EvalData {
   // Per band of the light's elevation |i_z| (kVisibilityBands bands of equal width): whether the
   // unbiased form's visibility correction runs there (visibility_pilot.cpp decides at open).
   static constexpr int kVisibilityBands = 4;
-  bool visibility_pays[kVisibilityBands] = {true, true, true, true};
-  bool corrects_visibility(double cos_i) const {
+  // Per form of g: [0] with a base (the cluster's mean specular albedo), [1] without (each
+  // texel's own, and the cheap samples of the whole footprint).
+  bool visibility_pays[2][kVisibilityBands] = {{true, true, true, true}, {true, true, true, true}};
+  bool corrects_visibility(double cos_i, bool with_base) const {
     const int band = int(cos_i * kVisibilityBands);  // cos_i = |i_z| in [0, 1]
     return options.visibility_samples > 0 &&
-           visibility_pays[band < kVisibilityBands ? band : kVisibilityBands - 1];
+           visibility_pays[with_base ? 0 : 1]
+                          [band < kVisibilityBands ? band : kVisibilityBands - 1];
   }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;
@@ -7199,29 +7202,43 @@ namespace clothbake::eval {
 
 struct EvalData;
 
-// The residual points' moments that the pilot reads from an estimate (methods.hpp): per point x,
-// the sums of x and x^2 of f - g, f - g_V and g_V - g (a point's value: every lobe's mean of its
-// three channels, summed), and the number of points.
+// The residual points' moments that the pilot reads from an estimate (methods.hpp), for both forms
+// of g (kWithBase: the cluster's mean specular albedo, as the forms with a base use it;
+// kWithoutBase: each texel's own): per point x, the sums of x and x^2 of f - g, f - g_V and g_V - g
+// (a point's value: every lobe's mean of its three channels, summed), and the number of points per
+// form. Each point is also paired with a partner offset by partner_side (u1 - u2, v1 - v2)
+// (uniforms from *partner_rng), and half the squared difference of their g (without a base) is
+// summed: the variance of g within a cheap sample's cell. Filled by estimates without a base or
+// parallax.
 struct ResidualMoments {
-  double sum[3] = {0, 0, 0}, square[3] = {0, 0, 0}, count = 0;
-  void add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept;
-  // The sample variance of quantity i (divisor count - 1); needs count >= 2.
-  double variance(int i) const noexcept {
-    return (square[i] - sum[i] * sum[i] / count) / (count - 1.0);
+  enum Form { kWithBase = 0, kWithoutBase = 1 };
+  enum Quantity { kResidual = 0, kCorrectedResidual, kCorrection };
+  double sum[2][3] = {}, square[2][3] = {}, count[2] = {0, 0};
+  double partner_side = 0, pair_square = 0, pairs = 0;
+  Rng* partner_rng = nullptr;
+  void add(Form form, const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept;
+  // The sample variance of a quantity (divisor count - 1); needs count >= 2.
+  double variance(Form form, Quantity q) const noexcept {
+    return (square[form][q] - sum[form][q] * sum[form][q] / count[form]) / (count[form] - 1.0);
   }
 };
 
-// Sets data->visibility_pays for every band of |i_z| (EvalData::kVisibilityBands): per band, up to
-// kPilotEstimates estimates of the unbiased form, each over a whole tile at a random offset with no
-// base (no view bin's sums are built), one cheap sample and no parallax (no plane decoded), spp
-// kPilotSpp, the correction on, a reflection light with |i_z| uniform over the band and a view of
-// o_z 1, 0.8, 0.55 or 0.3 in turn, azimuths and offsets from a generator of fixed seed; pairs whose
-// half vector a scene-planned asset left out are drawn again, up to kPilotAttempts in all. With
-// V_1, V_2, V_3 an estimate's sample variances over its residual points of f - g, f - g_V and
-// g_V - g, the band keeps the correction when the median over its estimates with V_1 > 0 of
-// (V_2 + V_3 / visibility_samples) / V_1 (the residual's variance with the correction against
-// without, per estimate as a relative error weighs it) is at most kCorrectionPays, when fewer than
-// a quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails. Deterministic for
+// Sets data->visibility_pays[form] (ResidualMoments::Form: with a base, without) for every
+// band of |i_z| (EvalData::kVisibilityBands): per band, up to kPilotEstimates estimates of the
+// unbiased form, each over a whole tile at a random offset with no base (no view bin's sums are
+// built), one cheap sample and no parallax (no plane decoded), spp kPilotSpp, the correction on, a
+// reflection light with |i_z| uniform over the band and a view of o_z 1, 0.8, 0.55 or 0.3 in turn,
+// azimuths and offsets from a generator of fixed seed; pairs whose half vector a scene-planned
+// asset left out are drawn again, up to kPilotAttempts in all. With V_1, V_2, V_3 an estimate's
+// sample variances over its residual points of f - g, f - g_V and g_V - g, per form of g, the
+// ratio of the estimate's variance with the correction to without it is, with a base,
+// (V_2 + V_3 / visibility_samples) / V_1 (its cheap samples cover a thin remainder), and without,
+// (V_2 + V_3 / visibility_samples + C) / (V_1 + C), C = (2 / m) W the cheap samples' variance per
+// residual sample of a footprint kReferenceSide of a tile a side at 2 spp (m = remainder_samples
+// there, W the variance of g within one of its m cells, from pairs of points a cell apart). A band
+// keeps the correction when the median over its estimates with V_1 > 0 (as a relative error weighs
+// them) is at most kCorrectionPays (kCorrectionPaysWithoutBase without a base), when fewer than a
+// quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails. Deterministic for
 // an asset and its options; needs the tables and texel records open (open() calls it last, when
 // visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes; allocates only
 // what the estimates allocate. Not thread safe.
@@ -8173,7 +8190,9 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 
 // What g needs per estimate (docs/evaluator.md, "Unbiased multi-scale"):
 //   g(t) = sum over the lobes asked for of
-//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table
+//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table;
+//                                           without a base, alpha(t) (the texel's own specular
+//                                           albedo) in place of kbar_c
 //     diffuse   |i_z| / pi T_sheen I(t) R(t) v(t)
 //     sheen     colour sheen(i, o) |i_z| v(t)
 //     delta     T_sheen (1 - I(t)) v(t)     (when i = -o)
@@ -8181,21 +8200,28 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 struct PushforwardConstants : ActiveLobes {
   Rgb diffuse_scale, sheen_scale, delta_scale;
   uint32_t rank = 0;
+  // g_spec with each texel's own specular albedo alpha(t) (the yarn's times its colour) instead of
+  // the cluster mean kbar_c: exact where threads of one yarn are dyed differently (a draft's warp
+  // colours), but the bins' sums hold no colour, so only a cover without a base (g only at points)
+  // uses it.
+  bool texel_albedo = false;
   // Per cluster: b_cj(i), j = 0..M (plain arrays: the 255-cluster capacity costs nothing).
   double vis[reader::kMaxVisibilityClusters][kMaxRank + 1];
-  Rgb specular_scale[reader::kMaxVisibilityClusters];  // s_c
+  Rgb specular_scale[reader::kMaxVisibilityClusters];     // s_c
+  Rgb attenuation_scale[reader::kMaxVisibilityClusters];  // s_c without kbar_c (texel_albedo)
   // Per compressed image i: sum_b w_b(h) basis_i(b), the image's value at h (the table value of a
   // texel is the sum of its image weights times these).
   const double* image_at_h = nullptr;
 };
 
-// g of every lobe asked for at texel index t (< N^2), added to g[]; when `low` is not null g_r,
-// the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is not
-// null g with the texel's own visibility V in place of v(t), added to exact[]: one packed record
-// (cv_texels.hpp) and the per-estimate constants.
+// g of every lobe asked for at texel index t (< N^2), with the texel's own specular albedo when
+// `texel_albedo` (k.texel_albedo; the pilot asks for both), added to g[]; when `low` is not null
+// g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is
+// not null g with the texel's own visibility V in place of v(t), added to exact[]: one packed
+// record (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
-                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr,
-                     double visibility = 0.0, Rgb* exact = nullptr) {
+                     bool texel_albedo, Rgb g[model::kLobeCount], uint32_t low_rank = 0,
+                     Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -8220,7 +8246,14 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     double value = at_h[0];
     for (uint32_t j = 1; j < texel.count; ++j)
       value += double(q[j - 1]) * at_h[j];
-    add(k.specular_lobe, k.specular_scale[data.image_cluster[texel.first_image]], value);
+    const uint32_t c = data.image_cluster[texel.first_image];
+    if (texel_albedo)
+      add(k.specular_lobe,
+          k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
+              Rgb(texel.colour[0], texel.colour[1], texel.colour[2]),
+          value);
+    else
+      add(k.specular_lobe, k.specular_scale[c], value);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
@@ -8580,6 +8613,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
                      sizeof(float) * layout.images);
   const bool reflect = frame.wi.z * frame.wo.z > 0.0;
   k.rank = data.visibility_rank();
+  k.texel_albedo = cover.base == FootprintCover::Base::None;
 
   // The visibility basis at the light (the stored cluster means when the asset has no basis).
   if (data.basis.is_open()) {
@@ -8615,6 +8649,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
         g = attenuation(data.yarn_fibre[y], frame, reflect);
       }
       k.specular_scale[c] = data.cluster_albedo[c] * t_sheen * (g * cos_i);
+      k.attenuation_scale[c] = t_sheen * (g * cos_i);
     }
   }
   if (k.diffuse) k.diffuse_scale = t_sheen * (cos_i * model::kInvPi<double>);
@@ -8671,16 +8706,33 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const int64_t n = int64_t(data.n);
   // With the visibility correction the residual is f - g_V, g with the texel's own visibility
   // (which shade_texel has just computed), and the correction below integrates g_V - g.
-  const bool correct_visibility = data.corrects_visibility(frame.cos_i);
+  const bool correct_visibility = data.corrects_visibility(frame.cos_i, !k.texel_albedo);
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-    control_variate(data, k, t, g, 0, nullptr, shading.visibility,
+    control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
                     correct_visibility ? g_exact : nullptr);
     const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
-    if (moments != nullptr && correct_visibility) moments->add(shading.lobes, g, g_exact);
+    if (moments != nullptr && correct_visibility) {  // the pilot's: no base, no parallax
+      Rgb base[model::kLobeCount], base_exact[model::kLobeCount], there[model::kLobeCount];
+      control_variate(data, k, t, false, base, 0, nullptr, shading.visibility, base_exact);
+      moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
+      moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
+      Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
+      const double dx = moments->partner_side * (partner.uniform() - partner.uniform());
+      const double dy = moments->partner_side * (partner.uniform() - partner.uniform());
+      control_variate(data, k,
+                      data.texel(int64_t(t) % n + int64_t(std::floor(0.5 + dx)),
+                                 int64_t(t) / n + int64_t(std::floor(0.5 + dy))),
+                      true, there);
+      double d = 0.0;
+      for (int l = 0; l < model::kLobeCount; ++l)
+        d += (g[l] - there[l]).mean();
+      moments->pair_square += 0.5 * d * d;
+      moments->pairs += 1.0;
+    }
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
@@ -8706,7 +8758,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     Rgb piece[model::kLobeCount];
     auto cheap_sample = [&](uint64_t t, double x, double y) {
       if (region.kind == CheapRegion::Kind::Signed) {
-        control_variate(data, k, t, piece);
+        control_variate(data, k, t, k.texel_albedo, piece);
         return;
       }
       const bool in_p = region.kind == CheapRegion::Kind::Difference || inside(p, x, y);
@@ -8714,13 +8766,13 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       if (low_rank >= k.rank) {  // g_r is g: 1_P g - 1_A g, one evaluation or none
         if (in_p == in_a) return;
         Rgb g[model::kLobeCount];
-        control_variate(data, k, t, g);
+        control_variate(data, k, t, k.texel_albedo, g);
         for (int l = 0; l < model::kLobeCount; ++l)
           piece[l] += in_p ? g[l] : g[l] * -1.0;
         return;
       }
       Rgb g[model::kLobeCount], g_low[model::kLobeCount];
-      control_variate(data, k, t, g, low_rank, g_low);
+      control_variate(data, k, t, k.texel_albedo, g, low_rank, g_low);
       for (int l = 0; l < model::kLobeCount; ++l) {
         if (in_p) piece[l] += g[l];
         if (in_a) piece[l] += g_low[l] * -1.0;
@@ -8745,7 +8797,8 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
         std::min<uint64_t>(uint64_t(data.options.visibility_samples) * spp, kMaxVisibilitySamples));
     visit_destinations(data, shift, p, corrections, rng, [&](uint64_t t, double, double) {
       Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-      control_variate(data, k, t, g, 0, nullptr, texel_visibility(data, frame, t), g_exact);
+      control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, texel_visibility(data, frame, t),
+                      g_exact);
       for (int l = 0; l < model::kLobeCount; ++l)
         correction[l] += g_exact[l] - g[l];
     });
@@ -9132,6 +9185,13 @@ constexpr double kViewZ[4] = {1.0, 0.8, 0.55, 0.3};  // the views' o_z, in turn
 // against 2-3 us), so it must at least halve the residual's variance to pay; the measured assets
 // sit far on either side (docs/evaluator.md, "Where the correction pays").
 constexpr double kCorrectionPays = 0.5;
+// Without a base the cheap samples cost as much again as the residual's, so the correction adds
+// about half to an estimate (the goose-eye chair's 2-spp render: 0.070 s with it, 0.048 s
+// without): it pays when it removes a third of the variance.
+constexpr double kCorrectionPaysWithoutBase = 2.0 / 3.0;
+// The footprint whose cheap samples the pilot weighs for the form without a base: a quarter of the
+// tile a side, between that form's least footprint (a tenth of a tile) and the blocks' (0.7).
+constexpr double kReferenceSide = 0.25;
 constexpr uint64_t kPilotSeed = 0x5eed'0f'7153'b11fULL;
 
 // A direction with z uniform in [z0, z1] and a uniform azimuth.
@@ -9146,24 +9206,32 @@ void direction(double z0, double z1, Rng& rng, double out[3]) {
 
 }  // namespace
 
-void ResidualMoments::add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept {
+void ResidualMoments::add(Form form, const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept {
   double value[3] = {0, 0, 0};  // f - g, f - g_V, g_V - g
   for (int l = 0; l < model::kLobeCount; ++l) {
-    value[0] += (f[l] - g[l]).mean();
-    value[1] += (f[l] - g_visibility[l]).mean();
-    value[2] += (g_visibility[l] - g[l]).mean();
+    value[kResidual] += (f[l] - g[l]).mean();
+    value[kCorrectedResidual] += (f[l] - g_visibility[l]).mean();
+    value[kCorrection] += (g_visibility[l] - g[l]).mean();
   }
   for (int i = 0; i < 3; ++i) {
-    sum[i] += value[i];
-    square[i] += value[i] * value[i];
+    sum[form][i] += value[i];
+    square[form][i] += value[i] * value[i];
   }
-  count += 1.0;
+  count[form] += 1.0;
 }
 
 void run_visibility_pilot(EvalData* data) noexcept {
   const double n = double(data->n);
   const double kappa = double(data->options.visibility_samples);
-  Rng rng(kPilotSeed);
+  Rng rng(kPilotSeed), partner_rng(kPilotSeed + 1);  // partners apart: the decisions with a base
+                                                     // are those of the pilot before them
+  // The reference footprint's cheap samples at 2 spp: m of them on a jittered grid of cells of side
+  // `stratum`, so their mean's variance per residual sample is (2 / m) W, W the variance of g
+  // within a cell (half the mean squared difference of two points of one cell).
+  const double side = kReferenceSide * n;
+  const uint32_t m =
+      std::max<uint32_t>(1, remainder_samples(*data, no_base_cover({0, 0, side, side}), 2));
+  const double stratum = side / std::max(1.0, std::round(std::sqrt(double(m))));
   // Without parallax: f and g are compared at the same texel either way, and the parallax table's
   // planes are decoded only for the view bins a caller meets (decoding them here took 135-175 ms).
   const bool parallax = data->options.parallax;
@@ -9171,7 +9239,7 @@ void run_visibility_pilot(EvalData* data) noexcept {
   for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
     const double z0 = std::max(0.02, double(band) / EvalData::kVisibilityBands);
     const double z1 = double(band + 1) / EvalData::kVisibilityBands;
-    double ratios[kPilotEstimates];  // per estimate: its residual's variance with / without
+    double ratios[2][kPilotEstimates];  // per form and estimate: its variance with / without
     uint32_t count = 0;
     bool failed = false;
     for (uint32_t e = 0; e < kPilotAttempts && count < kPilotEstimates; ++e) {
@@ -9183,6 +9251,8 @@ void run_visibility_pilot(EvalData* data) noexcept {
       Status status;
       Estimate estimate;
       ResidualMoments moments;
+      moments.partner_side = stratum;
+      moments.partner_rng = &partner_rng;
       if (!make_frame(*data, wi, wo, kAllLobes, &frame, &status)) continue;
       const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
       if (!data->specular.tables->covers_bins(h)) continue;
@@ -9196,12 +9266,23 @@ void run_visibility_pilot(EvalData* data) noexcept {
         failed = true;
         break;
       }
-      if (moments.count >= 2.0 && moments.variance(0) > 0.0)
-        ratios[count++] = (moments.variance(1) + moments.variance(2) / kappa) / moments.variance(0);
+      using M = ResidualMoments;
+      if (moments.count[0] < 2.0 || !(moments.variance(M::kWithBase, M::kResidual) > 0.0) ||
+          !(moments.variance(M::kWithoutBase, M::kResidual) > 0.0))
+        continue;
+      const double cheap[2] = {0.0, 2.0 / double(m) * moments.pair_square / moments.pairs};
+      for (const M::Form form : {M::kWithBase, M::kWithoutBase})
+        ratios[form][count] = (moments.variance(form, M::kCorrectedResidual) +
+                               moments.variance(form, M::kCorrection) / kappa + cheap[form]) /
+                              (moments.variance(form, M::kResidual) + cheap[form]);
+      ++count;
     }
-    std::nth_element(ratios, ratios + count / 2, ratios + count);
-    data->visibility_pays[band] =
-        failed || count < kPilotEstimates / 4 || ratios[count / 2] <= kCorrectionPays;
+    const double threshold[2] = {kCorrectionPays, kCorrectionPaysWithoutBase};
+    for (int form = 0; form < 2; ++form) {
+      std::nth_element(ratios[form], ratios[form] + count / 2, ratios[form] + count);
+      data->visibility_pays[form][band] =
+          failed || count < kPilotEstimates / 4 || ratios[form][count / 2] <= threshold[form];
+    }
   }
   data->options.parallax = parallax;
 }

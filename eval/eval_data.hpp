@@ -99,11 +99,14 @@ struct EvalData {
   // Per band of the light's elevation |i_z| (kVisibilityBands bands of equal width): whether the
   // unbiased form's visibility correction runs there (visibility_pilot.cpp decides at open).
   static constexpr int kVisibilityBands = 4;
-  bool visibility_pays[kVisibilityBands] = {true, true, true, true};
-  bool corrects_visibility(double cos_i) const {
+  // Per form of g: [0] with a base (the cluster's mean specular albedo), [1] without (each
+  // texel's own, and the cheap samples of the whole footprint).
+  bool visibility_pays[2][kVisibilityBands] = {{true, true, true, true}, {true, true, true, true}};
+  bool corrects_visibility(double cos_i, bool with_base) const {
     const int band = int(cos_i * kVisibilityBands);  // cos_i = |i_z| in [0, 1]
     return options.visibility_samples > 0 &&
-           visibility_pays[band < kVisibilityBands ? band : kVisibilityBands - 1];
+           visibility_pays[with_base ? 0 : 1]
+                          [band < kVisibilityBands ? band : kVisibilityBands - 1];
   }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;

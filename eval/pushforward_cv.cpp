@@ -21,7 +21,9 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 
 // What g needs per estimate (docs/evaluator.md, "Unbiased multi-scale"):
 //   g(t) = sum over the lobes asked for of
-//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table
+//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table;
+//                                           without a base, alpha(t) (the texel's own specular
+//                                           albedo) in place of kbar_c
 //     diffuse   |i_z| / pi T_sheen I(t) R(t) v(t)
 //     sheen     colour sheen(i, o) |i_z| v(t)
 //     delta     T_sheen (1 - I(t)) v(t)     (when i = -o)
@@ -29,21 +31,28 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 struct PushforwardConstants : ActiveLobes {
   Rgb diffuse_scale, sheen_scale, delta_scale;
   uint32_t rank = 0;
+  // g_spec with each texel's own specular albedo alpha(t) (the yarn's times its colour) instead of
+  // the cluster mean kbar_c: exact where threads of one yarn are dyed differently (a draft's warp
+  // colours), but the bins' sums hold no colour, so only a cover without a base (g only at points)
+  // uses it.
+  bool texel_albedo = false;
   // Per cluster: b_cj(i), j = 0..M (plain arrays: the 255-cluster capacity costs nothing).
   double vis[reader::kMaxVisibilityClusters][kMaxRank + 1];
-  Rgb specular_scale[reader::kMaxVisibilityClusters];  // s_c
+  Rgb specular_scale[reader::kMaxVisibilityClusters];     // s_c
+  Rgb attenuation_scale[reader::kMaxVisibilityClusters];  // s_c without kbar_c (texel_albedo)
   // Per compressed image i: sum_b w_b(h) basis_i(b), the image's value at h (the table value of a
   // texel is the sum of its image weights times these).
   const double* image_at_h = nullptr;
 };
 
-// g of every lobe asked for at texel index t (< N^2), added to g[]; when `low` is not null g_r,
-// the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is not
-// null g with the texel's own visibility V in place of v(t), added to exact[]: one packed record
-// (cv_texels.hpp) and the per-estimate constants.
+// g of every lobe asked for at texel index t (< N^2), with the texel's own specular albedo when
+// `texel_albedo` (k.texel_albedo; the pilot asks for both), added to g[]; when `low` is not null
+// g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is
+// not null g with the texel's own visibility V in place of v(t), added to exact[]: one packed
+// record (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
-                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr,
-                     double visibility = 0.0, Rgb* exact = nullptr) {
+                     bool texel_albedo, Rgb g[model::kLobeCount], uint32_t low_rank = 0,
+                     Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -68,7 +77,14 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     double value = at_h[0];
     for (uint32_t j = 1; j < texel.count; ++j)
       value += double(q[j - 1]) * at_h[j];
-    add(k.specular_lobe, k.specular_scale[data.image_cluster[texel.first_image]], value);
+    const uint32_t c = data.image_cluster[texel.first_image];
+    if (texel_albedo)
+      add(k.specular_lobe,
+          k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
+              Rgb(texel.colour[0], texel.colour[1], texel.colour[2]),
+          value);
+    else
+      add(k.specular_lobe, k.specular_scale[c], value);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
@@ -428,6 +444,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
                      sizeof(float) * layout.images);
   const bool reflect = frame.wi.z * frame.wo.z > 0.0;
   k.rank = data.visibility_rank();
+  k.texel_albedo = cover.base == FootprintCover::Base::None;
 
   // The visibility basis at the light (the stored cluster means when the asset has no basis).
   if (data.basis.is_open()) {
@@ -463,6 +480,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
         g = attenuation(data.yarn_fibre[y], frame, reflect);
       }
       k.specular_scale[c] = data.cluster_albedo[c] * t_sheen * (g * cos_i);
+      k.attenuation_scale[c] = t_sheen * (g * cos_i);
     }
   }
   if (k.diffuse) k.diffuse_scale = t_sheen * (cos_i * model::kInvPi<double>);
@@ -519,16 +537,33 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const int64_t n = int64_t(data.n);
   // With the visibility correction the residual is f - g_V, g with the texel's own visibility
   // (which shade_texel has just computed), and the correction below integrates g_V - g.
-  const bool correct_visibility = data.corrects_visibility(frame.cos_i);
+  const bool correct_visibility = data.corrects_visibility(frame.cos_i, !k.texel_albedo);
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-    control_variate(data, k, t, g, 0, nullptr, shading.visibility,
+    control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
                     correct_visibility ? g_exact : nullptr);
     const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
-    if (moments != nullptr && correct_visibility) moments->add(shading.lobes, g, g_exact);
+    if (moments != nullptr && correct_visibility) {  // the pilot's: no base, no parallax
+      Rgb base[model::kLobeCount], base_exact[model::kLobeCount], there[model::kLobeCount];
+      control_variate(data, k, t, false, base, 0, nullptr, shading.visibility, base_exact);
+      moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
+      moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
+      Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
+      const double dx = moments->partner_side * (partner.uniform() - partner.uniform());
+      const double dy = moments->partner_side * (partner.uniform() - partner.uniform());
+      control_variate(data, k,
+                      data.texel(int64_t(t) % n + int64_t(std::floor(0.5 + dx)),
+                                 int64_t(t) / n + int64_t(std::floor(0.5 + dy))),
+                      true, there);
+      double d = 0.0;
+      for (int l = 0; l < model::kLobeCount; ++l)
+        d += (g[l] - there[l]).mean();
+      moments->pair_square += 0.5 * d * d;
+      moments->pairs += 1.0;
+    }
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
@@ -554,7 +589,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     Rgb piece[model::kLobeCount];
     auto cheap_sample = [&](uint64_t t, double x, double y) {
       if (region.kind == CheapRegion::Kind::Signed) {
-        control_variate(data, k, t, piece);
+        control_variate(data, k, t, k.texel_albedo, piece);
         return;
       }
       const bool in_p = region.kind == CheapRegion::Kind::Difference || inside(p, x, y);
@@ -562,13 +597,13 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       if (low_rank >= k.rank) {  // g_r is g: 1_P g - 1_A g, one evaluation or none
         if (in_p == in_a) return;
         Rgb g[model::kLobeCount];
-        control_variate(data, k, t, g);
+        control_variate(data, k, t, k.texel_albedo, g);
         for (int l = 0; l < model::kLobeCount; ++l)
           piece[l] += in_p ? g[l] : g[l] * -1.0;
         return;
       }
       Rgb g[model::kLobeCount], g_low[model::kLobeCount];
-      control_variate(data, k, t, g, low_rank, g_low);
+      control_variate(data, k, t, k.texel_albedo, g, low_rank, g_low);
       for (int l = 0; l < model::kLobeCount; ++l) {
         if (in_p) piece[l] += g[l];
         if (in_a) piece[l] += g_low[l] * -1.0;
@@ -593,7 +628,8 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
         std::min<uint64_t>(uint64_t(data.options.visibility_samples) * spp, kMaxVisibilitySamples));
     visit_destinations(data, shift, p, corrections, rng, [&](uint64_t t, double, double) {
       Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-      control_variate(data, k, t, g, 0, nullptr, texel_visibility(data, frame, t), g_exact);
+      control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, texel_visibility(data, frame, t),
+                      g_exact);
       for (int l = 0; l < model::kLobeCount; ++l)
         correction[l] += g_exact[l] - g[l];
     });

@@ -100,7 +100,7 @@ clusters = 1
 
 struct Assets {
   std::filesystem::path dir;
-  std::string twill, flat, bare, satin;
+  std::string twill, flat, bare, satin, striped;
   ~Assets() {
     std::error_code ec;
     if (!dir.empty()) std::filesystem::remove_all(dir, ec);  // the process's own folder only
@@ -184,7 +184,18 @@ inline void write_flat_maps(const std::filesystem::path& dir) {
   make("flat_gap.exr", {"--pattern", "checker:width=4:height=4:color1=1:color2=0", "16x16", "1"});
 }
 
-// The four assets, baked once per test executable into shared_fixture_dir() (each missing one by
+// The twill with its four warp ends dyed three colours (one warp yarn: its clusters mix colours),
+// as a weaving draft's warp colours do.
+inline std::string striped_toml() {
+  std::string toml = kTwillToml;
+  const std::string weave = "name = \"twill3/1\"\n";
+  toml.insert(toml.find(weave) + weave.size(),
+              "end_colors = [[0.05, 0.09, 0.26], [0.70, 0.12, 0.10], [0.05, 0.09, 0.26], "
+              "[0.85, 0.80, 0.30]]\n");
+  return toml;
+}
+
+// The five assets, baked once per test executable into shared_fixture_dir() (each missing one by
 // the first process that needs it: two that race bake the same bytes, and the writer renames a
 // finished file into place), and a fresh temporary folder of this process (dir) with the fabric
 // descriptions and maps, where the tests write their own files.
@@ -204,15 +215,19 @@ inline const Assets& assets() {
     a.flat = path("flat.cbk");
     a.bare = path("bare.cbk");
     a.satin = path("satin.cbk");
+    a.striped = path("striped.cbk");
     if (!std::filesystem::exists(a.twill) || !std::filesystem::exists(a.flat) ||
-        !std::filesystem::exists(a.bare) || !std::filesystem::exists(a.satin)) {
+        !std::filesystem::exists(a.bare) || !std::filesystem::exists(a.satin) ||
+        !std::filesystem::exists(a.striped)) {
       write_text_atomically(shared / "twill.toml", kTwillToml);
       write_text_atomically(shared / "flat.toml", kFlatToml);
       write_text_atomically(shared / "satin.toml", kSatinToml);
+      write_text_atomically(shared / "striped.toml", striped_toml().c_str());
       write_flat_maps(shared);
       if (!std::filesystem::exists(a.twill)) bake(path("twill.toml"), a.twill, true);
       if (!std::filesystem::exists(a.flat)) bake(path("flat.toml"), a.flat);
       if (!std::filesystem::exists(a.satin)) bake(path("satin.toml"), a.satin);
+      if (!std::filesystem::exists(a.striped)) bake(path("striped.toml"), a.striped);
       if (!std::filesystem::exists(a.bare))
         bake(path("twill.toml"), a.bare, false, {"feature_maps", "parallax", "cluster"});
     }

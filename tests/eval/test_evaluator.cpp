@@ -349,14 +349,17 @@ TEST(Multiscale, VisibilityCorrectionIsUnbiasedAndTightensGrazingLight) {
 
 // The visibility pilot (eval/visibility_pilot.hpp) against an independent measurement of what it
 // estimates: per band of |i_z|, 96 whole-tile estimates of another seed with the correction on, the
-// median of their ratios (V_2 + V_3 / kappa_V) / V_1 of the residual's variance with the correction
-// to without. A
-// band measured below 0.35 must keep the correction and one above 0.7 must drop it (between, the
-// pilot's 16 estimates may go either way). On the 64^2 satin, kappa_V = 8 pays (V_2 is a few
-// percent of V_1) and kappa_V = 1 does not (V_3, about V_1, is no longer divided away), so both
-// decisions are exercised. Then the plumbing: with the pilot, every estimate is bit for bit the
-// estimate of the correction everywhere (a band that keeps it) or of visibility_samples = 0 (a
-// band that drops it), the generator's draws included.
+// median of their ratios of the estimate's variance with the correction to without, for each form
+// of g: with a base (V_2 + V_3 / kappa_V) / V_1, without (V_2 + V_3 / kappa_V + C) / (V_1 + C), C
+// the cheap samples' variance of a quarter-tile footprint from pairs of points a cell apart. With a
+// base, a band measured below 0.35 must keep the correction and one above 0.7 must drop it (the
+// pilot decides at 1/2); without, below 0.5 and above 0.85 (at 2/3); between, the pilot's 64
+// estimates may go either way. On the 64^2 satin, kappa_V = 8 pays (V_2 is a few percent of V_1)
+// and kappa_V = 1 does not (V_3, about V_1, is no longer divided away), so both decisions are
+// exercised. Then the plumbing: with the pilot, every estimate (a whole tile, with a base, and a
+// half-tile footprint, without) is bit for bit the estimate of the correction everywhere (a band
+// that keeps it) or of visibility_samples = 0 (a band that drops it), the generator's draws
+// included.
 TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
   reader::Asset asset;
   ASSERT_TRUE(asset.open_file(assets().satin.c_str()).ok());
@@ -373,9 +376,12 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
     ASSERT_TRUE(nowhere.open(asset, options).ok());
     const EvalData& d = *evaluator_data(everywhere);
     const EvalData& pilot = *evaluator_data(piloted);
-    Rng rng(77);
+    Rng rng(77), partner_rng(78);
+    // The form without a base weighs the cheap samples of a quarter-tile footprint at 2 spp.
+    const double side = 16.0;
+    const uint32_t m = remainder_samples(d, no_base_cover({0, 0, side, side}), 2);
     for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
-      std::vector<double> ratios;
+      std::vector<double> ratios[2];
       double wi[3], wo[3];
       for (int e = 0; e < 96; ++e) {
         const double z = std::max(0.02, (band + rng.uniform()) / EvalData::kVisibilityBands);
@@ -390,35 +396,49 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
         const double x = 64 * rng.uniform(), y = 64 * rng.uniform();
         const Footprint p{x, y, x + 64, y + 64};
         Estimate estimate;
-        eval::ResidualMoments m;
+        eval::ResidualMoments mo;
+        mo.partner_side = side / std::round(std::sqrt(double(m)));
+        mo.partner_rng = &partner_rng;
         ASSERT_TRUE(eval::pushforward_control_variates(d, frame, p, eval::no_base_cover(p), 8, rng,
-                                                       &estimate, &m)
+                                                       &estimate, &mo)
                         .ok());
-        ASSERT_EQ(m.count, 8.0);
-        ratios.push_back((m.variance(1) + m.variance(2) / kappa) / m.variance(0));
+        ASSERT_EQ(mo.count[1], 8.0);
+        using M = eval::ResidualMoments;
+        for (const M::Form form : {M::kWithBase, M::kWithoutBase}) {
+          const double cheap = form == M::kWithBase ? 0.0 : 2.0 / m * mo.pair_square / mo.pairs;
+          ratios[form].push_back((mo.variance(form, M::kCorrectedResidual) +
+                                  mo.variance(form, M::kCorrection) / kappa + cheap) /
+                                 (mo.variance(form, M::kResidual) + cheap));
+        }
       }
-      std::sort(ratios.begin(), ratios.end());
-      const double ratio = ratios[ratios.size() / 2];
-      std::printf("kappa_V %u, |i_z| band %d: measured ratio %.3f, pilot %s\n", kappa, band, ratio,
-                  pilot.visibility_pays[band] ? "keeps" : "drops");
-      if (ratio < 0.35) {
-        EXPECT_TRUE(pilot.visibility_pays[band]) << kappa << " " << band;
+      // Decided at 1/2 with a base, 2/3 without; the test's margins are the pilot's spread.
+      const double keep_below[2] = {0.35, 0.5}, drop_above[2] = {0.7, 0.85};
+      for (int form = 0; form < 2; ++form) {
+        std::sort(ratios[form].begin(), ratios[form].end());
+        const double ratio = ratios[form][ratios[form].size() / 2];
+        const bool pays = pilot.visibility_pays[form][band];
+        std::printf("kappa_V %u, |i_z| band %d, %s: measured ratio %.3f, pilot %s\n", kappa, band,
+                    form == 0 ? "with a base" : "without", ratio, pays ? "keeps" : "drops");
+        if (ratio < keep_below[form]) EXPECT_TRUE(pays) << kappa << " " << band << " " << form;
+        if (ratio > drop_above[form]) EXPECT_FALSE(pays) << kappa << " " << band << " " << form;
+        kept += ratio < keep_below[form];
+        dropped += ratio > drop_above[form];
       }
-      if (ratio > 0.7) {
-        EXPECT_FALSE(pilot.visibility_pays[band]) << kappa << " " << band;
-      }
-      kept += ratio < 0.35;
-      dropped += ratio > 0.7;
-      // The plumbing, at the last directions of the band (their |i_z| is in it).
-      const Footprint p{3.1, 40.2, 35.1, 72.2};
-      for (uint64_t seed = 1; seed <= 4; ++seed) {
-        Rng a(seed), b(seed);
-        Estimate with, expected;
-        ASSERT_TRUE(piloted.estimate(p, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
-        const Evaluator& same = pilot.visibility_pays[band] ? everywhere : nowhere;
-        ASSERT_TRUE(same.estimate(p, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected).ok());
-        EXPECT_EQ(with.value.g, expected.value.g) << kappa << " " << band;
-        EXPECT_EQ(a.next(), b.next());
+      // The plumbing, at the last directions of the band (their |i_z| is in it): a footprint with
+      // a base and one without.
+      for (const Footprint& p : {Footprint{0, 0, 64, 64}, Footprint{3.1, 40.2, 35.1, 72.2}}) {
+        const bool with_base = cover_footprint(d, p).base != FootprintCover::Base::None;
+        for (uint64_t seed = 1; seed <= 4; ++seed) {
+          Rng a(seed), b(seed);
+          Estimate with, expected;
+          ASSERT_TRUE(piloted.estimate(p, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
+          const Evaluator& same =
+              pilot.visibility_pays[with_base ? 0 : 1][band] ? everywhere : nowhere;
+          ASSERT_TRUE(
+              same.estimate(p, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected).ok());
+          EXPECT_EQ(with.value.g, expected.value.g) << kappa << " " << band << " " << with_base;
+          EXPECT_EQ(a.next(), b.next());
+        }
       }
     }
   }
