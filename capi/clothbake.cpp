@@ -6986,6 +6986,11 @@ void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>&
 // [0, 1], the visibility the integrand uses. No allocation.
 double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
 
+// I(t) D_t(h) of texel index t (< N^2): its gap weight times its fibre SGGX's distribution at the
+// frame's h (the texel's tangent and its yarn's roughness), the factor of f's specular lobes that
+// the tables hold per bin. No allocation.
+double texel_distribution(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
+
 // g(t) of texel (x, y) (any integers: the tile wraps).
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept;
@@ -8217,11 +8222,13 @@ struct PushforwardConstants : ActiveLobes {
 // g of every lobe asked for at texel index t (< N^2), with the texel's own specular albedo when
 // `texel_albedo` (k.texel_albedo; the pilot asks for both), added to g[]; when `low` is not null
 // g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is
-// not null g with the texel's own visibility V in place of v(t), added to exact[]: one packed
-// record (cv_texels.hpp) and the per-estimate constants.
+// not null g_V, g with the texel's own visibility V in place of v(t) and its own I(t) D_t(h)
+// (`distribution`, texel_distribution) in place of the table value T(t, h), added to exact[]: one
+// packed record (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
                      bool texel_albedo, Rgb g[model::kLobeCount], uint32_t low_rank = 0,
-                     Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr) {
+                     Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr,
+                     double distribution = 0.0) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -8232,10 +8239,10 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     if (j + 1 == low_rank) v_low = v;
   }
   // Each lobe's factor and scalar without the visibility, then times v (and v_low).
-  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar) {
+  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar, double exact_scalar) {
     g[int(lobe)] += factor * (scalar * v);
     if (low) low[int(lobe)] += factor * (scalar * v_low);
-    if (exact) exact[int(lobe)] += factor * (scalar * visibility);
+    if (exact) exact[int(lobe)] += factor * (exact_scalar * visibility);
   };
   const double gap = texel.gap;
   if (k.specular && texel.count > 0) {
@@ -8251,19 +8258,19 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
       add(k.specular_lobe,
           k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
               Rgb(texel.colour[0], texel.colour[1], texel.colour[2]),
-          value);
+          value, distribution);
     else
-      add(k.specular_lobe, k.specular_scale[c], value);
+      add(k.specular_lobe, k.specular_scale[c], value, distribution);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
                                                                   : yarn.diffuse_transmittance) *
                        Rgb(texel.colour[0], texel.colour[1], texel.colour[2]);
-    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap);
+    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, gap);
   }
-  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0);
-  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap);
+  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, 1.0);
+  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap, 1.0 - gap);
 }
 
 inline void prefetch(const void* address) noexcept {
@@ -8711,13 +8718,15 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
     control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
-                    correct_visibility ? g_exact : nullptr);
+                    correct_visibility ? g_exact : nullptr,
+                    correct_visibility ? texel_distribution(data, frame, t) : 0.0);
     const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
     if (moments != nullptr && correct_visibility) {  // the pilot's: no base, no parallax
       Rgb base[model::kLobeCount], base_exact[model::kLobeCount], there[model::kLobeCount];
-      control_variate(data, k, t, false, base, 0, nullptr, shading.visibility, base_exact);
+      control_variate(data, k, t, false, base, 0, nullptr, shading.visibility, base_exact,
+                      texel_distribution(data, frame, t));
       moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
       moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
       Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
@@ -8798,7 +8807,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     visit_destinations(data, shift, p, corrections, rng, [&](uint64_t t, double, double) {
       Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
       control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, texel_visibility(data, frame, t),
-                      g_exact);
+                      g_exact, texel_distribution(data, frame, t));
       for (int l = 0; l < model::kLobeCount; ++l)
         correction[l] += g_exact[l] - g[l];
     });
@@ -9150,6 +9159,14 @@ double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_
   const model::Asg<double> lobe = model::asg_from_params(data.visibility.lobe_at(t));
   const double v = model::asg_eval(lobe, frame.wi_light);
   return v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
+}
+
+double texel_distribution(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept {
+  const float* tangent = data.maps.tangent.data + 3 * t;
+  const model::FibreSggx<double> sggx = model::FibreSggx<double>::make(
+      model::Vec3d(tangent[0], tangent[1], tangent[2]), data.yarns[data.maps.yarn_id[t]].roughness);
+  const double gap = data.maps.gap[t];
+  return (gap > 0.0 ? (gap < 1.0 ? gap : 1.0) : 0.0) * sggx.D(frame.h);
 }
 
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,

@@ -419,8 +419,12 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
         const bool pays = pilot.visibility_pays[form][band];
         std::printf("kappa_V %u, |i_z| band %d, %s: measured ratio %.3f, pilot %s\n", kappa, band,
                     form == 0 ? "with a base" : "without", ratio, pays ? "keeps" : "drops");
-        if (ratio < keep_below[form]) EXPECT_TRUE(pays) << kappa << " " << band << " " << form;
-        if (ratio > drop_above[form]) EXPECT_FALSE(pays) << kappa << " " << band << " " << form;
+        if (ratio < keep_below[form]) {
+          EXPECT_TRUE(pays) << kappa << " " << band << " " << form;
+        }
+        if (ratio > drop_above[form]) {
+          EXPECT_FALSE(pays) << kappa << " " << band << " " << form;
+        }
         kept += ratio < keep_below[form];
         dropped += ratio > drop_above[form];
       }
