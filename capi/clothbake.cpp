@@ -7008,12 +7008,15 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
 
 
 // The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
-// each texel's low-rank visibility at every sample's own destination; its integral over the
+// each texel's low-rank visibility (and, without a base, its own specular albedo) at every
+// sample's own destination; its integral over the
 // cover's base region exact from the bin's tables (the whole-tile push-forward sums or the block
 // prefix sums), over the cover's regions from remainder_samples() cheap samples
 // (footprint_cover.hpp). P has positive area; the compressed specular tables are open. Errors:
 // Unsupported when the bin's sums cannot be allocated.
 // When `moments` is not null and the visibility correction runs, each residual point is added to it
+// for both forms of g, with a partner point drawn from moments->partner_rng (not null): only the
+// pilot's estimates (a cover without a base, no parallax) give it meaningful moments
 // (visibility_pilot.hpp).
 struct ResidualMoments;
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
@@ -7211,10 +7214,11 @@ struct EvalData;
 // of g (kWithBase: the cluster's mean specular albedo, as the forms with a base use it;
 // kWithoutBase: each texel's own): per point x, the sums of x and x^2 of f - g, f - g_V and g_V - g
 // (a point's value: every lobe's mean of its three channels, summed), and the number of points per
-// form. Each point is also paired with a partner offset by partner_side (u1 - u2, v1 - v2)
-// (uniforms from *partner_rng), and half the squared difference of their g (without a base) is
-// summed: the variance of g within a cheap sample's cell. Filled by estimates without a base or
-// parallax.
+// form. Each point is also paired with a partner floor(u0 + partner_side (u1 - u2)) texels away in
+// x and likewise in y (uniforms from *partner_rng; u0 the point's place in its texel, which the
+// estimate does not keep, drawn afresh), and half the squared difference of their g (without a
+// base) is summed: the variance of g within a cheap sample's cell. Filled by estimates without a
+// base or parallax.
 struct ResidualMoments {
   enum Form { kWithBase = 0, kWithoutBase = 1 };
   enum Quantity { kResidual = 0, kCorrectedResidual, kCorrection };
@@ -7241,12 +7245,12 @@ struct ResidualMoments {
 // (V_2 + V_3 / visibility_samples + C) / (V_1 + C), C = (2 / m) W the cheap samples' variance per
 // residual sample of a footprint kReferenceSide of a tile a side at 2 spp (m = remainder_samples
 // there, W the variance of g within one of its m cells, from pairs of points a cell apart). A band
-// keeps the correction when the median over its estimates with V_1 > 0 (as a relative error weighs
-// them) is at most kCorrectionPays (kCorrectionPaysWithoutBase without a base), when fewer than a
-// quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails. Deterministic for
-// an asset and its options; needs the tables and texel records open (open() calls it last, when
-// visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes; allocates only
-// what the estimates allocate. Not thread safe.
+// keeps the correction when the median over its estimates with V_1 > 0 in both forms (as a relative
+// error weighs them) is at most kCorrectionPays (kCorrectionPaysWithoutBase without a base), when
+// fewer than a quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails.
+// Deterministic for an asset and its options; needs the tables and texel records open (open() calls
+// it last, when visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes;
+// allocates only what the estimates allocate. Not thread safe.
 void run_visibility_pilot(EvalData* data) noexcept;
 
 }  // namespace clothbake::eval
@@ -8222,9 +8226,9 @@ struct PushforwardConstants : ActiveLobes {
 // g of every lobe asked for at texel index t (< N^2), with the texel's own specular albedo when
 // `texel_albedo` (k.texel_albedo; the pilot asks for both), added to g[]; when `low` is not null
 // g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is
-// not null g_V, g with the texel's own visibility V in place of v(t) and its own I(t) D_t(h)
-// (`distribution`, texel_distribution) in place of the table value T(t, h), added to exact[]: one
-// packed record (cv_texels.hpp) and the per-estimate constants.
+// not null g_V, g with the texel's own visibility V in place of v(t), its own I(t) D_t(h)
+// (`distribution`, texel_distribution) in place of the table value T(t, h) and its own specular
+// albedo, added to exact[]: one packed record (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
                      bool texel_albedo, Rgb g[model::kLobeCount], uint32_t low_rank = 0,
                      Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr,
@@ -8238,11 +8242,12 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     v += b[j + 1] * double(e[j]);
     if (j + 1 == low_rank) v_low = v;
   }
-  // Each lobe's factor and scalar without the visibility, then times v (and v_low).
-  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar, double exact_scalar) {
+  // Each lobe's factor and scalar without the visibility, then times v (and v_low); g_V's own.
+  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar, const Rgb& exact_factor,
+                 double exact_scalar) {
     g[int(lobe)] += factor * (scalar * v);
     if (low) low[int(lobe)] += factor * (scalar * v_low);
-    if (exact) exact[int(lobe)] += factor * (exact_scalar * visibility);
+    if (exact) exact[int(lobe)] += exact_factor * (exact_scalar * visibility);
   };
   const double gap = texel.gap;
   if (k.specular && texel.count > 0) {
@@ -8254,23 +8259,21 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     for (uint32_t j = 1; j < texel.count; ++j)
       value += double(q[j - 1]) * at_h[j];
     const uint32_t c = data.image_cluster[texel.first_image];
-    if (texel_albedo)
-      add(k.specular_lobe,
-          k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
-              Rgb(texel.colour[0], texel.colour[1], texel.colour[2]),
-          value, distribution);
-    else
-      add(k.specular_lobe, k.specular_scale[c], value, distribution);
+    const Rgb own = texel_albedo || exact
+                        ? k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
+                              Rgb(texel.colour[0], texel.colour[1], texel.colour[2])
+                        : Rgb();
+    add(k.specular_lobe, texel_albedo ? own : k.specular_scale[c], value, own, distribution);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
                                                                   : yarn.diffuse_transmittance) *
                        Rgb(texel.colour[0], texel.colour[1], texel.colour[2]);
-    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, gap);
+    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, k.diffuse_scale * albedo, gap);
   }
-  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, 1.0);
-  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap, 1.0 - gap);
+  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, k.sheen_scale, 1.0);
+  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap, k.delta_scale, 1.0 - gap);
 }
 
 inline void prefetch(const void* address) noexcept {
@@ -8717,6 +8720,8 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
+    // texel_distribution, not shading's gap and D: the correction's samples below call it, and g_V
+    // must be one function of t on both sides.
     control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
                     correct_visibility ? g_exact : nullptr,
                     correct_visibility ? texel_distribution(data, frame, t) : 0.0);
@@ -8730,11 +8735,12 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
       moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
       Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
-      const double dx = moments->partner_side * (partner.uniform() - partner.uniform());
-      const double dy = moments->partner_side * (partner.uniform() - partner.uniform());
+      const double side = moments->partner_side;
+      const double dx = partner.uniform() + side * (partner.uniform() - partner.uniform());
+      const double dy = partner.uniform() + side * (partner.uniform() - partner.uniform());
       control_variate(data, k,
-                      data.texel(int64_t(t) % n + int64_t(std::floor(0.5 + dx)),
-                                 int64_t(t) / n + int64_t(std::floor(0.5 + dy))),
+                      data.texel(int64_t(t) % n + int64_t(std::floor(dx)),
+                                 int64_t(t) / n + int64_t(std::floor(dy))),
                       true, there);
       double d = 0.0;
       for (int l = 0; l < model::kLobeCount; ++l)
@@ -9165,8 +9171,8 @@ double texel_distribution(const EvalData& data, const ShadingFrame& frame, uint6
   const float* tangent = data.maps.tangent.data + 3 * t;
   const model::FibreSggx<double> sggx = model::FibreSggx<double>::make(
       model::Vec3d(tangent[0], tangent[1], tangent[2]), data.yarns[data.maps.yarn_id[t]].roughness);
-  const double gap = data.maps.gap[t];
-  return (gap > 0.0 ? (gap < 1.0 ? gap : 1.0) : 0.0) * sggx.D(frame.h);
+  const double gap = data.maps.gap[t];  // as model::ClothBsdf reads it
+  return (std::isnan(gap) ? 1.0 : (gap > 0.0 ? (gap < 1.0 ? gap : 1.0) : 0.0)) * sggx.D(frame.h);
 }
 
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
@@ -9240,8 +9246,7 @@ void ResidualMoments::add(Form form, const Rgb* f, const Rgb* g, const Rgb* g_vi
 void run_visibility_pilot(EvalData* data) noexcept {
   const double n = double(data->n);
   const double kappa = double(data->options.visibility_samples);
-  Rng rng(kPilotSeed), partner_rng(kPilotSeed + 1);  // partners apart: the decisions with a base
-                                                     // are those of the pilot before them
+  Rng rng(kPilotSeed), partner_rng(kPilotSeed + 1);  // partners apart: rng draws as before
   // The reference footprint's cheap samples at 2 spp: m of them on a jittered grid of cells of side
   // `stratum`, so their mean's variance per residual sample is (2 / m) W, W the variance of g
   // within a cell (half the mean squared difference of two points of one cell).

@@ -26,12 +26,15 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame,
 #endif
 
 // The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
-// each texel's low-rank visibility at every sample's own destination; its integral over the
+// each texel's low-rank visibility (and, without a base, its own specular albedo) at every
+// sample's own destination; its integral over the
 // cover's base region exact from the bin's tables (the whole-tile push-forward sums or the block
 // prefix sums), over the cover's regions from remainder_samples() cheap samples
 // (footprint_cover.hpp). P has positive area; the compressed specular tables are open. Errors:
 // Unsupported when the bin's sums cannot be allocated.
 // When `moments` is not null and the visibility correction runs, each residual point is added to it
+// for both forms of g, with a partner point drawn from moments->partner_rng (not null): only the
+// pilot's estimates (a cover without a base, no parallax) give it meaningful moments
 // (visibility_pilot.hpp).
 struct ResidualMoments;
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,

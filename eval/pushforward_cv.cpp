@@ -48,9 +48,9 @@ struct PushforwardConstants : ActiveLobes {
 // g of every lobe asked for at texel index t (< N^2), with the texel's own specular albedo when
 // `texel_albedo` (k.texel_albedo; the pilot asks for both), added to g[]; when `low` is not null
 // g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is
-// not null g_V, g with the texel's own visibility V in place of v(t) and its own I(t) D_t(h)
-// (`distribution`, texel_distribution) in place of the table value T(t, h), added to exact[]: one
-// packed record (cv_texels.hpp) and the per-estimate constants.
+// not null g_V, g with the texel's own visibility V in place of v(t), its own I(t) D_t(h)
+// (`distribution`, texel_distribution) in place of the table value T(t, h) and its own specular
+// albedo, added to exact[]: one packed record (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
                      bool texel_albedo, Rgb g[model::kLobeCount], uint32_t low_rank = 0,
                      Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr,
@@ -64,11 +64,12 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     v += b[j + 1] * double(e[j]);
     if (j + 1 == low_rank) v_low = v;
   }
-  // Each lobe's factor and scalar without the visibility, then times v (and v_low).
-  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar, double exact_scalar) {
+  // Each lobe's factor and scalar without the visibility, then times v (and v_low); g_V's own.
+  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar, const Rgb& exact_factor,
+                 double exact_scalar) {
     g[int(lobe)] += factor * (scalar * v);
     if (low) low[int(lobe)] += factor * (scalar * v_low);
-    if (exact) exact[int(lobe)] += factor * (exact_scalar * visibility);
+    if (exact) exact[int(lobe)] += exact_factor * (exact_scalar * visibility);
   };
   const double gap = texel.gap;
   if (k.specular && texel.count > 0) {
@@ -80,23 +81,21 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     for (uint32_t j = 1; j < texel.count; ++j)
       value += double(q[j - 1]) * at_h[j];
     const uint32_t c = data.image_cluster[texel.first_image];
-    if (texel_albedo)
-      add(k.specular_lobe,
-          k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
-              Rgb(texel.colour[0], texel.colour[1], texel.colour[2]),
-          value, distribution);
-    else
-      add(k.specular_lobe, k.specular_scale[c], value, distribution);
+    const Rgb own = texel_albedo || exact
+                        ? k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
+                              Rgb(texel.colour[0], texel.colour[1], texel.colour[2])
+                        : Rgb();
+    add(k.specular_lobe, texel_albedo ? own : k.specular_scale[c], value, own, distribution);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
                                                                   : yarn.diffuse_transmittance) *
                        Rgb(texel.colour[0], texel.colour[1], texel.colour[2]);
-    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, gap);
+    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, k.diffuse_scale * albedo, gap);
   }
-  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, 1.0);
-  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap, 1.0 - gap);
+  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, k.sheen_scale, 1.0);
+  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap, k.delta_scale, 1.0 - gap);
 }
 
 inline void prefetch(const void* address) noexcept {
@@ -543,6 +542,8 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
+    // texel_distribution, not shading's gap and D: the correction's samples below call it, and g_V
+    // must be one function of t on both sides.
     control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
                     correct_visibility ? g_exact : nullptr,
                     correct_visibility ? texel_distribution(data, frame, t) : 0.0);
@@ -556,11 +557,12 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
       moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
       Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
-      const double dx = moments->partner_side * (partner.uniform() - partner.uniform());
-      const double dy = moments->partner_side * (partner.uniform() - partner.uniform());
+      const double side = moments->partner_side;
+      const double dx = partner.uniform() + side * (partner.uniform() - partner.uniform());
+      const double dy = partner.uniform() + side * (partner.uniform() - partner.uniform());
       control_variate(data, k,
-                      data.texel(int64_t(t) % n + int64_t(std::floor(0.5 + dx)),
-                                 int64_t(t) / n + int64_t(std::floor(0.5 + dy))),
+                      data.texel(int64_t(t) % n + int64_t(std::floor(dx)),
+                                 int64_t(t) / n + int64_t(std::floor(dy))),
                       true, there);
       double d = 0.0;
       for (int l = 0; l < model::kLobeCount; ++l)

@@ -60,8 +60,7 @@ void ResidualMoments::add(Form form, const Rgb* f, const Rgb* g, const Rgb* g_vi
 void run_visibility_pilot(EvalData* data) noexcept {
   const double n = double(data->n);
   const double kappa = double(data->options.visibility_samples);
-  Rng rng(kPilotSeed), partner_rng(kPilotSeed + 1);  // partners apart: the decisions with a base
-                                                     // are those of the pilot before them
+  Rng rng(kPilotSeed), partner_rng(kPilotSeed + 1);  // partners apart: rng draws as before
   // The reference footprint's cheap samples at 2 spp: m of them on a jittered grid of cells of side
   // `stratum`, so their mean's variance per residual sample is (2 / m) W, W the variance of g
   // within a cell (half the mean squared difference of two points of one cell).

@@ -12,10 +12,11 @@ struct EvalData;
 // of g (kWithBase: the cluster's mean specular albedo, as the forms with a base use it;
 // kWithoutBase: each texel's own): per point x, the sums of x and x^2 of f - g, f - g_V and g_V - g
 // (a point's value: every lobe's mean of its three channels, summed), and the number of points per
-// form. Each point is also paired with a partner offset by partner_side (u1 - u2, v1 - v2)
-// (uniforms from *partner_rng), and half the squared difference of their g (without a base) is
-// summed: the variance of g within a cheap sample's cell. Filled by estimates without a base or
-// parallax.
+// form. Each point is also paired with a partner floor(u0 + partner_side (u1 - u2)) texels away in
+// x and likewise in y (uniforms from *partner_rng; u0 the point's place in its texel, which the
+// estimate does not keep, drawn afresh), and half the squared difference of their g (without a
+// base) is summed: the variance of g within a cheap sample's cell. Filled by estimates without a
+// base or parallax.
 struct ResidualMoments {
   enum Form { kWithBase = 0, kWithoutBase = 1 };
   enum Quantity { kResidual = 0, kCorrectedResidual, kCorrection };
@@ -42,12 +43,12 @@ struct ResidualMoments {
 // (V_2 + V_3 / visibility_samples + C) / (V_1 + C), C = (2 / m) W the cheap samples' variance per
 // residual sample of a footprint kReferenceSide of a tile a side at 2 spp (m = remainder_samples
 // there, W the variance of g within one of its m cells, from pairs of points a cell apart). A band
-// keeps the correction when the median over its estimates with V_1 > 0 (as a relative error weighs
-// them) is at most kCorrectionPays (kCorrectionPaysWithoutBase without a base), when fewer than a
-// quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails. Deterministic for
-// an asset and its options; needs the tables and texel records open (open() calls it last, when
-// visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes; allocates only
-// what the estimates allocate. Not thread safe.
+// keeps the correction when the median over its estimates with V_1 > 0 in both forms (as a relative
+// error weighs them) is at most kCorrectionPays (kCorrectionPaysWithoutBase without a base), when
+// fewer than a quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails.
+// Deterministic for an asset and its options; needs the tables and texel records open (open() calls
+// it last, when visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes;
+// allocates only what the estimates allocate. Not thread safe.
 void run_visibility_pilot(EvalData* data) noexcept;
 
 }  // namespace clothbake::eval

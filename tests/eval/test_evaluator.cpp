@@ -356,14 +356,14 @@ TEST(Multiscale, VisibilityCorrectionIsUnbiasedAndTightensGrazingLight) {
 // pilot decides at 1/2); without, below 0.5 and above 0.85 (at 2/3); between, the pilot's 64
 // estimates may go either way. On the 64^2 satin, kappa_V = 8 pays (V_2 is a few percent of V_1)
 // and kappa_V = 1 does not (V_3, about V_1, is no longer divided away), so both decisions are
-// exercised. Then the plumbing: with the pilot, every estimate (a whole tile, with a base, and a
-// half-tile footprint, without) is bit for bit the estimate of the correction everywhere (a band
-// that keeps it) or of visibility_samples = 0 (a band that drops it), the generator's draws
-// included.
+// exercised in each form. Then the plumbing, with each band's two decisions forced apart both
+// ways: every estimate (a whole tile, with a base, and a 12^2 footprint, without) is bit for bit
+// the estimate of the correction everywhere (where its form's decision keeps it) or of
+// visibility_samples = 0 (where it drops it), the generator's draws included.
 TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
   reader::Asset asset;
   ASSERT_TRUE(asset.open_file(assets().satin.c_str()).ok());
-  int kept = 0, dropped = 0;
+  int kept[2] = {0, 0}, dropped[2] = {0, 0};  // per form
   for (const uint32_t kappa : {8u, 1u}) {
     EvalOptions options;
     options.tables = TableChoice::Compressed;
@@ -425,29 +425,44 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
         if (ratio > drop_above[form]) {
           EXPECT_FALSE(pays) << kappa << " " << band << " " << form;
         }
-        kept += ratio < keep_below[form];
-        dropped += ratio > drop_above[form];
+        kept[form] += ratio < keep_below[form];
+        dropped[form] += ratio > drop_above[form];
       }
-      // The plumbing, at the last directions of the band (their |i_z| is in it): a footprint with
-      // a base and one without.
-      for (const Footprint& p : {Footprint{0, 0, 64, 64}, Footprint{3.1, 40.2, 35.1, 72.2}}) {
-        const bool with_base = cover_footprint(d, p).base != FootprintCover::Base::None;
-        for (uint64_t seed = 1; seed <= 4; ++seed) {
-          Rng a(seed), b(seed);
-          Estimate with, expected;
-          ASSERT_TRUE(piloted.estimate(p, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
-          const Evaluator& same =
-              pilot.visibility_pays[with_base ? 0 : 1][band] ? everywhere : nowhere;
-          ASSERT_TRUE(
-              same.estimate(p, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected).ok());
-          EXPECT_EQ(with.value.g, expected.value.g) << kappa << " " << band << " " << with_base;
-          EXPECT_EQ(a.next(), b.next());
+      // The plumbing, at the last directions of the band (their |i_z| is in it): a whole tile
+      // (whole periods) and a 12^2 footprint (no base), with the band's two decisions forced
+      // apart both ways, so that a form reading the other's decision fails.
+      const Footprint tile{0, 0, 64, 64}, small{5.5, 7.25, 17.5, 19.25};
+      ASSERT_EQ(cover_footprint(d, tile).base, FootprintCover::Base::WholePeriods);
+      ASSERT_EQ(cover_footprint(d, small).base, FootprintCover::Base::None);
+      EvalData& decisions = const_cast<EvalData&>(pilot);
+      const bool chosen[2] = {pilot.visibility_pays[0][band], pilot.visibility_pays[1][band]};
+      for (const bool with_base_keeps : {true, false}) {
+        decisions.visibility_pays[0][band] = with_base_keeps;
+        decisions.visibility_pays[1][band] = !with_base_keeps;
+        for (const bool whole : {true, false}) {
+          const Footprint& p = whole ? tile : small;
+          const bool keeps = whole == with_base_keeps;
+          for (uint64_t seed = 1; seed <= 4; ++seed) {
+            Rng a(seed), b(seed);
+            Estimate with, expected;
+            ASSERT_TRUE(
+                piloted.estimate(p, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
+            ASSERT_TRUE((keeps ? everywhere : nowhere)
+                            .estimate(p, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected)
+                            .ok());
+            EXPECT_EQ(with.value.g, expected.value.g) << kappa << " " << band << " " << keeps;
+            EXPECT_EQ(a.next(), b.next());
+          }
         }
       }
+      decisions.visibility_pays[0][band] = chosen[0];
+      decisions.visibility_pays[1][band] = chosen[1];
     }
   }
-  EXPECT_GE(kept, 2);
-  EXPECT_GE(dropped, 2);
+  for (int form = 0; form < 2; ++form) {
+    EXPECT_GE(kept[form], 2) << form;
+    EXPECT_GE(dropped[form], 2) << form;
+  }
 }
 
 // A remainder so thin that the sample count formula asks for one cheap sample (|B|/|P| = 1.5 % at
