@@ -6557,85 +6557,6 @@ inline Asg<T> asg_from_params(const AsgParams<T>& p) {
   return g;
 }
 
-// Canonical parameters of g: lambda >= mu (x and y swapped if needed), psi in [0, pi); psi = 0 when
-// the lobe is isotropic (lambda == mu), where the rotation has no meaning.
-template <class T>
-inline AsgParams<T> asg_to_params(const Asg<T>& g) {
-  AsgParams<T> p;
-  p.axis = normalize(g.z);
-  p.lambda = g.lambda;
-  p.mu = g.mu;
-  p.amplitude = g.amplitude;
-  Vec3<T> x = g.x;
-  if (p.lambda < p.mu) {
-    std::swap(p.lambda, p.mu);
-    x = g.y;
-  }
-  if (p.lambda == p.mu) {
-    p.rotation = T(0);
-    return p;
-  }
-  Vec3<T> s, t;
-  orthonormal_basis(p.axis, s, t);
-  T psi = std::atan2(dot(x, t), dot(x, s));  // (-pi, pi]
-  if (psi < T(0)) psi += kPi<T>;
-  if (psi >= kPi<T>) psi -= kPi<T>;
-  p.rotation = psi;
-  return p;
-}
-
-// g(k) = integral_0^1 exp(-k (1 - t^2)) dt for k >= 0 (the polar integral of an ASG along one
-// azimuth; equals Dawson's function F(sqrt k) / sqrt k). Relative accuracy ~1e-15.
-inline double asg_polar_integral(double k) {
-  if (!(k > 0.0)) return 1.0;
-  if (k <= 40.0) {
-    // e^-k sum_n k^n / (n! (2n + 1)): every term positive, so no cancellation.
-    double term = std::exp(-k), sum = term;
-    for (int n = 1; n < 400; ++n) {
-      term *= k / double(n);
-      double add = term / double(2 * n + 1);
-      sum += add;
-      if (double(n) > k && add < 1e-17 * sum) break;
-    }
-    return sum;
-  }
-  // Asymptotic series 1/(2k) sum_m (2m-1)!! / (2k)^m; the neglected remainder is O(e^-k).
-  double inv = 1.0 / (2.0 * k), term = 1.0, sum = 1.0;
-  for (int m = 1; m < 60; ++m) {
-    term *= double(2 * m - 1) * inv;
-    sum += term;
-    if (term < 1e-17 * sum) break;
-  }
-  return sum * inv;
-}
-
-// Integral of G over the sphere, in sr times the amplitude: c * int_0^2pi g(lambda cos^2 phi + mu
-// sin^2 phi) dphi, the azimuthal integral by the periodic trapezoid rule (exponentially convergent;
-// the node count grows with the anisotropy so that the peak near the narrow axis is resolved).
-// Relative accuracy better than 1e-9 for bandwidths up to kAsgMaxBandwidth (tests/asg checks it
-// against quadrature over the sphere). 2 pi c at zero bandwidths.
-template <class T>
-inline T asg_integral(const Asg<T>& g) {
-  const double lambda = std::max(double(g.lambda), 0.0), mu = std::max(double(g.mu), 0.0);
-  const double hi = std::max(lambda, mu), lo = std::min(lambda, mu);
-  const double ratio = std::sqrt((hi + 1.0) / (lo + 1.0));
-  const int nodes = int(std::clamp(std::ceil(24.0 * ratio) * 4.0, 64.0, 16384.0));
-  // phi in [0, pi/2] with the 4-fold symmetry of cos^2/sin^2: midpoint nodes of the periodic rule.
-  double sum = 0.0;
-  for (int i = 0; i < nodes; ++i) {
-    double phi = (double(i) + 0.5) * (kPi<double> / 2) / double(nodes);
-    double c = std::cos(phi), s = std::sin(phi);
-    sum += asg_polar_integral(lambda * c * c + mu * s * s);
-  }
-  return T(double(g.amplitude) * 2.0 * kPi<double> * sum / double(nodes));
-}
-
-// Xu et al.'s closed-form approximation for sharp lobes: c pi / sqrt(lambda mu); relative error
-// O(1 / min(lambda, mu)). Infinite when a bandwidth is zero.
-template <class T>
-inline T asg_integral_sharp(const Asg<T>& g) {
-  return g.amplitude * kPi<T> / std::sqrt(g.lambda * g.mu);
-}
 
 // 12-byte record of canonical ASG parameters (little-endian uint16 fields on disk):
 //   axis_u, axis_v : the axis on the equal-area hemisphere square (DirectionGrid min_cos 0),
@@ -6654,33 +6575,6 @@ struct AsgRecord {
 static_assert(sizeof(AsgRecord) == 12, "AsgRecord is a 12-byte on-disk record");
 static_assert(alignof(AsgRecord) == 2, "AsgRecord has 2-byte alignment");
 
-namespace detail {
-inline uint16_t quantize_unit(double x) {  // [0, 1] -> [0, 65535], NaN -> 0
-  if (!(x > 0.0)) return 0;
-  if (x >= 1.0) return 65535;
-  return uint16_t(std::lround(x * 65535.0));
-}
-}  // namespace detail
-
-// Packs params (canonicalised first through an Asg); values are clamped into the record's ranges.
-template <class T>
-inline AsgRecord pack_asg(const AsgParams<T>& params) {
-  AsgParams<double> p = asg_to_params(asg_from_params(
-      AsgParams<double>{Vec3d(params.axis), double(params.rotation), double(params.lambda),
-                        double(params.mu), double(params.amplitude)}));
-  AsgRecord r;
-  DirectionGrid<double> hemisphere{1, 0.0};
-  double u, v;
-  hemisphere.to_square(p.axis, u, v);
-  r.axis_u = detail::quantize_unit(u);
-  r.axis_v = detail::quantize_unit(v);
-  long q = std::lround(p.rotation / kPi<double> * 65536.0);
-  r.rotation = uint16_t(((q % 65536) + 65536) % 65536);
-  r.lambda = detail::quantize_unit(std::sqrt(std::max(p.lambda, 0.0) / kAsgMaxBandwidth));
-  r.mu = detail::quantize_unit(std::sqrt(std::max(p.mu, 0.0) / kAsgMaxBandwidth));
-  r.amplitude = detail::quantize_unit(p.amplitude / kAsgMaxAmplitude);  // = round(c * 32768)
-  return r;
-}
 
 // Any 12 bytes give a valid lobe (finite, bandwidths in range).
 template <class T>

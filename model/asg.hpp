@@ -87,6 +87,7 @@ inline Asg<T> asg_from_params(const AsgParams<T>& p) {
   return g;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the bake's and the tools', not shading's (the single file leaves them out)
 // Canonical parameters of g: lambda >= mu (x and y swapped if needed), psi in [0, pi); psi = 0 when
 // the lobe is isotropic (lambda == mu), where the rotation has no meaning.
 template <class T>
@@ -166,6 +167,7 @@ template <class T>
 inline T asg_integral_sharp(const Asg<T>& g) {
   return g.amplitude * kPi<T> / std::sqrt(g.lambda * g.mu);
 }
+#endif
 
 // 12-byte record of canonical ASG parameters (little-endian uint16 fields on disk):
 //   axis_u, axis_v : the axis on the equal-area hemisphere square (DirectionGrid min_cos 0),
@@ -184,6 +186,7 @@ struct AsgRecord {
 static_assert(sizeof(AsgRecord) == 12, "AsgRecord is a 12-byte on-disk record");
 static_assert(alignof(AsgRecord) == 2, "AsgRecord has 2-byte alignment");
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the bake's and the tools', not shading's (the single file leaves them out)
 namespace detail {
 inline uint16_t quantize_unit(double x) {  // [0, 1] -> [0, 65535], NaN -> 0
   if (!(x > 0.0)) return 0;
@@ -211,6 +214,7 @@ inline AsgRecord pack_asg(const AsgParams<T>& params) {
   r.amplitude = detail::quantize_unit(p.amplitude / kAsgMaxAmplitude);  // = round(c * 32768)
   return r;
 }
+#endif
 
 // Any 12 bytes give a valid lobe (finite, bandwidths in range).
 template <class T>
