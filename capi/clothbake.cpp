@@ -6642,6 +6642,8 @@ class VisibilityAsgView {
   // The same at texel index t = y N + x (t < N^2: not checked; no division, for per-sample use).
   model::AsgRecord record_at(uint64_t t) const noexcept;
   model::AsgParams<double> lobe_at(uint64_t t) const noexcept;
+  // Where record_at(t) reads (for a caller's prefetch); t < N^2, not checked.
+  const void* record_address(uint64_t t) const noexcept { return records_ + t * kAsgRecordFields; }
   // RMS fit error at (x, y); NaN without the fit error section.
   double fit_error(int64_t x, int64_t y) const noexcept;
 
@@ -8205,12 +8207,17 @@ struct PointBatch {
     prefetch(source_code(shift, source));
     points[count++] = {x, y, source};
   }
-  void resolve(const EvalData& data, const BinShift& shift) noexcept {
+  // `texel_maps`: also the destination's tangent and visibility lobe, which g_V reads.
+  void resolve(const EvalData& data, const BinShift& shift, bool texel_maps = false) noexcept {
     for (uint32_t i = 0; i < count; ++i) {
       int64_t tx = 0, ty = 0;
       shifted_destination(shift, points[i].source, points[i].x, points[i].y, &tx, &ty);
       destination[i] = data.texel(tx, ty);
       prefetch_record(data, destination[i]);
+      if (texel_maps) {
+        prefetch(data.maps.tangent.data + 3 * destination[i]);
+        prefetch(data.visibility.record_address(destination[i]));
+      }
     }
   }
 };
@@ -8229,10 +8236,10 @@ inline void prefetch_lines(const void* begin, std::size_t bytes) noexcept {
 // at a time (the samples land at random texels of planes and records of megabytes).
 template <class Visit>
 void visit_destinations(const EvalData& data, const BinShift& shift, const Footprint& rect,
-                        uint32_t count, Rng& rng, Visit visit) {
+                        uint32_t count, Rng& rng, Visit visit, bool texel_maps = false) {
   PointBatch<16> chunk;
   auto flush = [&] {
-    chunk.resolve(data, shift);
+    chunk.resolve(data, shift, texel_maps);
     for (uint32_t i = 0; i < chunk.count; ++i)
       visit(chunk.destination[i], chunk.points[i].x, chunk.points[i].y);
     chunk.count = 0;
@@ -8647,7 +8654,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     for (uint32_t i = 0; i < spp; ++i)
       residual_sample(early.destination[i], 0.0, 0.0);
   else
-    visit_destinations(data, shift, p, spp, rng, residual_sample);
+    visit_destinations(data, shift, p, spp, rng, residual_sample, true);
   // The rest of the integral of g by cheap samples, stratified over each region, each region's
   // mean times its area (footprint_cover.hpp): sign g over the whole-period form's rectangles (and
   // over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
@@ -8704,13 +8711,17 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   if (correct_visibility) {
     corrections = uint32_t(
         std::min<uint64_t>(uint64_t(data.options.visibility_samples) * spp, kMaxVisibilitySamples));
-    visit_destinations(data, shift, p, corrections, rng, [&](uint64_t t, double, double) {
-      Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-      control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, texel_visibility(data, frame, t),
-                      g_exact, texel_distribution(data, frame, t));
-      for (int l = 0; l < model::kLobeCount; ++l)
-        correction[l] += g_exact[l] - g[l];
-    });
+    visit_destinations(
+        data, shift, p, corrections, rng,
+        [&](uint64_t t, double, double) {
+          Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
+          control_variate(data, k, t, k.texel_albedo, g, 0, nullptr,
+                          texel_visibility(data, frame, t), g_exact,
+                          texel_distribution(data, frame, t));
+          for (int l = 0; l < model::kLobeCount; ++l)
+            correction[l] += g_exact[l] - g[l];
+        },
+        true);
     for (Rgb& c : correction)
       c = c / double(corrections);
   }

@@ -71,6 +71,8 @@ class VisibilityAsgView {
   // The same at texel index t = y N + x (t < N^2: not checked; no division, for per-sample use).
   model::AsgRecord record_at(uint64_t t) const noexcept;
   model::AsgParams<double> lobe_at(uint64_t t) const noexcept;
+  // Where record_at(t) reads (for a caller's prefetch); t < N^2, not checked.
+  const void* record_address(uint64_t t) const noexcept { return records_ + t * kAsgRecordFields; }
   // RMS fit error at (x, y); NaN without the fit error section.
   double fit_error(int64_t x, int64_t y) const noexcept;
 
