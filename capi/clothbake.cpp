@@ -8146,6 +8146,7 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     if (exact) exact[int(lobe)] += exact_factor * (exact_scalar * visibility);
   };
   const double gap = texel.gap;
+  const Rgb colour(texel.colour[0], texel.colour[1], texel.colour[2]);
   if (k.specular && texel.count > 0) {
     // The table value at h: image `first` (the cell mean) has weight 1, the others their stored
     // coefficients.
@@ -8156,8 +8157,7 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
       value += double(q[j - 1]) * at_h[j];
     const uint32_t c = data.image_cluster[texel.first_image];
     const Rgb own = texel_albedo || exact
-                        ? k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo *
-                              Rgb(texel.colour[0], texel.colour[1], texel.colour[2])
+                        ? k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo * colour
                         : Rgb();
     add(k.specular_lobe, texel_albedo ? own : k.specular_scale[c], value, own, distribution);
   }
@@ -8165,7 +8165,7 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     const YarnShading& yarn = data.yarns[texel.yarn];
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
                                                                   : yarn.diffuse_transmittance) *
-                       Rgb(texel.colour[0], texel.colour[1], texel.colour[2]);
+                       colour;
     add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, k.diffuse_scale * albedo, gap);
   }
   if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, k.sheen_scale, 1.0);
@@ -8623,16 +8623,16 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
     // texel_distribution, not shading's gap and D: the correction's samples below call it, and g_V
     // must be one function of t on both sides.
+    const double distribution = correct_visibility ? texel_distribution(data, frame, t) : 0.0;
     control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
-                    correct_visibility ? g_exact : nullptr,
-                    correct_visibility ? texel_distribution(data, frame, t) : 0.0);
+                    correct_visibility ? g_exact : nullptr, distribution);
     const Rgb* against = correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
     if (moments != nullptr && correct_visibility) {  // the pilot's: no base, no parallax
       Rgb base[model::kLobeCount], base_exact[model::kLobeCount], there[model::kLobeCount];
       control_variate(data, k, t, false, base, 0, nullptr, shading.visibility, base_exact,
-                      texel_distribution(data, frame, t));
+                      distribution);
       moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
       moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
       Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
