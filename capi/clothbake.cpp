@@ -4743,20 +4743,20 @@ struct EvalOptions {
   // residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
   // visibility_samples > 0. Either keeps the estimate unbiased.
   bool visibility_pilot = true;
-  // The unbiased multi-scale form uses its control variate on a footprint P when the effective
-  // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
-  // the exactly integrated base, weighted by its integrand's spread) is at most this fraction of
-  // |P|; otherwise P is sampled as brute force. Any value keeps the estimate unbiased;
-  // docs/evaluator.md gives the measured choice.
-  double max_remainder_fraction = 1.0;
-  // Footprints whose geometric mean side (the square root of their area) is below this fraction
-  // of the tile, or below min_control_variate_floats float lengths of the weave (the mean run of
-  // one yarn along the tile's rows and columns), are sampled as brute force by the unbiased
-  // multi-scale form: over so little of the weave the integrand varies too little for the control
-  // variate's per-estimate cost to pay (docs/evaluator.md, "Footprints the control variate does not
-  // pay for", gives the measured crossovers). 0: no bound.
-  double min_control_variate_tiles = 0.1;
-  double min_control_variate_floats = 1.0;
+  // The unbiased multi-scale form integrates its control variate exactly over whole periods or
+  // whole source blocks of a footprint P when the effective remainder that base leaves to cheap
+  // samples (eval/footprint_cover.hpp: the part of P outside the exactly integrated base, weighted
+  // by its integrand's spread and cost) is at most this fraction of |P|; above it, P takes the form
+  // without a base, whose control variate g_V (each texel's own visibility, fibre distribution and
+  // albedo) follows f more closely than any g with one but is integrated by cheap samples alone.
+  // Any value keeps the estimate unbiased; docs/evaluator.md gives the measured choice.
+  double max_remainder_fraction = 0.75;
+  // Footprints whose geometric mean side (the square root of their area) is below this many
+  // texels are sampled as brute force by the unbiased multi-scale form: over so few texels brute
+  // force's stratified samples already see most of the integrand, and the control variate's
+  // per-estimate cost does not pay (docs/evaluator.md, "Footprints the control variate does not
+  // pay for", gives the measured crossover). 0: no bound.
+  double min_control_variate_side = 2.0;
   // The base region of the unbiased multi-scale form (eval/footprint_cover.hpp): Auto takes, per
   // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder;
   // the others force one form (for studies: docs/evaluator.md, "Footprints below a period").
@@ -5496,13 +5496,14 @@ void stratified_points(const Footprint& p, uint32_t spp, Rng& rng, Visit visit) 
 //                  samples take g - g_r (nothing when r is the full rank), and up to four strips of
 //                  the box around P ∪ A outside I, where they take 1_P g - 1_A g_r:
 //                    ∫_P g = ∫_A g_r + ∫_I (g - g_r) + Σ_strips ∫ (1_P g - 1_A g_r).
-//                  A footprint that rounds to no block has A empty: the whole of P by cheap
-//                  samples.
-// Each form leaves an effective remainder e: the whole-period form |A Δ P| / |P|; the block form
-// (|A Δ P| + σ_r |I|) / |P|, σ_r the spread of g - g_r relative to g's (kBlockInteriorSpread).
-// The cover takes the form of the smaller e (whole periods on ties); e also sets the number of
-// cheap samples (remainder_samples) and, above EvalOptions::max_remainder_fraction, sends P to
-// brute force.
+//                  A footprint that rounds to no block has A empty: no base.
+// Each form with a base leaves an effective remainder e: the whole-period form |A Δ P| / |P|; the
+// block form (|A Δ P| + σ_r |I|) / |P|, σ_r the spread of g - g_r relative to g's
+// (kBlockInteriorSpread). The cover takes the form of the smaller e (whole periods on ties; the
+// block form's e weighed with what its base costs beyond one vector of sums) and, where that
+// exceeds EvalOptions::max_remainder_fraction, no base: the whole of P by cheap samples of g_V,
+// the control variate with each texel's own visibility, fibre distribution and albedo. e also sets
+// the number of cheap samples (remainder_samples).
 //
 // C++17, standard library only, no allocation. Safe on any finite footprint of positive area.
 // Internal to the evaluator library.
@@ -5559,7 +5560,8 @@ struct FootprintCover {
   double remainder = 0;  // the effective remainder e of the form taken
 };
 
-// No base: the whole of P (positive area) as one region of cheap samples of g (remainder 1).
+// No base: the whole of P (positive area) as one region of cheap samples of g_V (effective
+// remainder 2: footprint_cover.cpp, kWithoutBaseRemainder).
 FootprintCover no_base_cover(const Footprint& footprint) noexcept;
 
 // The cover of P (positive area) for `data`'s tables and options (EvalOptions::footprint_base):
@@ -5653,6 +5655,20 @@ class ControlVariateTexels {
     float colour[3];
   };
   static_assert(sizeof(Header) == 24);
+  // What g_V, g with the texel's own visibility, fibre distribution and specular albedo, reads at
+  // texel t (docs/evaluator.md, "Unbiased multi-scale"): one cache line.
+  struct alignas(64) Exact {
+    float axis[3];      // the visibility lobe's unit axis z
+    float rotation[2];  // cos psi, sin psi (x = cos psi s + sin psi t, (s, t) the axis's basis)
+    float lambda, mu, amplitude;
+    float tangent[3];  // the fibre tangent, unit (+z where the map's is zero or not finite)
+    float gap;         // I(t) clamped to [0, 1], NaN read as 1 (as model::ClothBsdf)
+    float colour[3];   // the albedo map's RGB
+    uint16_t yarn;     // the texel's yarn index
+    uint8_t cluster;   // the cluster whose yarn attenuation scales the specular lobe
+    uint8_t padding;
+  };
+  static_assert(sizeof(Exact) == 64);
 
   // Builds the records of every texel from `data`'s open views (the compressed specular tables
   // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 9.4 MB
@@ -5677,6 +5693,7 @@ class ControlVariateTexels {
                                             4 * std::size_t(rank_));
   }
   const void* address(uint64_t t) const noexcept { return bytes() + t * stride_; }
+  const Exact& exact(uint64_t t) const noexcept { return exact_[t]; }
 
  private:
   struct alignas(64) CacheLine {
@@ -5686,6 +5703,7 @@ class ControlVariateTexels {
     return reinterpret_cast<const unsigned char*>(lines_.data());
   }
   model::Buffer<CacheLine> lines_;  // the records, from the evaluator's allocator
+  model::Buffer<Exact> exact_;      // g_V's records
   uint32_t stride_ = 0, rank_ = 0;
 };
 
@@ -6723,23 +6741,17 @@ struct EvalData {
   model::Buffer<uint32_t> cluster_image_begin;
   PushforwardSums pushforward;     // the unbiased form's whole-tile sums (pushforward_sums.hpp)
   SubperiodSums subperiod;         // its block sums (subperiod_sums.hpp; not open: no block form)
-  ControlVariateTexels cv_texels;  // the unbiased form's per-texel records of g (cv_texels.hpp)
-  // The weave's float length: the mean length in texels of a run of one yarn along the tile's rows
-  // and columns, 2 N^2 / (changes of yarn id between neighbours, wrapping, along both axes); N
-  // when the tile has one yarn. The scale below which a footprint holds too little of the weave
-  // for the control variate to pay (EvalOptions::min_control_variate_floats).
-  double yarn_run = 0;
+  ControlVariateTexels cv_texels;  // the unbiased form's per-texel records of g and g_V
+                                   // (cv_texels.hpp)
   // Per band of the light's elevation |i_z| (kVisibilityBands bands of equal width): whether the
   // unbiased form's visibility correction runs there (visibility_pilot.cpp decides at open).
   static constexpr int kVisibilityBands = 4;
-  // Per form of g: [0] with a base (the cluster's mean specular albedo), [1] without (each
-  // texel's own, and the cheap samples of the whole footprint).
-  bool visibility_pays[2][kVisibilityBands] = {{true, true, true, true}, {true, true, true, true}};
-  bool corrects_visibility(double cos_i, bool with_base) const {
+  // (Only the forms with a base correct: without one the control variate is g_V itself.)
+  bool visibility_pays[kVisibilityBands] = {true, true, true, true};
+  bool corrects_visibility(double cos_i) const {
     const int band = int(cos_i * kVisibilityBands);  // cos_i = |i_z| in [0, 1]
     return options.visibility_samples > 0 &&
-           visibility_pays[with_base ? 0 : 1]
-                          [band < kVisibilityBands ? band : kVisibilityBands - 1];
+           visibility_pays[band < kVisibilityBands ? band : kVisibilityBands - 1];
   }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;
@@ -6882,11 +6894,6 @@ void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>&
 // [0, 1], the visibility the integrand uses. No allocation.
 double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
 
-// I(t) D_t(h) of texel index t (< N^2): its gap weight times its fibre SGGX's distribution at the
-// frame's h (the texel's tangent and its yarn's roughness), the factor of f's specular lobes that
-// the tables hold per bin. No allocation.
-double texel_distribution(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
-
 // g(t) of texel (x, y) (any integers: the tile wraps).
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept;
@@ -6957,6 +6964,8 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
 // The control variate's packed per-texel records (cv_texels.hpp).
 
 #include <algorithm>
+#include <cmath>
+
 
 
 namespace clothbake::eval {
@@ -7014,6 +7023,34 @@ bool ControlVariateTexels::build(const EvalData& data) noexcept {
       for (uint32_t j = 1; j < count; ++j)
         q[j - 1] = int16_t(weights[j]);
     }
+  }
+  if (!exact_.allocate(texels, data.allocator)) return false;
+  for (uint64_t t = 0; t < texels; ++t) {
+    Exact& x = exact_[t];
+    const model::AsgParams<double> lobe = data.visibility.lobe_at(t);
+    const model::Asg<double> asg = model::asg_from_params(lobe);
+    x.axis[0] = float(asg.z.x);
+    x.axis[1] = float(asg.z.y);
+    x.axis[2] = float(asg.z.z);
+    x.rotation[0] = float(std::cos(lobe.rotation));
+    x.rotation[1] = float(std::sin(lobe.rotation));
+    x.lambda = float(asg.lambda);
+    x.mu = float(asg.mu);
+    x.amplitude = float(asg.amplitude);
+    const float* tangent = data.maps.tangent.data + 3 * t;
+    const model::FibreSggx<double> sggx =
+        model::FibreSggx<double>::make(model::Vec3d(tangent[0], tangent[1], tangent[2]), 0.5);
+    x.tangent[0] = float(sggx.t.x);
+    x.tangent[1] = float(sggx.t.y);
+    x.tangent[2] = float(sggx.t.z);
+    const double gap = data.maps.gap[t];
+    x.gap = float(std::isnan(gap) ? 1.0 : std::clamp(gap, 0.0, 1.0));
+    for (int c = 0; c < 3; ++c)
+      x.colour[c] = data.maps.albedo.data[3 * t + c];
+    x.yarn = data.maps.yarn_id[t];
+    const ControlVariateTexels::Header& h = header(t);
+    x.cluster = uint8_t(h.count > 0 ? data.image_cluster[h.first_image] : h.label);
+    x.padding = 0;
   }
   return true;
 }
@@ -7106,47 +7143,34 @@ namespace clothbake::eval {
 
 struct EvalData;
 
-// The residual points' moments that the pilot reads from an estimate (methods.hpp), for both forms
-// of g (kWithBase: the cluster's mean specular albedo, as the forms with a base use it;
-// kWithoutBase: each texel's own): per point x, the sums of x and x^2 of f - g, f - g_V and g_V - g
-// (a point's value: every lobe's mean of its three channels, summed), and the number of points per
-// form. Each point is also paired with a partner floor(u0 + partner_side (u1 - u2)) texels away in
-// x and likewise in y (uniforms from *partner_rng; u0 the point's place in its texel, which the
-// estimate does not keep, drawn afresh), and half the squared difference of their g (without a
-// base) is summed: the variance of g within a cheap sample's cell. Filled by estimates without a
-// base or parallax.
+// The residual points' moments that the pilot reads from an estimate (methods.hpp): per point x,
+// the sums of x and x^2 of f - g, f - g_V and g_V - g (g as the forms with a base use it; a
+// point's value: every lobe's mean of its three channels, summed), and the number of points.
 struct ResidualMoments {
-  enum Form { kWithBase = 0, kWithoutBase = 1 };
   enum Quantity { kResidual = 0, kCorrectedResidual, kCorrection };
-  double sum[2][3] = {}, square[2][3] = {}, count[2] = {0, 0};
-  double partner_side = 0, pair_square = 0, pairs = 0;
-  Rng* partner_rng = nullptr;
-  void add(Form form, const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept;
+  double sum[3] = {}, square[3] = {}, count = 0;
+  void add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept;
   // The sample variance of a quantity (divisor count - 1); needs count >= 2.
-  double variance(Form form, Quantity q) const noexcept {
-    return (square[form][q] - sum[form][q] * sum[form][q] / count[form]) / (count[form] - 1.0);
+  double variance(Quantity q) const noexcept {
+    return (square[q] - sum[q] * sum[q] / count) / (count - 1.0);
   }
 };
 
-// Sets data->visibility_pays[form] (ResidualMoments::Form: with a base, without) for every
-// band of |i_z| (EvalData::kVisibilityBands): per band, up to kPilotEstimates estimates of the
-// unbiased form, each over a whole tile at a random offset with no base (no view bin's sums are
-// built), one cheap sample and no parallax (no plane decoded), spp kPilotSpp, the correction on, a
-// reflection light with |i_z| uniform over the band and a view of o_z 1, 0.8, 0.55 or 0.3 in turn,
-// azimuths and offsets from a generator of fixed seed; pairs whose half vector a scene-planned
-// asset left out are drawn again, up to kPilotAttempts in all. With V_1, V_2, V_3 an estimate's
-// sample variances over its residual points of f - g, f - g_V and g_V - g, per form of g, the
-// ratio of the estimate's variance with the correction to without it is, with a base,
-// (V_2 + V_3 / visibility_samples) / V_1 (its cheap samples cover a thin remainder), and without,
-// (V_2 + V_3 / visibility_samples + C) / (V_1 + C), C = (2 / m) W the cheap samples' variance per
-// residual sample of a footprint kReferenceSide of a tile a side at 2 spp (m = remainder_samples
-// there, W the variance of g within one of its m cells, from pairs of points a cell apart). A band
-// keeps the correction when the median over its estimates with V_1 > 0 in both forms (as a relative
-// error weighs them) is at most kCorrectionPays (kCorrectionPaysWithoutBase without a base), when
-// fewer than a quarter of kPilotEstimates estimates had V_1 > 0, and when an estimate fails.
-// Deterministic for an asset and its options; needs the tables and texel records open (open() calls
-// it last, when visibility_samples > 0 and visibility_pilot). 3-5 ms on the 256^2 example bakes;
-// allocates only what the estimates allocate. Not thread safe.
+// Sets data->visibility_pays for every band of |i_z| (EvalData::kVisibilityBands): per band, up to
+// kPilotEstimates estimates of the unbiased form, each over a whole tile at a random offset with no
+// base (no view bin's sums are built), one cheap sample and no parallax (no plane decoded), spp
+// kPilotSpp, a reflection light with |i_z| uniform over the band and a view of o_z 1, 0.8, 0.55 or
+// 0.3 in turn, azimuths and offsets from a generator of fixed seed; pairs whose half vector a
+// scene-planned asset left out are drawn again, up to kPilotAttempts in all. With V_1, V_2, V_3 an
+// estimate's sample variances over its residual points of f - g, f - g_V and g_V - g, the ratio of
+// the variance of an estimate with a base with the correction to without it is
+// (V_2 + V_3 / visibility_samples) / V_1 (its cheap samples cover a thin remainder). A band keeps
+// the correction when the median ratio over its estimates with V_1 > 0 (as a relative error weighs
+// them) is at most kCorrectionPays, when fewer than a quarter of kPilotEstimates estimates had
+// V_1 > 0, and when an estimate fails. Deterministic for an asset and its options; needs the
+// tables and texel records open (open() calls it last, when visibility_samples > 0 and
+// visibility_pilot). A few ms on the 256^2 example bakes; allocates only what the estimates
+// allocate. Not thread safe.
 void run_visibility_pilot(EvalData* data) noexcept;
 
 }  // namespace clothbake::eval
@@ -7224,12 +7248,10 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                          "max_block_sum_bytes must be >= 0");
   if (unsigned(options.footprint_base) > unsigned(FootprintBase::None))
     return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown footprint_base");
-  if (!(options.min_control_variate_tiles >= 0.0) ||
-      !std::isfinite(options.min_control_variate_tiles) ||
-      !(options.min_control_variate_floats >= 0.0) ||
-      !std::isfinite(options.min_control_variate_floats))
+  if (!(options.min_control_variate_side >= 0.0) ||
+      !std::isfinite(options.min_control_variate_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "min_control_variate_tiles and _floats must be finite and >= 0");
+                         "min_control_variate_side must be finite and >= 0");
   if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "direct_max_side must be finite and >= 0");
@@ -7270,17 +7292,6 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                            "texel (%u, %u) has yarn id %u but the asset has %u yarn records",
                            unsigned(t % d->n), unsigned(t / d->n), unsigned(d->maps.yarn_id[t]),
                            unsigned(yarns.size));
-  {
-    uint64_t changes = 0;
-    const uint32_t n = d->n;
-    for (uint32_t y = 0; y < n; ++y)
-      for (uint32_t x = 0; x < n; ++x) {
-        const uint16_t here = d->maps.yarn_id[uint64_t(y) * n + x];
-        changes += here != d->maps.yarn_id[uint64_t(y) * n + (x + 1) % n];
-        changes += here != d->maps.yarn_id[uint64_t((y + 1) % n) * n + x];
-      }
-    d->yarn_run = changes > 0 ? 2.0 * double(n) * n / double(changes) : double(n);
-  }
   d->sheen_color = Rgb(fabric->sheen_color[0], fabric->sheen_color[1], fabric->sheen_color[2]);
   d->sheen_roughness = fabric->sheen_roughness;
 
@@ -7521,14 +7532,10 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   // Too small a footprint for the control variate to pay is brute force's without further ado;
   // otherwise its cover, once per estimate, decides the branch and the estimator uses it.
   const bool unbiased_multiscale = method == Method::Multiscale && !direct;
-  const bool too_small =
-      unbiased_multiscale &&
-      w * h < square(std::max(data_->options.min_control_variate_tiles * double(data_->n),
-                              data_->options.min_control_variate_floats * data_->yarn_run));
-  const FootprintCover cover =
-      unbiased_multiscale && !too_small ? cover_footprint(*data_, footprint) : FootprintCover{};
   const bool without_cv =
-      too_small || (unbiased_multiscale && cover.remainder > data_->options.max_remainder_fraction);
+      unbiased_multiscale && w * h < square(data_->options.min_control_variate_side);
+  const FootprintCover cover =
+      unbiased_multiscale && !without_cv ? cover_footprint(*data_, footprint) : FootprintCover{};
   if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
                                                // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};
@@ -7759,13 +7766,19 @@ Status exact_average(const EvalData& data, const ShadingFrame& frame, const Foot
 
 namespace clothbake::eval {
 
+// The effective remainder of the form without a base: twice its area. Its residual f - g_V leaves
+// the cheap samples of g_V most of the estimate's variance, so the cost-optimal count
+// (remainder_samples) is about twice that of a g whose residual carries the rest (the goose-eye
+// chair at 2 spp: relMSE 0.0081 -> 0.0044 for 0.047 -> 0.070 s; three times: 0.0033 in 0.095 s).
+constexpr double kWithoutBaseRemainder = 2.0;
+
 FootprintCover no_base_cover(const Footprint& p) noexcept {
   FootprintCover cover;
   cover.base = FootprintCover::Base::None;
   cover.regions[0].rect = p;
   cover.regions[0].area = (p.x1 - p.x0) * (p.y1 - p.y0);
   cover.region_count = 1;
-  cover.remainder = 1.0;
+  cover.remainder = kWithoutBaseRemainder;
   return cover;
 }
 
@@ -7895,7 +7908,8 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
   }
   // The form of least cost-weighted remainder: the whole-period form's, the block form's plus what
   // its base costs beyond one vector of sums (kBlockBaseCost: up to nine prefix points where the
-  // whole-period form reads one), and no base at all (remainder 1); ties to the first.
+  // whole-period form reads one), ties to the first; above EvalOptions::max_remainder_fraction the
+  // form without a base, whose control variate g_V follows f more closely than any g with a base.
   FootprintCover best = whole_periods(data.n, p);
   double best_cost = best.remainder;
   if (have_blocks) {
@@ -7906,7 +7920,7 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
       best_cost = cost;
     }
   }
-  if (1.0 < best_cost) best = no_base_cover(p);
+  if (best_cost > data.options.max_remainder_fraction) best = no_base_cover(p);
   return best;
 }
 
@@ -8105,30 +8119,67 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 struct PushforwardConstants : ActiveLobes {
   Rgb diffuse_scale, sheen_scale, delta_scale;
   uint32_t rank = 0;
-  // g_spec with each texel's own specular albedo alpha(t) (the yarn's times its colour) instead of
-  // the cluster mean kbar_c: exact where threads of one yarn are dyed differently (a draft's warp
-  // colours), but the bins' sums hold no colour, so only a cover without a base (g only at points)
-  // uses it.
-  bool texel_albedo = false;
   // Per cluster: b_cj(i), j = 0..M (plain arrays: the 255-cluster capacity costs nothing).
   double vis[reader::kMaxVisibilityClusters][kMaxRank + 1];
   Rgb specular_scale[reader::kMaxVisibilityClusters];     // s_c
-  Rgb attenuation_scale[reader::kMaxVisibilityClusters];  // s_c without kbar_c (texel_albedo)
+  Rgb attenuation_scale[reader::kMaxVisibilityClusters];  // s_c without kbar_c (g_V's)
   // Per compressed image i: sum_b w_b(h) basis_i(b), the image's value at h (the table value of a
   // texel is the sum of its image weights times these).
   const double* image_at_h = nullptr;
+  // g_V's: the light direction of the visibility look-ups and h (ShadingFrame's).
+  model::Vec3d light, h;
 };
 
-// g of every lobe asked for at texel index t (< N^2), with the texel's own specular albedo when
-// `texel_albedo` (k.texel_albedo; the pilot asks for both), added to g[]; when `low` is not null
-// g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is
-// not null g_V, g with the texel's own visibility V in place of v(t), its own I(t) D_t(h)
-// (`distribution`, texel_distribution) in place of the table value T(t, h) and its own specular
-// albedo, added to exact[]: one packed record (cv_texels.hpp) and the per-estimate constants.
+// g_V at texel index t (< N^2), added to exact[]: g with the texel's own visibility V(t, i), its
+// own I(t) D_t(h) in place of the table value and its own specular albedo, from its one-line
+// record (cv_texels.hpp's Exact).
+void exact_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
+                   Rgb exact[model::kLobeCount]) {
+  const ControlVariateTexels::Exact& x = data.cv_texels.exact(t);
+  const model::Vec3d z(x.axis[0], x.axis[1], x.axis[2]);
+  double visibility = 0.0;
+  const double vz = dot(k.light, z);
+  if (vz > 0.0) {
+    model::Vec3d s, u;
+    model::orthonormal_basis(z, s, u);
+    const double a = dot(k.light, s), b = dot(k.light, u);
+    const double c = x.rotation[0], sn = x.rotation[1];
+    const double vx = c * a + sn * b, vy = c * b - sn * a;
+    visibility =
+        double(x.amplitude) * std::exp(-double(x.lambda) * vx * vx - double(x.mu) * vy * vy);
+    visibility = visibility > 1.0 ? 1.0 : visibility;
+  }
+  const YarnShading& yarn = data.yarns[x.yarn];
+  const double gap = x.gap;
+  const Rgb colour(x.colour[0], x.colour[1], x.colour[2]);
+  if (k.specular) {
+    model::FibreSggx<double> sggx;
+    sggx.t = model::Vec3d(x.tangent[0], x.tangent[1], x.tangent[2]);
+    double sigma = yarn.roughness;
+    if (!(sigma >= model::kMinFibreRoughness<double>))
+      sigma = std::isnan(sigma) ? 1.0 : model::kMinFibreRoughness<double>;
+    if (sigma > 1.0) sigma = 1.0;
+    sggx.sigma2 = sigma * sigma;
+    sggx.one_minus_sigma2 = (1.0 - sigma) * (1.0 + sigma);
+    sggx.d_norm = sigma * sigma * sigma / model::kPi<double>;
+    exact[int(k.specular_lobe)] += k.attenuation_scale[x.cluster] * yarn.specular_albedo * colour *
+                                   (gap * sggx.D(k.h) * visibility);
+  }
+  if (k.diffuse) {
+    const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
+                                                                  : yarn.diffuse_transmittance) *
+                       colour;
+    exact[int(k.diffuse_lobe)] += k.diffuse_scale * albedo * (gap * visibility);
+  }
+  if (k.sheen) exact[int(Lobe::Sheen)] += k.sheen_scale * visibility;
+  if (k.delta) exact[int(Lobe::DeltaTransmission)] += k.delta_scale * ((1.0 - gap) * visibility);
+}
+
+// g of every lobe asked for at texel index t (< N^2), added to g[]; when `low` is not null g_r, the
+// same with the visibility basis cut at rank `low_rank`, added to low[]: one packed record
+// (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
-                     bool texel_albedo, Rgb g[model::kLobeCount], uint32_t low_rank = 0,
-                     Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr,
-                     double distribution = 0.0) {
+                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -8138,12 +8189,10 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     v += b[j + 1] * double(e[j]);
     if (j + 1 == low_rank) v_low = v;
   }
-  // Each lobe's factor and scalar without the visibility, then times v (and v_low); g_V's own.
-  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar, const Rgb& exact_factor,
-                 double exact_scalar) {
+  // Each lobe's factor and scalar without the visibility, then times v (and v_low).
+  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar) {
     g[int(lobe)] += factor * (scalar * v);
     if (low) low[int(lobe)] += factor * (scalar * v_low);
-    if (exact) exact[int(lobe)] += exact_factor * (exact_scalar * visibility);
   };
   const double gap = texel.gap;
   const Rgb colour(texel.colour[0], texel.colour[1], texel.colour[2]);
@@ -8155,21 +8204,17 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     double value = at_h[0];
     for (uint32_t j = 1; j < texel.count; ++j)
       value += double(q[j - 1]) * at_h[j];
-    const uint32_t c = data.image_cluster[texel.first_image];
-    const Rgb own = texel_albedo || exact
-                        ? k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo * colour
-                        : Rgb();
-    add(k.specular_lobe, texel_albedo ? own : k.specular_scale[c], value, own, distribution);
+    add(k.specular_lobe, k.specular_scale[data.image_cluster[texel.first_image]], value);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
                                                                   : yarn.diffuse_transmittance) *
                        colour;
-    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, k.diffuse_scale * albedo, gap);
+    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap);
   }
-  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, k.sheen_scale, 1.0);
-  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap, k.delta_scale, 1.0 - gap);
+  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0);
+  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap);
 }
 
 inline void prefetch(const void* address) noexcept {
@@ -8192,6 +8237,8 @@ inline void prefetch_record(const EvalData& data, uint64_t t) noexcept {
 // Up to kCapacity sample points of one view bin in two stages, so that their cache misses overlap:
 // add() keeps a point and prefetches its source texel's parallax code; resolve() computes every
 // kept point's destination texel and prefetches its record. The caller evaluates afterwards.
+enum Reads : unsigned { kRecord = 1, kExact = 2, kMaps = 4 };
+
 template <uint32_t kCapacity>
 struct PointBatch {
   struct Point {
@@ -8207,14 +8254,16 @@ struct PointBatch {
     prefetch(source_code(shift, source));
     points[count++] = {x, y, source};
   }
-  // `texel_maps`: also the destination's tangent and visibility lobe, which g_V reads.
-  void resolve(const EvalData& data, const BinShift& shift, bool texel_maps = false) noexcept {
+  // What of each destination to prefetch (Reads): its record of g, its record of g_V, the maps
+  // shade_texel reads besides (the tangent and the visibility lobe).
+  void resolve(const EvalData& data, const BinShift& shift, unsigned reads) noexcept {
     for (uint32_t i = 0; i < count; ++i) {
       int64_t tx = 0, ty = 0;
       shifted_destination(shift, points[i].source, points[i].x, points[i].y, &tx, &ty);
       destination[i] = data.texel(tx, ty);
-      prefetch_record(data, destination[i]);
-      if (texel_maps) {
+      if (reads & kRecord) prefetch_record(data, destination[i]);
+      if (reads & kExact) prefetch(&data.cv_texels.exact(destination[i]));
+      if (reads & kMaps) {
         prefetch(data.maps.tangent.data + 3 * destination[i]);
         prefetch(data.visibility.record_address(destination[i]));
       }
@@ -8236,10 +8285,10 @@ inline void prefetch_lines(const void* begin, std::size_t bytes) noexcept {
 // at a time (the samples land at random texels of planes and records of megabytes).
 template <class Visit>
 void visit_destinations(const EvalData& data, const BinShift& shift, const Footprint& rect,
-                        uint32_t count, Rng& rng, Visit visit, bool texel_maps = false) {
+                        uint32_t count, Rng& rng, Visit visit, unsigned reads) {
   PointBatch<16> chunk;
   auto flush = [&] {
-    chunk.resolve(data, shift, texel_maps);
+    chunk.resolve(data, shift, reads);
     for (uint32_t i = 0; i < chunk.count; ++i)
       visit(chunk.destination[i], chunk.points[i].x, chunk.points[i].y);
     chunk.count = 0;
@@ -8458,6 +8507,9 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   // and later estimates never pay a build (docs/evaluator.md).
   const bool whole_periods = cover.base == FootprintCover::Base::WholePeriods;
   const bool with_blocks = cover.base == FootprintCover::Base::Blocks;
+  // Without a base nothing integrates g exactly, so the control variate is g_V itself (no tables).
+  const bool without_base = cover.base == FootprintCover::Base::None;
+  const bool needs_g = !without_base || moments != nullptr;  // the pilot's moments read g
   for (int other = 0; other < 4; ++other)
     if (other != bin && frame.parallax_bins.weight[other] > 0.0) {
       const uint32_t index = uint32_t(frame.parallax_bins.index[other]);
@@ -8483,7 +8535,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   double stack_images[kStackImages];
   model::Buffer<double> heap_images;
   double* image_at_h = stack_images;
-  if (layout.images > kStackImages) {
+  if (needs_g && layout.images > kStackImages) {
     if (!heap_images.allocate(layout.images, data.allocator))
       return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
                            "cannot allocate the images' values at h");
@@ -8518,16 +8570,19 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const uint32_t blocks = data.subperiod.blocks();
   const BlockPoints corners = with_blocks ? block_points(cover.blocks, blocks) : BlockPoints{};
   if (whole_periods) prefetch_lines(sums, sizeof(double) * layout.count());
-  if (k.specular)
+  if (k.specular && needs_g)
     for (uint32_t q = 0; q < k.h_bins.count; ++q)
       prefetch_lines(data.specular.compressed.image_basis_row(k.h_bins.bin[q]),
                      sizeof(float) * layout.images);
   const bool reflect = frame.wi.z * frame.wo.z > 0.0;
   k.rank = data.visibility_rank();
-  k.texel_albedo = cover.base == FootprintCover::Base::None;
+  k.light = frame.wi_light;
+  k.h = frame.h;
 
   // The visibility basis at the light (the stored cluster means when the asset has no basis).
-  if (data.basis.is_open()) {
+  if (!needs_g) {
+    // g_V reads no basis.
+  } else if (data.basis.is_open()) {
     const model::DirectionGrid<double> grid{int(data.basis.dirs()), 0.0};
     const model::BinBilinear<double> b = grid.bilinear(frame.wi_light);
     for (uint32_t c = 0; c < clusters; ++c)
@@ -8567,9 +8622,10 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
   if (k.delta) k.delta_scale = t_sheen;
 
-  early.resolve(data, shift);  // the records asked for before the base is computed
+  // The records asked for before the base is computed.
+  early.resolve(data, shift, without_base ? kExact : kRecord);
 
-  if (k.specular) {
+  if (k.specular && needs_g) {
     const reader::CompressedRadianceTables& tables = data.specular.compressed;
     // The four bins' rows at once (a bilinear lookup with fewer bins pads with weight 0).
     const float* rows[4];
@@ -8615,46 +8671,29 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   const int64_t n = int64_t(data.n);
-  // With the visibility correction the residual is f - g_V, g with the texel's own visibility
-  // (which shade_texel has just computed), and the correction below integrates g_V - g.
-  const bool correct_visibility = data.corrects_visibility(frame.cos_i, !k.texel_albedo);
+  // The residual is f - g_V without a base, and with the visibility correction (which integrates
+  // g_V - g below); f - g otherwise.
+  const bool correct_visibility = !without_base && data.corrects_visibility(frame.cos_i);
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-    // texel_distribution, not shading's gap and D: the correction's samples below call it, and g_V
-    // must be one function of t on both sides.
-    const double distribution = correct_visibility ? texel_distribution(data, frame, t) : 0.0;
-    control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
-                    correct_visibility ? g_exact : nullptr, distribution);
-    const Rgb* against = correct_visibility ? g_exact : g;
+    if (!without_base) control_variate(data, k, t, g);
+    if (without_base || correct_visibility || moments != nullptr)
+      exact_variate(data, k, t, g_exact);
+    const Rgb* against = without_base || correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
-    if (moments != nullptr && correct_visibility) {  // the pilot's: no base, no parallax
-      Rgb base[model::kLobeCount], base_exact[model::kLobeCount], there[model::kLobeCount];
-      control_variate(data, k, t, false, base, 0, nullptr, shading.visibility, base_exact,
-                      distribution);
-      moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
-      moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
-      Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
-      const double side = moments->partner_side;
-      const double dx = partner.uniform() + side * (partner.uniform() - partner.uniform());
-      const double dy = partner.uniform() + side * (partner.uniform() - partner.uniform());
-      control_variate(data, k,
-                      data.texel(int64_t(t) % n + int64_t(std::floor(dx)),
-                                 int64_t(t) / n + int64_t(std::floor(dy))),
-                      true, there);
-      double d = 0.0;
-      for (int l = 0; l < model::kLobeCount; ++l)
-        d += (g[l] - there[l]).mean();
-      moments->pair_square += 0.5 * d * d;
-      moments->pairs += 1.0;
+    if (moments != nullptr) {  // the pilot's: f, g as the forms with a base use it, and g_V
+      if (without_base) control_variate(data, k, t, g);
+      moments->add(shading.lobes, g, g_exact);
     }
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
       residual_sample(early.destination[i], 0.0, 0.0);
   else
-    visit_destinations(data, shift, p, spp, rng, residual_sample, true);
+    visit_destinations(data, shift, p, spp, rng, residual_sample,
+                       without_base ? kExact | kMaps : kRecord | kExact | kMaps);
   // The rest of the integral of g by cheap samples, stratified over each region, each region's
   // mean times its area (footprint_cover.hpp): sign g over the whole-period form's rectangles (and
   // over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
@@ -8674,7 +8713,10 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     Rgb piece[model::kLobeCount];
     auto cheap_sample = [&](uint64_t t, double x, double y) {
       if (region.kind == CheapRegion::Kind::Signed) {
-        control_variate(data, k, t, k.texel_albedo, piece);
+        if (without_base)
+          exact_variate(data, k, t, piece);
+        else
+          control_variate(data, k, t, piece);
         return;
       }
       const bool in_p = region.kind == CheapRegion::Kind::Difference || inside(p, x, y);
@@ -8682,13 +8724,13 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       if (low_rank >= k.rank) {  // g_r is g: 1_P g - 1_A g, one evaluation or none
         if (in_p == in_a) return;
         Rgb g[model::kLobeCount];
-        control_variate(data, k, t, k.texel_albedo, g);
+        control_variate(data, k, t, g);
         for (int l = 0; l < model::kLobeCount; ++l)
           piece[l] += in_p ? g[l] : g[l] * -1.0;
         return;
       }
       Rgb g[model::kLobeCount], g_low[model::kLobeCount];
-      control_variate(data, k, t, k.texel_albedo, g, low_rank, g_low);
+      control_variate(data, k, t, g, low_rank, g_low);
       for (int l = 0; l < model::kLobeCount; ++l) {
         if (in_p) piece[l] += g[l];
         if (in_a) piece[l] += g_low[l] * -1.0;
@@ -8698,7 +8740,8 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       for (uint32_t i = 0; i < counts[r]; ++i, ++next)
         cheap_sample(early.destination[next], early.points[next].x, early.points[next].y);
     else
-      visit_destinations(data, shift, region.rect, counts[r], rng, cheap_sample);
+      visit_destinations(data, shift, region.rect, counts[r], rng, cheap_sample,
+                         without_base ? kExact : kRecord);
     const double scale = (region.kind == CheapRegion::Kind::Signed ? region.sign : 1.0) *
                          region.area / double(counts[r]);
     for (int l = 0; l < model::kLobeCount; ++l)
@@ -8715,13 +8758,12 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
         data, shift, p, corrections, rng,
         [&](uint64_t t, double, double) {
           Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-          control_variate(data, k, t, k.texel_albedo, g, 0, nullptr,
-                          texel_visibility(data, frame, t), g_exact,
-                          texel_distribution(data, frame, t));
+          control_variate(data, k, t, g);
+          exact_variate(data, k, t, g_exact);
           for (int l = 0; l < model::kLobeCount; ++l)
             correction[l] += g_exact[l] - g[l];
         },
-        true);
+        kRecord | kExact);
     for (Rgb& c : correction)
       c = c / double(corrections);
   }
@@ -9072,14 +9114,6 @@ double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_
   return v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
 }
 
-double texel_distribution(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept {
-  const float* tangent = data.maps.tangent.data + 3 * t;
-  const model::FibreSggx<double> sggx = model::FibreSggx<double>::make(
-      model::Vec3d(tangent[0], tangent[1], tangent[2]), data.yarns[data.maps.yarn_id[t]].roughness);
-  const double gap = data.maps.gap[t];  // as model::ClothBsdf reads it
-  return (std::isnan(gap) ? 1.0 : (gap > 0.0 ? (gap < 1.0 ? gap : 1.0) : 0.0)) * sggx.D(frame.h);
-}
-
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept {
   const uint64_t t = data.texel(x, y);
@@ -9109,17 +9143,10 @@ constexpr uint32_t kPilotEstimates = 64;  // per band
 constexpr uint32_t kPilotAttempts = 32 * kPilotEstimates;
 constexpr uint32_t kPilotSpp = 8;
 constexpr double kViewZ[4] = {1.0, 0.8, 0.55, 0.3};  // the views' o_z, in turn
-// The correction costs about as much as the rest of a 2-spp estimate (16 samples of 90-500 ns
-// against 2-3 us), so it must at least halve the residual's variance to pay; the measured assets
-// sit far on either side (docs/evaluator.md, "Where the correction pays").
-constexpr double kCorrectionPays = 0.5;
-// Without a base the cheap samples cost as much again as the residual's, so the correction adds
-// about half to an estimate (the goose-eye chair's 2-spp render: 0.070 s with it, 0.048 s
-// without): it pays when it removes a third of the variance.
-constexpr double kCorrectionPaysWithoutBase = 2.0 / 3.0;
-// The footprint whose cheap samples the pilot weighs for the form without a base: a quarter of the
-// tile a side, between that form's least footprint (a tenth of a tile) and the blocks' (0.7).
-constexpr double kReferenceSide = 0.25;
+// The correction adds about half to a 2-spp estimate (a whole 256^2 twill tile: 3.3-3.9 us with
+// it, 2.0-2.4 us without), so it pays where it removes a third of the residual's variance
+// (docs/evaluator.md, "Where the correction pays").
+constexpr double kCorrectionPays = 2.0 / 3.0;
 constexpr uint64_t kPilotSeed = 0x5eed'0f'7153'b11fULL;
 
 // A direction with z uniform in [z0, z1] and a uniform azimuth.
@@ -9134,7 +9161,7 @@ void direction(double z0, double z1, Rng& rng, double out[3]) {
 
 }  // namespace
 
-void ResidualMoments::add(Form form, const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept {
+void ResidualMoments::add(const Rgb* f, const Rgb* g, const Rgb* g_visibility) noexcept {
   double value[3] = {0, 0, 0};  // f - g, f - g_V, g_V - g
   for (int l = 0; l < model::kLobeCount; ++l) {
     value[kResidual] += (f[l] - g[l]).mean();
@@ -9142,23 +9169,16 @@ void ResidualMoments::add(Form form, const Rgb* f, const Rgb* g, const Rgb* g_vi
     value[kCorrection] += (g_visibility[l] - g[l]).mean();
   }
   for (int i = 0; i < 3; ++i) {
-    sum[form][i] += value[i];
-    square[form][i] += value[i] * value[i];
+    sum[i] += value[i];
+    square[i] += value[i] * value[i];
   }
-  count[form] += 1.0;
+  count += 1.0;
 }
 
 void run_visibility_pilot(EvalData* data) noexcept {
   const double n = double(data->n);
   const double kappa = double(data->options.visibility_samples);
-  Rng rng(kPilotSeed), partner_rng(kPilotSeed + 1);  // partners apart: rng draws as before
-  // The reference footprint's cheap samples at 2 spp: m of them on a jittered grid of cells of side
-  // `stratum`, so their mean's variance per residual sample is (2 / m) W, W the variance of g
-  // within a cell (half the mean squared difference of two points of one cell).
-  const double side = kReferenceSide * n;
-  const uint32_t m =
-      std::max<uint32_t>(1, remainder_samples(*data, no_base_cover({0, 0, side, side}), 2));
-  const double stratum = side / std::max(1.0, std::round(std::sqrt(double(m))));
+  Rng rng(kPilotSeed);
   // Without parallax: f and g are compared at the same texel either way, and the parallax table's
   // planes are decoded only for the view bins a caller meets (decoding them here took 135-175 ms).
   const bool parallax = data->options.parallax;
@@ -9166,7 +9186,7 @@ void run_visibility_pilot(EvalData* data) noexcept {
   for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
     const double z0 = std::max(0.02, double(band) / EvalData::kVisibilityBands);
     const double z1 = double(band + 1) / EvalData::kVisibilityBands;
-    double ratios[2][kPilotEstimates];  // per form and estimate: its variance with / without
+    double ratios[kPilotEstimates];  // per estimate: its variance with / without
     uint32_t count = 0;
     bool failed = false;
     for (uint32_t e = 0; e < kPilotAttempts && count < kPilotEstimates; ++e) {
@@ -9178,8 +9198,6 @@ void run_visibility_pilot(EvalData* data) noexcept {
       Status status;
       Estimate estimate;
       ResidualMoments moments;
-      moments.partner_side = stratum;
-      moments.partner_rng = &partner_rng;
       if (!make_frame(*data, wi, wo, kAllLobes, &frame, &status)) continue;
       const double h[3] = {frame.h.x, frame.h.y, frame.h.z};
       if (!data->specular.tables->covers_bins(h)) continue;
@@ -9194,22 +9212,14 @@ void run_visibility_pilot(EvalData* data) noexcept {
         break;
       }
       using M = ResidualMoments;
-      if (moments.count[0] < 2.0 || !(moments.variance(M::kWithBase, M::kResidual) > 0.0) ||
-          !(moments.variance(M::kWithoutBase, M::kResidual) > 0.0))
-        continue;
-      const double cheap[2] = {0.0, 2.0 / double(m) * moments.pair_square / moments.pairs};
-      for (const M::Form form : {M::kWithBase, M::kWithoutBase})
-        ratios[form][count] = (moments.variance(form, M::kCorrectedResidual) +
-                               moments.variance(form, M::kCorrection) / kappa + cheap[form]) /
-                              (moments.variance(form, M::kResidual) + cheap[form]);
-      ++count;
+      if (moments.count < 2.0 || !(moments.variance(M::kResidual) > 0.0)) continue;
+      ratios[count++] =
+          (moments.variance(M::kCorrectedResidual) + moments.variance(M::kCorrection) / kappa) /
+          moments.variance(M::kResidual);
     }
-    const double threshold[2] = {kCorrectionPays, kCorrectionPaysWithoutBase};
-    for (int form = 0; form < 2; ++form) {
-      std::nth_element(ratios[form], ratios[form] + count / 2, ratios[form] + count);
-      data->visibility_pays[form][band] =
-          failed || count < kPilotEstimates / 4 || ratios[form][count / 2] <= threshold[form];
-    }
+    std::nth_element(ratios, ratios + count / 2, ratios + count);
+    data->visibility_pays[band] =
+        failed || count < kPilotEstimates / 4 || ratios[count / 2] <= kCorrectionPays;
   }
   data->options.parallax = parallax;
 }

@@ -2,6 +2,10 @@
 #include "eval/cv_texels.hpp"
 
 #include <algorithm>
+#include <cmath>
+
+#include "model/asg.hpp"
+#include "model/sggx.hpp"
 
 #include "eval/eval_data.hpp"
 
@@ -60,6 +64,34 @@ bool ControlVariateTexels::build(const EvalData& data) noexcept {
       for (uint32_t j = 1; j < count; ++j)
         q[j - 1] = int16_t(weights[j]);
     }
+  }
+  if (!exact_.allocate(texels, data.allocator)) return false;
+  for (uint64_t t = 0; t < texels; ++t) {
+    Exact& x = exact_[t];
+    const model::AsgParams<double> lobe = data.visibility.lobe_at(t);
+    const model::Asg<double> asg = model::asg_from_params(lobe);
+    x.axis[0] = float(asg.z.x);
+    x.axis[1] = float(asg.z.y);
+    x.axis[2] = float(asg.z.z);
+    x.rotation[0] = float(std::cos(lobe.rotation));
+    x.rotation[1] = float(std::sin(lobe.rotation));
+    x.lambda = float(asg.lambda);
+    x.mu = float(asg.mu);
+    x.amplitude = float(asg.amplitude);
+    const float* tangent = data.maps.tangent.data + 3 * t;
+    const model::FibreSggx<double> sggx =
+        model::FibreSggx<double>::make(model::Vec3d(tangent[0], tangent[1], tangent[2]), 0.5);
+    x.tangent[0] = float(sggx.t.x);
+    x.tangent[1] = float(sggx.t.y);
+    x.tangent[2] = float(sggx.t.z);
+    const double gap = data.maps.gap[t];
+    x.gap = float(std::isnan(gap) ? 1.0 : std::clamp(gap, 0.0, 1.0));
+    for (int c = 0; c < 3; ++c)
+      x.colour[c] = data.maps.albedo.data[3 * t + c];
+    x.yarn = data.maps.yarn_id[t];
+    const ControlVariateTexels::Header& h = header(t);
+    x.cluster = uint8_t(h.count > 0 ? data.image_cluster[h.first_image] : h.label);
+    x.padding = 0;
   }
   return true;
 }

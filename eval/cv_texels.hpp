@@ -47,6 +47,20 @@ class ControlVariateTexels {
     float colour[3];
   };
   static_assert(sizeof(Header) == 24);
+  // What g_V, g with the texel's own visibility, fibre distribution and specular albedo, reads at
+  // texel t (docs/evaluator.md, "Unbiased multi-scale"): one cache line.
+  struct alignas(64) Exact {
+    float axis[3];      // the visibility lobe's unit axis z
+    float rotation[2];  // cos psi, sin psi (x = cos psi s + sin psi t, (s, t) the axis's basis)
+    float lambda, mu, amplitude;
+    float tangent[3];  // the fibre tangent, unit (+z where the map's is zero or not finite)
+    float gap;         // I(t) clamped to [0, 1], NaN read as 1 (as model::ClothBsdf)
+    float colour[3];   // the albedo map's RGB
+    uint16_t yarn;     // the texel's yarn index
+    uint8_t cluster;   // the cluster whose yarn attenuation scales the specular lobe
+    uint8_t padding;
+  };
+  static_assert(sizeof(Exact) == 64);
 
   // Builds the records of every texel from `data`'s open views (the compressed specular tables
   // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 9.4 MB
@@ -71,6 +85,7 @@ class ControlVariateTexels {
                                             4 * std::size_t(rank_));
   }
   const void* address(uint64_t t) const noexcept { return bytes() + t * stride_; }
+  const Exact& exact(uint64_t t) const noexcept { return exact_[t]; }
 
  private:
   struct alignas(64) CacheLine {
@@ -80,6 +95,7 @@ class ControlVariateTexels {
     return reinterpret_cast<const unsigned char*>(lines_.data());
   }
   model::Buffer<CacheLine> lines_;  // the records, from the evaluator's allocator
+  model::Buffer<Exact> exact_;      // g_V's records
   uint32_t stride_ = 0, rank_ = 0;
 };
 

@@ -90,23 +90,17 @@ struct EvalData {
   model::Buffer<uint32_t> cluster_image_begin;
   PushforwardSums pushforward;     // the unbiased form's whole-tile sums (pushforward_sums.hpp)
   SubperiodSums subperiod;         // its block sums (subperiod_sums.hpp; not open: no block form)
-  ControlVariateTexels cv_texels;  // the unbiased form's per-texel records of g (cv_texels.hpp)
-  // The weave's float length: the mean length in texels of a run of one yarn along the tile's rows
-  // and columns, 2 N^2 / (changes of yarn id between neighbours, wrapping, along both axes); N
-  // when the tile has one yarn. The scale below which a footprint holds too little of the weave
-  // for the control variate to pay (EvalOptions::min_control_variate_floats).
-  double yarn_run = 0;
+  ControlVariateTexels cv_texels;  // the unbiased form's per-texel records of g and g_V
+                                   // (cv_texels.hpp)
   // Per band of the light's elevation |i_z| (kVisibilityBands bands of equal width): whether the
   // unbiased form's visibility correction runs there (visibility_pilot.cpp decides at open).
   static constexpr int kVisibilityBands = 4;
-  // Per form of g: [0] with a base (the cluster's mean specular albedo), [1] without (each
-  // texel's own, and the cheap samples of the whole footprint).
-  bool visibility_pays[2][kVisibilityBands] = {{true, true, true, true}, {true, true, true, true}};
-  bool corrects_visibility(double cos_i, bool with_base) const {
+  // (Only the forms with a base correct: without one the control variate is g_V itself.)
+  bool visibility_pays[kVisibilityBands] = {true, true, true, true};
+  bool corrects_visibility(double cos_i) const {
     const int band = int(cos_i * kVisibilityBands);  // cos_i = |i_z| in [0, 1]
     return options.visibility_samples > 0 &&
-           visibility_pays[with_base ? 0 : 1]
-                          [band < kVisibilityBands ? band : kVisibilityBands - 1];
+           visibility_pays[band < kVisibilityBands ? band : kVisibilityBands - 1];
   }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;

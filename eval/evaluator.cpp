@@ -121,12 +121,10 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                          "max_block_sum_bytes must be >= 0");
   if (unsigned(options.footprint_base) > unsigned(FootprintBase::None))
     return Status::error(ErrorCode::InvalidArgument, Check::None, "unknown footprint_base");
-  if (!(options.min_control_variate_tiles >= 0.0) ||
-      !std::isfinite(options.min_control_variate_tiles) ||
-      !(options.min_control_variate_floats >= 0.0) ||
-      !std::isfinite(options.min_control_variate_floats))
+  if (!(options.min_control_variate_side >= 0.0) ||
+      !std::isfinite(options.min_control_variate_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
-                         "min_control_variate_tiles and _floats must be finite and >= 0");
+                         "min_control_variate_side must be finite and >= 0");
   if (!(options.direct_max_side >= 0.0) || !std::isfinite(options.direct_max_side))
     return Status::error(ErrorCode::InvalidArgument, Check::None,
                          "direct_max_side must be finite and >= 0");
@@ -167,17 +165,6 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                            "texel (%u, %u) has yarn id %u but the asset has %u yarn records",
                            unsigned(t % d->n), unsigned(t / d->n), unsigned(d->maps.yarn_id[t]),
                            unsigned(yarns.size));
-  {
-    uint64_t changes = 0;
-    const uint32_t n = d->n;
-    for (uint32_t y = 0; y < n; ++y)
-      for (uint32_t x = 0; x < n; ++x) {
-        const uint16_t here = d->maps.yarn_id[uint64_t(y) * n + x];
-        changes += here != d->maps.yarn_id[uint64_t(y) * n + (x + 1) % n];
-        changes += here != d->maps.yarn_id[uint64_t((y + 1) % n) * n + x];
-      }
-    d->yarn_run = changes > 0 ? 2.0 * double(n) * n / double(changes) : double(n);
-  }
   d->sheen_color = Rgb(fabric->sheen_color[0], fabric->sheen_color[1], fabric->sheen_color[2]);
   d->sheen_roughness = fabric->sheen_roughness;
 
@@ -453,14 +440,10 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   // Too small a footprint for the control variate to pay is brute force's without further ado;
   // otherwise its cover, once per estimate, decides the branch and the estimator uses it.
   const bool unbiased_multiscale = method == Method::Multiscale && !direct;
-  const bool too_small =
-      unbiased_multiscale &&
-      w * h < square(std::max(data_->options.min_control_variate_tiles * double(data_->n),
-                              data_->options.min_control_variate_floats * data_->yarn_run));
-  const FootprintCover cover =
-      unbiased_multiscale && !too_small ? cover_footprint(*data_, footprint) : FootprintCover{};
   const bool without_cv =
-      too_small || (unbiased_multiscale && cover.remainder > data_->options.max_remainder_fraction);
+      unbiased_multiscale && w * h < square(data_->options.min_control_variate_side);
+  const FootprintCover cover =
+      unbiased_multiscale && !without_cv ? cover_footprint(*data_, footprint) : FootprintCover{};
   if (multiscale && !direct && !without_cv) {  // a scene-planned asset answers only the half
                                                // vectors it kept
     const double hv[3] = {frame.h.x, frame.h.y, frame.h.z};

@@ -124,20 +124,20 @@ struct EvalOptions {
   // residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
   // visibility_samples > 0. Either keeps the estimate unbiased.
   bool visibility_pilot = true;
-  // The unbiased multi-scale form uses its control variate on a footprint P when the effective
-  // remainder its cover leaves to cheap samples (eval/footprint_cover.hpp: the part of P outside
-  // the exactly integrated base, weighted by its integrand's spread) is at most this fraction of
-  // |P|; otherwise P is sampled as brute force. Any value keeps the estimate unbiased;
-  // docs/evaluator.md gives the measured choice.
-  double max_remainder_fraction = 1.0;
-  // Footprints whose geometric mean side (the square root of their area) is below this fraction
-  // of the tile, or below min_control_variate_floats float lengths of the weave (the mean run of
-  // one yarn along the tile's rows and columns), are sampled as brute force by the unbiased
-  // multi-scale form: over so little of the weave the integrand varies too little for the control
-  // variate's per-estimate cost to pay (docs/evaluator.md, "Footprints the control variate does not
-  // pay for", gives the measured crossovers). 0: no bound.
-  double min_control_variate_tiles = 0.1;
-  double min_control_variate_floats = 1.0;
+  // The unbiased multi-scale form integrates its control variate exactly over whole periods or
+  // whole source blocks of a footprint P when the effective remainder that base leaves to cheap
+  // samples (eval/footprint_cover.hpp: the part of P outside the exactly integrated base, weighted
+  // by its integrand's spread and cost) is at most this fraction of |P|; above it, P takes the form
+  // without a base, whose control variate g_V (each texel's own visibility, fibre distribution and
+  // albedo) follows f more closely than any g with one but is integrated by cheap samples alone.
+  // Any value keeps the estimate unbiased; docs/evaluator.md gives the measured choice.
+  double max_remainder_fraction = 0.75;
+  // Footprints whose geometric mean side (the square root of their area) is below this many
+  // texels are sampled as brute force by the unbiased multi-scale form: over so few texels brute
+  // force's stratified samples already see most of the integrand, and the control variate's
+  // per-estimate cost does not pay (docs/evaluator.md, "Footprints the control variate does not
+  // pay for", gives the measured crossover). 0: no bound.
+  double min_control_variate_side = 2.0;
   // The base region of the unbiased multi-scale form (eval/footprint_cover.hpp): Auto takes, per
   // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder;
   // the others force one form (for studies: docs/evaluator.md, "Footprints below a period").

@@ -14,13 +14,14 @@
 //                  samples take g - g_r (nothing when r is the full rank), and up to four strips of
 //                  the box around P ∪ A outside I, where they take 1_P g - 1_A g_r:
 //                    ∫_P g = ∫_A g_r + ∫_I (g - g_r) + Σ_strips ∫ (1_P g - 1_A g_r).
-//                  A footprint that rounds to no block has A empty: the whole of P by cheap
-//                  samples.
-// Each form leaves an effective remainder e: the whole-period form |A Δ P| / |P|; the block form
-// (|A Δ P| + σ_r |I|) / |P|, σ_r the spread of g - g_r relative to g's (kBlockInteriorSpread).
-// The cover takes the form of the smaller e (whole periods on ties); e also sets the number of
-// cheap samples (remainder_samples) and, above EvalOptions::max_remainder_fraction, sends P to
-// brute force.
+//                  A footprint that rounds to no block has A empty: no base.
+// Each form with a base leaves an effective remainder e: the whole-period form |A Δ P| / |P|; the
+// block form (|A Δ P| + σ_r |I|) / |P|, σ_r the spread of g - g_r relative to g's
+// (kBlockInteriorSpread). The cover takes the form of the smaller e (whole periods on ties; the
+// block form's e weighed with what its base costs beyond one vector of sums) and, where that
+// exceeds EvalOptions::max_remainder_fraction, no base: the whole of P by cheap samples of g_V,
+// the control variate with each texel's own visibility, fibre distribution and albedo. e also sets
+// the number of cheap samples (remainder_samples).
 //
 // C++17, standard library only, no allocation. Safe on any finite footprint of positive area.
 // Internal to the evaluator library.
@@ -79,7 +80,8 @@ struct FootprintCover {
   double remainder = 0;  // the effective remainder e of the form taken
 };
 
-// No base: the whole of P (positive area) as one region of cheap samples of g (remainder 1).
+// No base: the whole of P (positive area) as one region of cheap samples of g_V (effective
+// remainder 2: footprint_cover.cpp, kWithoutBaseRemainder).
 FootprintCover no_base_cover(const Footprint& footprint) noexcept;
 
 // The cover of P (positive area) for `data`'s tables and options (EvalOptions::footprint_base):

@@ -31,30 +31,67 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 struct PushforwardConstants : ActiveLobes {
   Rgb diffuse_scale, sheen_scale, delta_scale;
   uint32_t rank = 0;
-  // g_spec with each texel's own specular albedo alpha(t) (the yarn's times its colour) instead of
-  // the cluster mean kbar_c: exact where threads of one yarn are dyed differently (a draft's warp
-  // colours), but the bins' sums hold no colour, so only a cover without a base (g only at points)
-  // uses it.
-  bool texel_albedo = false;
   // Per cluster: b_cj(i), j = 0..M (plain arrays: the 255-cluster capacity costs nothing).
   double vis[reader::kMaxVisibilityClusters][kMaxRank + 1];
   Rgb specular_scale[reader::kMaxVisibilityClusters];     // s_c
-  Rgb attenuation_scale[reader::kMaxVisibilityClusters];  // s_c without kbar_c (texel_albedo)
+  Rgb attenuation_scale[reader::kMaxVisibilityClusters];  // s_c without kbar_c (g_V's)
   // Per compressed image i: sum_b w_b(h) basis_i(b), the image's value at h (the table value of a
   // texel is the sum of its image weights times these).
   const double* image_at_h = nullptr;
+  // g_V's: the light direction of the visibility look-ups and h (ShadingFrame's).
+  model::Vec3d light, h;
 };
 
-// g of every lobe asked for at texel index t (< N^2), with the texel's own specular albedo when
-// `texel_albedo` (k.texel_albedo; the pilot asks for both), added to g[]; when `low` is not null
-// g_r, the same with the visibility basis cut at rank `low_rank`, added to low[]; when `exact` is
-// not null g_V, g with the texel's own visibility V in place of v(t), its own I(t) D_t(h)
-// (`distribution`, texel_distribution) in place of the table value T(t, h) and its own specular
-// albedo, added to exact[]: one packed record (cv_texels.hpp) and the per-estimate constants.
+// g_V at texel index t (< N^2), added to exact[]: g with the texel's own visibility V(t, i), its
+// own I(t) D_t(h) in place of the table value and its own specular albedo, from its one-line
+// record (cv_texels.hpp's Exact).
+void exact_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
+                   Rgb exact[model::kLobeCount]) {
+  const ControlVariateTexels::Exact& x = data.cv_texels.exact(t);
+  const model::Vec3d z(x.axis[0], x.axis[1], x.axis[2]);
+  double visibility = 0.0;
+  const double vz = dot(k.light, z);
+  if (vz > 0.0) {
+    model::Vec3d s, u;
+    model::orthonormal_basis(z, s, u);
+    const double a = dot(k.light, s), b = dot(k.light, u);
+    const double c = x.rotation[0], sn = x.rotation[1];
+    const double vx = c * a + sn * b, vy = c * b - sn * a;
+    visibility =
+        double(x.amplitude) * std::exp(-double(x.lambda) * vx * vx - double(x.mu) * vy * vy);
+    visibility = visibility > 1.0 ? 1.0 : visibility;
+  }
+  const YarnShading& yarn = data.yarns[x.yarn];
+  const double gap = x.gap;
+  const Rgb colour(x.colour[0], x.colour[1], x.colour[2]);
+  if (k.specular) {
+    model::FibreSggx<double> sggx;
+    sggx.t = model::Vec3d(x.tangent[0], x.tangent[1], x.tangent[2]);
+    double sigma = yarn.roughness;
+    if (!(sigma >= model::kMinFibreRoughness<double>))
+      sigma = std::isnan(sigma) ? 1.0 : model::kMinFibreRoughness<double>;
+    if (sigma > 1.0) sigma = 1.0;
+    sggx.sigma2 = sigma * sigma;
+    sggx.one_minus_sigma2 = (1.0 - sigma) * (1.0 + sigma);
+    sggx.d_norm = sigma * sigma * sigma / model::kPi<double>;
+    exact[int(k.specular_lobe)] += k.attenuation_scale[x.cluster] * yarn.specular_albedo * colour *
+                                   (gap * sggx.D(k.h) * visibility);
+  }
+  if (k.diffuse) {
+    const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
+                                                                  : yarn.diffuse_transmittance) *
+                       colour;
+    exact[int(k.diffuse_lobe)] += k.diffuse_scale * albedo * (gap * visibility);
+  }
+  if (k.sheen) exact[int(Lobe::Sheen)] += k.sheen_scale * visibility;
+  if (k.delta) exact[int(Lobe::DeltaTransmission)] += k.delta_scale * ((1.0 - gap) * visibility);
+}
+
+// g of every lobe asked for at texel index t (< N^2), added to g[]; when `low` is not null g_r, the
+// same with the visibility basis cut at rank `low_rank`, added to low[]: one packed record
+// (cv_texels.hpp) and the per-estimate constants.
 void control_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
-                     bool texel_albedo, Rgb g[model::kLobeCount], uint32_t low_rank = 0,
-                     Rgb* low = nullptr, double visibility = 0.0, Rgb* exact = nullptr,
-                     double distribution = 0.0) {
+                     Rgb g[model::kLobeCount], uint32_t low_rank = 0, Rgb* low = nullptr) {
   const ControlVariateTexels& records = data.cv_texels;
   const ControlVariateTexels::Header& texel = records.header(t);
   const double* b = k.vis[texel.label];
@@ -64,12 +101,10 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     v += b[j + 1] * double(e[j]);
     if (j + 1 == low_rank) v_low = v;
   }
-  // Each lobe's factor and scalar without the visibility, then times v (and v_low); g_V's own.
-  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar, const Rgb& exact_factor,
-                 double exact_scalar) {
+  // Each lobe's factor and scalar without the visibility, then times v (and v_low).
+  auto add = [&](model::Lobe lobe, const Rgb& factor, double scalar) {
     g[int(lobe)] += factor * (scalar * v);
     if (low) low[int(lobe)] += factor * (scalar * v_low);
-    if (exact) exact[int(lobe)] += exact_factor * (exact_scalar * visibility);
   };
   const double gap = texel.gap;
   const Rgb colour(texel.colour[0], texel.colour[1], texel.colour[2]);
@@ -81,21 +116,17 @@ void control_variate(const EvalData& data, const PushforwardConstants& k, uint64
     double value = at_h[0];
     for (uint32_t j = 1; j < texel.count; ++j)
       value += double(q[j - 1]) * at_h[j];
-    const uint32_t c = data.image_cluster[texel.first_image];
-    const Rgb own = texel_albedo || exact
-                        ? k.attenuation_scale[c] * data.yarns[texel.yarn].specular_albedo * colour
-                        : Rgb();
-    add(k.specular_lobe, texel_albedo ? own : k.specular_scale[c], value, own, distribution);
+    add(k.specular_lobe, k.specular_scale[data.image_cluster[texel.first_image]], value);
   }
   if (k.diffuse) {
     const YarnShading& yarn = data.yarns[texel.yarn];
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
                                                                   : yarn.diffuse_transmittance) *
                        colour;
-    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap, k.diffuse_scale * albedo, gap);
+    add(k.diffuse_lobe, k.diffuse_scale * albedo, gap);
   }
-  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0, k.sheen_scale, 1.0);
-  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap, k.delta_scale, 1.0 - gap);
+  if (k.sheen) add(Lobe::Sheen, k.sheen_scale, 1.0);
+  if (k.delta) add(Lobe::DeltaTransmission, k.delta_scale, 1.0 - gap);
 }
 
 inline void prefetch(const void* address) noexcept {
@@ -118,6 +149,8 @@ inline void prefetch_record(const EvalData& data, uint64_t t) noexcept {
 // Up to kCapacity sample points of one view bin in two stages, so that their cache misses overlap:
 // add() keeps a point and prefetches its source texel's parallax code; resolve() computes every
 // kept point's destination texel and prefetches its record. The caller evaluates afterwards.
+enum Reads : unsigned { kRecord = 1, kExact = 2, kMaps = 4 };
+
 template <uint32_t kCapacity>
 struct PointBatch {
   struct Point {
@@ -133,14 +166,16 @@ struct PointBatch {
     prefetch(source_code(shift, source));
     points[count++] = {x, y, source};
   }
-  // `texel_maps`: also the destination's tangent and visibility lobe, which g_V reads.
-  void resolve(const EvalData& data, const BinShift& shift, bool texel_maps = false) noexcept {
+  // What of each destination to prefetch (Reads): its record of g, its record of g_V, the maps
+  // shade_texel reads besides (the tangent and the visibility lobe).
+  void resolve(const EvalData& data, const BinShift& shift, unsigned reads) noexcept {
     for (uint32_t i = 0; i < count; ++i) {
       int64_t tx = 0, ty = 0;
       shifted_destination(shift, points[i].source, points[i].x, points[i].y, &tx, &ty);
       destination[i] = data.texel(tx, ty);
-      prefetch_record(data, destination[i]);
-      if (texel_maps) {
+      if (reads & kRecord) prefetch_record(data, destination[i]);
+      if (reads & kExact) prefetch(&data.cv_texels.exact(destination[i]));
+      if (reads & kMaps) {
         prefetch(data.maps.tangent.data + 3 * destination[i]);
         prefetch(data.visibility.record_address(destination[i]));
       }
@@ -162,10 +197,10 @@ inline void prefetch_lines(const void* begin, std::size_t bytes) noexcept {
 // at a time (the samples land at random texels of planes and records of megabytes).
 template <class Visit>
 void visit_destinations(const EvalData& data, const BinShift& shift, const Footprint& rect,
-                        uint32_t count, Rng& rng, Visit visit, bool texel_maps = false) {
+                        uint32_t count, Rng& rng, Visit visit, unsigned reads) {
   PointBatch<16> chunk;
   auto flush = [&] {
-    chunk.resolve(data, shift, texel_maps);
+    chunk.resolve(data, shift, reads);
     for (uint32_t i = 0; i < chunk.count; ++i)
       visit(chunk.destination[i], chunk.points[i].x, chunk.points[i].y);
     chunk.count = 0;
@@ -384,6 +419,9 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   // and later estimates never pay a build (docs/evaluator.md).
   const bool whole_periods = cover.base == FootprintCover::Base::WholePeriods;
   const bool with_blocks = cover.base == FootprintCover::Base::Blocks;
+  // Without a base nothing integrates g exactly, so the control variate is g_V itself (no tables).
+  const bool without_base = cover.base == FootprintCover::Base::None;
+  const bool needs_g = !without_base || moments != nullptr;  // the pilot's moments read g
   for (int other = 0; other < 4; ++other)
     if (other != bin && frame.parallax_bins.weight[other] > 0.0) {
       const uint32_t index = uint32_t(frame.parallax_bins.index[other]);
@@ -409,7 +447,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   double stack_images[kStackImages];
   model::Buffer<double> heap_images;
   double* image_at_h = stack_images;
-  if (layout.images > kStackImages) {
+  if (needs_g && layout.images > kStackImages) {
     if (!heap_images.allocate(layout.images, data.allocator))
       return Status::error(reader::ErrorCode::Unsupported, reader::Check::None,
                            "cannot allocate the images' values at h");
@@ -444,16 +482,19 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   const uint32_t blocks = data.subperiod.blocks();
   const BlockPoints corners = with_blocks ? block_points(cover.blocks, blocks) : BlockPoints{};
   if (whole_periods) prefetch_lines(sums, sizeof(double) * layout.count());
-  if (k.specular)
+  if (k.specular && needs_g)
     for (uint32_t q = 0; q < k.h_bins.count; ++q)
       prefetch_lines(data.specular.compressed.image_basis_row(k.h_bins.bin[q]),
                      sizeof(float) * layout.images);
   const bool reflect = frame.wi.z * frame.wo.z > 0.0;
   k.rank = data.visibility_rank();
-  k.texel_albedo = cover.base == FootprintCover::Base::None;
+  k.light = frame.wi_light;
+  k.h = frame.h;
 
   // The visibility basis at the light (the stored cluster means when the asset has no basis).
-  if (data.basis.is_open()) {
+  if (!needs_g) {
+    // g_V reads no basis.
+  } else if (data.basis.is_open()) {
     const model::DirectionGrid<double> grid{int(data.basis.dirs()), 0.0};
     const model::BinBilinear<double> b = grid.bilinear(frame.wi_light);
     for (uint32_t c = 0; c < clusters; ++c)
@@ -493,9 +534,10 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
   if (k.delta) k.delta_scale = t_sheen;
 
-  early.resolve(data, shift);  // the records asked for before the base is computed
+  // The records asked for before the base is computed.
+  early.resolve(data, shift, without_base ? kExact : kRecord);
 
-  if (k.specular) {
+  if (k.specular && needs_g) {
     const reader::CompressedRadianceTables& tables = data.specular.compressed;
     // The four bins' rows at once (a bilinear lookup with fewer bins pads with weight 0).
     const float* rows[4];
@@ -541,46 +583,29 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   Rgb residual[model::kLobeCount];
   TexelShading shading;
   const int64_t n = int64_t(data.n);
-  // With the visibility correction the residual is f - g_V, g with the texel's own visibility
-  // (which shade_texel has just computed), and the correction below integrates g_V - g.
-  const bool correct_visibility = data.corrects_visibility(frame.cos_i, !k.texel_albedo);
+  // The residual is f - g_V without a base, and with the visibility correction (which integrates
+  // g_V - g below); f - g otherwise.
+  const bool correct_visibility = !without_base && data.corrects_visibility(frame.cos_i);
   auto residual_sample = [&](uint64_t t, double, double) {
     shade_texel(data, frame, int64_t(t) % n, int64_t(t) / n, &shading);
     Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-    // texel_distribution, not shading's gap and D: the correction's samples below call it, and g_V
-    // must be one function of t on both sides.
-    const double distribution = correct_visibility ? texel_distribution(data, frame, t) : 0.0;
-    control_variate(data, k, t, k.texel_albedo, g, 0, nullptr, shading.visibility,
-                    correct_visibility ? g_exact : nullptr, distribution);
-    const Rgb* against = correct_visibility ? g_exact : g;
+    if (!without_base) control_variate(data, k, t, g);
+    if (without_base || correct_visibility || moments != nullptr)
+      exact_variate(data, k, t, g_exact);
+    const Rgb* against = without_base || correct_visibility ? g_exact : g;
     for (int l = 0; l < model::kLobeCount; ++l)
       residual[l] += shading.lobes[l] - against[l];
-    if (moments != nullptr && correct_visibility) {  // the pilot's: no base, no parallax
-      Rgb base[model::kLobeCount], base_exact[model::kLobeCount], there[model::kLobeCount];
-      control_variate(data, k, t, false, base, 0, nullptr, shading.visibility, base_exact,
-                      distribution);
-      moments->add(ResidualMoments::kWithBase, shading.lobes, base, base_exact);
-      moments->add(ResidualMoments::kWithoutBase, shading.lobes, g, g_exact);
-      Rng& partner = *moments->partner_rng;  // a point within a cell of side partner_side
-      const double side = moments->partner_side;
-      const double dx = partner.uniform() + side * (partner.uniform() - partner.uniform());
-      const double dy = partner.uniform() + side * (partner.uniform() - partner.uniform());
-      control_variate(data, k,
-                      data.texel(int64_t(t) % n + int64_t(std::floor(dx)),
-                                 int64_t(t) / n + int64_t(std::floor(dy))),
-                      true, there);
-      double d = 0.0;
-      for (int l = 0; l < model::kLobeCount; ++l)
-        d += (g[l] - there[l]).mean();
-      moments->pair_square += 0.5 * d * d;
-      moments->pairs += 1.0;
+    if (moments != nullptr) {  // the pilot's: f, g as the forms with a base use it, and g_V
+      if (without_base) control_variate(data, k, t, g);
+      moments->add(shading.lobes, g, g_exact);
     }
   };
   if (drawn_early)
     for (uint32_t i = 0; i < spp; ++i)
       residual_sample(early.destination[i], 0.0, 0.0);
   else
-    visit_destinations(data, shift, p, spp, rng, residual_sample, true);
+    visit_destinations(data, shift, p, spp, rng, residual_sample,
+                       without_base ? kExact | kMaps : kRecord | kExact | kMaps);
   // The rest of the integral of g by cheap samples, stratified over each region, each region's
   // mean times its area (footprint_cover.hpp): sign g over the whole-period form's rectangles (and
   // over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
@@ -600,7 +625,10 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
     Rgb piece[model::kLobeCount];
     auto cheap_sample = [&](uint64_t t, double x, double y) {
       if (region.kind == CheapRegion::Kind::Signed) {
-        control_variate(data, k, t, k.texel_albedo, piece);
+        if (without_base)
+          exact_variate(data, k, t, piece);
+        else
+          control_variate(data, k, t, piece);
         return;
       }
       const bool in_p = region.kind == CheapRegion::Kind::Difference || inside(p, x, y);
@@ -608,13 +636,13 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       if (low_rank >= k.rank) {  // g_r is g: 1_P g - 1_A g, one evaluation or none
         if (in_p == in_a) return;
         Rgb g[model::kLobeCount];
-        control_variate(data, k, t, k.texel_albedo, g);
+        control_variate(data, k, t, g);
         for (int l = 0; l < model::kLobeCount; ++l)
           piece[l] += in_p ? g[l] : g[l] * -1.0;
         return;
       }
       Rgb g[model::kLobeCount], g_low[model::kLobeCount];
-      control_variate(data, k, t, k.texel_albedo, g, low_rank, g_low);
+      control_variate(data, k, t, g, low_rank, g_low);
       for (int l = 0; l < model::kLobeCount; ++l) {
         if (in_p) piece[l] += g[l];
         if (in_a) piece[l] += g_low[l] * -1.0;
@@ -624,7 +652,8 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       for (uint32_t i = 0; i < counts[r]; ++i, ++next)
         cheap_sample(early.destination[next], early.points[next].x, early.points[next].y);
     else
-      visit_destinations(data, shift, region.rect, counts[r], rng, cheap_sample);
+      visit_destinations(data, shift, region.rect, counts[r], rng, cheap_sample,
+                         without_base ? kExact : kRecord);
     const double scale = (region.kind == CheapRegion::Kind::Signed ? region.sign : 1.0) *
                          region.area / double(counts[r]);
     for (int l = 0; l < model::kLobeCount; ++l)
@@ -641,13 +670,12 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
         data, shift, p, corrections, rng,
         [&](uint64_t t, double, double) {
           Rgb g[model::kLobeCount], g_exact[model::kLobeCount];
-          control_variate(data, k, t, k.texel_albedo, g, 0, nullptr,
-                          texel_visibility(data, frame, t), g_exact,
-                          texel_distribution(data, frame, t));
+          control_variate(data, k, t, g);
+          exact_variate(data, k, t, g_exact);
           for (int l = 0; l < model::kLobeCount; ++l)
             correction[l] += g_exact[l] - g[l];
         },
-        true);
+        kRecord | kExact);
     for (Rgb& c : correction)
       c = c / double(corrections);
   }

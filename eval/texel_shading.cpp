@@ -165,14 +165,6 @@ double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_
   return v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v);
 }
 
-double texel_distribution(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept {
-  const float* tangent = data.maps.tangent.data + 3 * t;
-  const model::FibreSggx<double> sggx = model::FibreSggx<double>::make(
-      model::Vec3d(tangent[0], tangent[1], tangent[2]), data.yarns[data.maps.yarn_id[t]].roughness);
-  const double gap = data.maps.gap[t];  // as model::ClothBsdf reads it
-  return (std::isnan(gap) ? 1.0 : (gap > 0.0 ? (gap < 1.0 ? gap : 1.0) : 0.0)) * sggx.D(frame.h);
-}
-
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept {
   const uint64_t t = data.texel(x, y);

@@ -124,11 +124,6 @@ void integrand_lobes(const ShadingFrame& frame, const model::LobeValues<double>&
 // [0, 1], the visibility the integrand uses. No allocation.
 double texel_visibility(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
 
-// I(t) D_t(h) of texel index t (< N^2): its gap weight times its fibre SGGX's distribution at the
-// frame's h (the texel's tangent and its yarn's roughness), the factor of f's specular lobes that
-// the tables hold per bin. No allocation.
-double texel_distribution(const EvalData& data, const ShadingFrame& frame, uint64_t t) noexcept;
-
 // g(t) of texel (x, y) (any integers: the tile wraps).
 void shade_texel(const EvalData& data, const ShadingFrame& frame, int64_t x, int64_t y,
                  TexelShading* out) noexcept;

@@ -17,6 +17,9 @@
 //                to P from the bin's block prefix sums, the rest by cheap samples
 //   shipped      the evaluator's default (per footprint the whole-period or the block form, brute
 //                force where neither leaves a remainder below EvalOptions::max_remainder_fraction)
+// A candidate's EvalOptions may follow its name, "name:key=value:...", keys visibility_samples,
+// visibility_pilot, remainder_sample_scale, block_sum_rank, min_control_variate_side,
+// max_remainder_fraction (e.g. shipped:max_remainder_fraction=0.35).
 //
 // For each size: K footprints (sides size x N, aspect 1:2 .. 2:1), random positions; directions
 // random on the upper hemisphere with cos >= 0.2 (--order random), or K/16 rows of 16 abutting
@@ -237,14 +240,40 @@ struct Candidate {
 
 const char* kAllCandidates = "periods,shifted,shifted-bin,samples,blocks,shipped";
 
-Candidate make_candidate(const std::string& name) {
+// A candidate's options after its name: "name:key=value:..." (the knobs a study sweeps).
+void set_option(Candidate& c, const std::string& setting) {
+  const size_t eq = setting.find('=');
+  if (eq == std::string::npos) usage("candidate option " + setting + " is not key=value");
+  const std::string key = setting.substr(0, eq);
+  char* end = nullptr;
+  const double value = std::strtod(setting.c_str() + eq + 1, &end);
+  if (end == setting.c_str() + eq + 1 || *end != '\0' || !(value >= 0.0))
+    usage("candidate option " + setting + ": not a number >= 0");
+  EvalOptions& o = c.options;
+  if (key == "visibility_samples")
+    o.visibility_samples = uint32_t(value);
+  else if (key == "visibility_pilot")
+    o.visibility_pilot = value != 0.0;
+  else if (key == "remainder_sample_scale")
+    o.remainder_sample_scale = value;
+  else if (key == "block_sum_rank")
+    o.block_sum_rank = uint32_t(value);
+  else if (key == "min_control_variate_side")
+    o.min_control_variate_side = value;
+  else if (key == "max_remainder_fraction")
+    o.max_remainder_fraction = value;
+  else
+    usage("unknown candidate option " + key);
+}
+
+Candidate make_candidate(const std::string& spec) {
   Candidate c;
-  c.name = name;
+  c.name = spec;
+  const std::string name = spec.substr(0, spec.find(':'));
   if (name == "periods") {
     c.options.footprint_base = FootprintBase::WholePeriods;
     c.options.max_remainder_fraction = 1e300;
-    c.options.min_control_variate_tiles = 0.0;
-    c.options.min_control_variate_floats = 0.0;
+    c.options.min_control_variate_side = 0.0;
   } else if (name == "shifted") {
     c.kind = 1;
   } else if (name == "shifted-bin") {
@@ -252,15 +281,18 @@ Candidate make_candidate(const std::string& name) {
   } else if (name == "samples") {
     c.options.footprint_base = FootprintBase::None;
     c.options.max_remainder_fraction = 1e300;
-    c.options.min_control_variate_tiles = 0.0;
-    c.options.min_control_variate_floats = 0.0;
+    c.options.min_control_variate_side = 0.0;
   } else if (name == "blocks") {
     c.options.footprint_base = FootprintBase::Blocks;
     c.options.max_remainder_fraction = 1e300;
-    c.options.min_control_variate_tiles = 0.0;
-    c.options.min_control_variate_floats = 0.0;
+    c.options.min_control_variate_side = 0.0;
   } else if (name != "shipped") {
     usage("unknown candidate " + name + " (" + kAllCandidates + ")");
+  }
+  for (size_t s = spec.find(':'); s != std::string::npos;) {
+    const size_t e = spec.find(':', s + 1);
+    set_option(c, spec.substr(s + 1, e == std::string::npos ? e : e - s - 1));
+    s = e;
   }
   return c;
 }
@@ -372,9 +404,9 @@ int main(int argc, char** argv) {
     const std::string name =
         path.substr(path.rfind('/') == std::string::npos ? 0 : path.rfind('/') + 1);
     std::printf(
-        "# %s: %g^2 texels, %u clusters, yarn run %.1f texels, block grid %u^2, %s order, %d "
-        "footprints x %d repeats\n",
-        path.c_str(), n, data.cluster_count(), data.yarn_run, data.subperiod.blocks(),
+        "# %s: %g^2 texels, %u clusters, block grid %u^2, %s order, %d footprints x %d "
+        "repeats\n",
+        path.c_str(), n, data.cluster_count(), data.subperiod.blocks(),
         scanline ? "scanline" : "random", footprints, repeats);
     std::printf(
         "| repeats a side | candidate | relMSE at 2 spp | us / estimate | speedup in time | in "

@@ -348,22 +348,20 @@ TEST(Multiscale, VisibilityCorrectionIsUnbiasedAndTightensGrazingLight) {
 }
 
 // The visibility pilot (eval/visibility_pilot.hpp) against an independent measurement of what it
-// estimates: per band of |i_z|, 96 whole-tile estimates of another seed with the correction on, the
-// median of their ratios of the estimate's variance with the correction to without, for each form
-// of g: with a base (V_2 + V_3 / kappa_V) / V_1, without (V_2 + V_3 / kappa_V + C) / (V_1 + C), C
-// the cheap samples' variance of a quarter-tile footprint from pairs of points a cell apart. With a
-// base, a band measured below 0.35 must keep the correction and one above 0.7 must drop it (the
-// pilot decides at 1/2); without, below 0.5 and above 0.85 (at 2/3); between, the pilot's 64
-// estimates may go either way. On the 64^2 satin, kappa_V = 8 pays (V_2 is a few percent of V_1)
-// and kappa_V = 1 does not (V_3, about V_1, is no longer divided away), so both decisions are
-// exercised in each form. Then the plumbing, with each band's two decisions forced apart both
-// ways: every estimate (a whole tile, with a base, and a 12^2 footprint, without) is bit for bit
-// the estimate of the correction everywhere (where its form's decision keeps it) or of
-// visibility_samples = 0 (where it drops it), the generator's draws included.
+// estimates: per band of |i_z|, 96 whole-tile estimates of another seed, the median of their
+// ratios (V_2 + V_3 / kappa_V) / V_1 of an estimate's variance with the correction to without. A
+// band measured below 0.5 must keep the correction and one above 0.85 must drop it (the pilot
+// decides at 2/3); between, the pilot's 64 estimates may go either way. On the 64^2 satin,
+// kappa_V = 8 pays (V_2 is a few percent of V_1) and kappa_V = 1 does not (V_3, about V_1, is no
+// longer divided away), so both decisions are exercised. Then the plumbing, with each band's
+// decision forced both ways: a whole tile (with a base) is bit for bit the estimate of the
+// correction everywhere where the decision keeps it and of visibility_samples = 0 where it drops
+// it, the generator's draws included; a 12^2 footprint (no base, whose control variate is g_V and
+// which never corrects) is bit for bit both.
 TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
   reader::Asset asset;
   ASSERT_TRUE(asset.open_file(assets().satin.c_str()).ok());
-  int kept[2] = {0, 0}, dropped[2] = {0, 0};  // per form
+  int kept = 0, dropped = 0;
   for (const uint32_t kappa : {8u, 1u}) {
     EvalOptions options;
     options.tables = TableChoice::Compressed;
@@ -376,12 +374,9 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
     ASSERT_TRUE(nowhere.open(asset, options).ok());
     const EvalData& d = *evaluator_data(everywhere);
     const EvalData& pilot = *evaluator_data(piloted);
-    Rng rng(77), partner_rng(78);
-    // The form without a base weighs the cheap samples of a quarter-tile footprint at 2 spp.
-    const double side = 16.0;
-    const uint32_t m = remainder_samples(d, no_base_cover({0, 0, side, side}), 2);
+    Rng rng(77);
     for (int band = 0; band < EvalData::kVisibilityBands; ++band) {
-      std::vector<double> ratios[2];
+      std::vector<double> ratios;
       double wi[3], wo[3];
       for (int e = 0; e < 96; ++e) {
         const double z = std::max(0.02, (band + rng.uniform()) / EvalData::kVisibilityBands);
@@ -397,72 +392,67 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
         const Footprint p{x, y, x + 64, y + 64};
         Estimate estimate;
         eval::ResidualMoments mo;
-        mo.partner_side = side / std::round(std::sqrt(double(m)));
-        mo.partner_rng = &partner_rng;
         ASSERT_TRUE(eval::pushforward_control_variates(d, frame, p, eval::no_base_cover(p), 8, rng,
                                                        &estimate, &mo)
                         .ok());
-        ASSERT_EQ(mo.count[1], 8.0);
+        ASSERT_EQ(mo.count, 8.0);
         using M = eval::ResidualMoments;
-        for (const M::Form form : {M::kWithBase, M::kWithoutBase}) {
-          const double cheap = form == M::kWithBase ? 0.0 : 2.0 / m * mo.pair_square / mo.pairs;
-          ratios[form].push_back((mo.variance(form, M::kCorrectedResidual) +
-                                  mo.variance(form, M::kCorrection) / kappa + cheap) /
-                                 (mo.variance(form, M::kResidual) + cheap));
-        }
+        ratios.push_back(
+            (mo.variance(M::kCorrectedResidual) + mo.variance(M::kCorrection) / kappa) /
+            mo.variance(M::kResidual));
       }
-      // Decided at 1/2 with a base, 2/3 without; the test's margins are the pilot's spread.
-      const double keep_below[2] = {0.35, 0.5}, drop_above[2] = {0.7, 0.85};
-      for (int form = 0; form < 2; ++form) {
-        std::sort(ratios[form].begin(), ratios[form].end());
-        const double ratio = ratios[form][ratios[form].size() / 2];
-        const bool pays = pilot.visibility_pays[form][band];
-        std::printf("kappa_V %u, |i_z| band %d, %s: measured ratio %.3f, pilot %s\n", kappa, band,
-                    form == 0 ? "with a base" : "without", ratio, pays ? "keeps" : "drops");
-        if (ratio < keep_below[form]) {
-          EXPECT_TRUE(pays) << kappa << " " << band << " " << form;
-        }
-        if (ratio > drop_above[form]) {
-          EXPECT_FALSE(pays) << kappa << " " << band << " " << form;
-        }
-        kept[form] += ratio < keep_below[form];
-        dropped[form] += ratio > drop_above[form];
+      std::sort(ratios.begin(), ratios.end());
+      const double ratio = ratios[ratios.size() / 2];
+      const bool pays = pilot.visibility_pays[band];
+      std::printf("kappa_V %u, |i_z| band %d: measured ratio %.3f, pilot %s\n", kappa, band, ratio,
+                  pays ? "keeps" : "drops");
+      if (ratio < 0.5) {
+        EXPECT_TRUE(pays) << kappa << " " << band;
       }
-      // The plumbing, at the last directions of the band (their |i_z| is in it): a whole tile
-      // (whole periods) and a 12^2 footprint (no base), with the band's two decisions forced
-      // apart both ways, so that a form reading the other's decision fails.
+      if (ratio > 0.85) {
+        EXPECT_FALSE(pays) << kappa << " " << band;
+      }
+      kept += ratio < 0.5;
+      dropped += ratio > 0.85;
+      // The plumbing, at the last directions of the band (their |i_z| is in it).
       const Footprint tile{0, 0, 64, 64}, small{5.5, 7.25, 17.5, 19.25};
       ASSERT_EQ(cover_footprint(d, tile).base, FootprintCover::Base::WholePeriods);
       ASSERT_EQ(cover_footprint(d, small).base, FootprintCover::Base::None);
       EvalData& decisions = const_cast<EvalData&>(pilot);
-      const bool chosen[2] = {pilot.visibility_pays[0][band], pilot.visibility_pays[1][band]};
-      for (const bool with_base_keeps : {true, false}) {
-        decisions.visibility_pays[0][band] = with_base_keeps;
-        decisions.visibility_pays[1][band] = !with_base_keeps;
-        for (const bool whole : {true, false}) {
-          const Footprint& p = whole ? tile : small;
-          const bool keeps = whole == with_base_keeps;
-          for (uint64_t seed = 1; seed <= 4; ++seed) {
-            Rng a(seed), b(seed);
-            Estimate with, expected;
-            ASSERT_TRUE(
-                piloted.estimate(p, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
-            ASSERT_TRUE((keeps ? everywhere : nowhere)
-                            .estimate(p, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected)
-                            .ok());
-            EXPECT_EQ(with.value.g, expected.value.g) << kappa << " " << band << " " << keeps;
-            EXPECT_EQ(a.next(), b.next());
-          }
+      const bool chosen = pilot.visibility_pays[band];
+      for (const bool keeps : {true, false}) {
+        decisions.visibility_pays[band] = keeps;
+        for (uint64_t seed = 1; seed <= 4; ++seed) {
+          Rng a(seed), b(seed), c(seed), e(seed), f(seed);
+          Estimate with, expected, small_with, small_everywhere, small_nowhere;
+          ASSERT_TRUE(
+              piloted.estimate(tile, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
+          ASSERT_TRUE((keeps ? everywhere : nowhere)
+                          .estimate(tile, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected)
+                          .ok());
+          EXPECT_EQ(with.value.g, expected.value.g) << kappa << " " << band << " " << keeps;
+          EXPECT_EQ(a.next(), b.next());
+          ASSERT_TRUE(
+              piloted.estimate(small, wi, wo, Method::Multiscale, 2, c, kAllLobes, &small_with)
+                  .ok());
+          ASSERT_TRUE(
+              everywhere
+                  .estimate(small, wi, wo, Method::Multiscale, 2, e, kAllLobes, &small_everywhere)
+                  .ok());
+          ASSERT_TRUE(
+              nowhere.estimate(small, wi, wo, Method::Multiscale, 2, f, kAllLobes, &small_nowhere)
+                  .ok());
+          EXPECT_EQ(small_with.value.g, small_everywhere.value.g);
+          EXPECT_EQ(small_with.value.g, small_nowhere.value.g);
+          EXPECT_EQ(small_with.counters.visibility_samples, 0u);
+          EXPECT_EQ(c.next(), f.next());
         }
       }
-      decisions.visibility_pays[0][band] = chosen[0];
-      decisions.visibility_pays[1][band] = chosen[1];
+      decisions.visibility_pays[band] = chosen;
     }
   }
-  for (int form = 0; form < 2; ++form) {
-    EXPECT_GE(kept[form], 2) << form;
-    EXPECT_GE(dropped[form], 2) << form;
-  }
+  EXPECT_GE(kept, 2);
+  EXPECT_GE(dropped, 2);
 }
 
 // A remainder so thin that the sample count formula asks for one cheap sample (|B|/|P| = 1.5 % at
@@ -548,45 +538,49 @@ TEST(Multiscale, SmallFootprintsAreSummedExactly) {
   }
 }
 
-// A footprint below min_control_variate_tiles (a tenth of the tile, 6.4 texels) a side, or one
-// whose cover leaves more than max_remainder_fraction of it to cheap samples, is sampled exactly as
-// brute force (bit for bit with the same generator); otherwise the control variate is used, below
-// a tile too (whole blocks or no base), and the remainder gets its cheap samples; the paper form
-// always has its control variate.
+// A footprint below min_control_variate_side (2 texels) a side is sampled exactly as brute force
+// (bit for bit with the same generator); otherwise the control variate is used: whole periods or
+// blocks where they leave at most max_remainder_fraction of it to cheap samples, the form without a
+// base (cheap samples of g_V, no table query) beyond, the remainder with its cheap samples; the
+// paper form always has its control variate.
 TEST(Multiscale, FootprintsTheControlVariateDoesNotPayForAreSampledAsBruteForce) {
   auto o = open(assets().twill);
   EvalOptions strict;
-  strict.max_remainder_fraction = 0.0;  // any remainder: brute force
-  Evaluator exact_only;
-  ASSERT_TRUE(exact_only.open(o->asset, strict).ok());
+  strict.max_remainder_fraction = 0.0;  // any remainder: no base
+  Evaluator samples_only;
+  ASSERT_TRUE(samples_only.open(o->asset, strict).ok());
   const double wo[3] = {-0.4, 0.1, 0.85};
-  const Footprint small{3.5, 9.25, 8.5, 15.25},  // 5 x 6: below 6.4 texels a side
+  const Footprint small{3.5, 9.25, 5.0, 11.25},  // 1.5 x 2: below 2 texels a side
+      just_above{3.5, 9.25, 5.75, 11.25},        // 2.25 x 2
       narrow{3.5, 9.25, 30.0, 300.0},            // tall, under half the tile wide
       whole{-10.0, 5.0, 118.0, 69.0},            // two tiles by one: no remainder
       ragged{-10.0, 5.0, 120.5, 90.0},           // whole periods and a remainder
       near_tile{-3.0, 2.0, 49.0, 54.0};          // 0.81 x 0.81 tiles
-  auto same_as_brute = [&](const Evaluator& ev, const Footprint& p, uint64_t seed) {
-    Rng a(seed), b(seed);
+  const EvalData& d = *evaluator_data(o->evaluator);
+  EXPECT_EQ(cover_footprint(d, ragged).base, FootprintCover::Base::WholePeriods);
+  EXPECT_EQ(cover_footprint(*evaluator_data(samples_only), ragged).base,
+            FootprintCover::Base::None);
+  for (int k = 0; k < 20; ++k) {
+    Rng a(100 + k), b(100 + k);
     Estimate ms, brute;
-    ASSERT_TRUE(ev.estimate(p, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms).ok());
-    ASSERT_TRUE(ev.estimate(p, kReflectWi, wo, Method::Brute, 2, b, kAllLobes, &brute).ok());
-    EXPECT_TRUE(ms.counters.without_control_variate) << p.x0 << ", " << p.y0;
+    ASSERT_TRUE(
+        o->evaluator.estimate(small, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
+            .ok());
+    ASSERT_TRUE(
+        o->evaluator.estimate(small, kReflectWi, wo, Method::Brute, 2, b, kAllLobes, &brute).ok());
+    EXPECT_TRUE(ms.counters.without_control_variate);
     EXPECT_FALSE(brute.counters.without_control_variate);
     for (int c = 0; c < 3; ++c)
-      EXPECT_EQ(ms.value[c], brute.value[c]) << p.x0 << ", " << p.y0;
-  };
-  for (int k = 0; k < 20; ++k) {
-    same_as_brute(o->evaluator, small, 100 + k);
-    same_as_brute(exact_only, narrow, 200 + k);
-    same_as_brute(exact_only, near_tile, 300 + k);
-    Rng a(100 + k);
-    Estimate ms;
-    for (const Footprint& p : {narrow, near_tile, ragged}) {
-      ASSERT_TRUE(
-          o->evaluator.estimate(p, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms).ok());
-      EXPECT_FALSE(ms.counters.without_control_variate);
-      EXPECT_GT(ms.counters.remainder_samples, 0u);
-    }
+      EXPECT_EQ(ms.value[c], brute.value[c]);
+    for (const Evaluator* ev : {&o->evaluator, &samples_only})
+      for (const Footprint& p : {just_above, narrow, near_tile, ragged}) {
+        ASSERT_TRUE(ev->estimate(p, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms).ok());
+        EXPECT_FALSE(ms.counters.without_control_variate);
+        EXPECT_GT(ms.counters.remainder_samples, 0u);
+        if (ev == &samples_only) {
+          EXPECT_EQ(ms.counters.table_queries, 0u);
+        }
+      }
     ASSERT_TRUE(
         o->evaluator.estimate(whole, kReflectWi, wo, Method::Multiscale, 2, a, kAllLobes, &ms)
             .ok());
@@ -606,7 +600,8 @@ TEST(Multiscale, FootprintsTheControlVariateDoesNotPayForAreSampledAsBruteForce)
 
 // The control variate's packed records hold, texel by texel, exactly what the asset's views give:
 // the label, the yarn, the gap and colour, the visibility coefficients and the compressed tables'
-// image weights (cv_texels.hpp). g at a sample reads only the record.
+// image weights (cv_texels.hpp). g at a sample reads only the record; g_V only its own record,
+// checked here against the views too.
 TEST(Multiscale, TexelRecordsAreTheViewsValues) {
   for (const std::string* path : {&assets().twill, &assets().satin}) {
     auto o = open(*path);
@@ -617,6 +612,14 @@ TEST(Multiscale, TexelRecordsAreTheViewsValues) {
     ASSERT_EQ(records.stride() % 16, 0u);
     ASSERT_EQ(reinterpret_cast<std::uintptr_t>(records.address(0)) % 64, 0u);
     uint32_t widest = 0;
+    ShadingFrame grazing, slanted, overhead;
+    const ShadingFrame* frames[3] = {&grazing, &slanted, &overhead};
+    const double lights[3][3] = {{0.97, 0.1, 0.22}, {-0.4, 0.5, 0.77}, {0.0, 0.05, 1.0}};
+    for (int k = 0; k < 3; ++k) {
+      Status status;
+      ASSERT_TRUE(make_frame(d, lights[k], kReflectWo, kAllLobes,
+                             const_cast<ShadingFrame*>(frames[k]), &status));
+    }
     for (uint64_t t = 0; t < uint64_t(d.n) * d.n; ++t) {
       const ControlVariateTexels::Header& h = records.header(t);
       EXPECT_EQ(h.label, d.clusters.label_at(t));
@@ -638,6 +641,32 @@ TEST(Multiscale, TexelRecordsAreTheViewsValues) {
       for (uint32_t j = 1; j < count; ++j)
         EXPECT_EQ(double(records.image_weights(t)[j - 1]), w[j]);
       widest = std::max(widest, count);
+      // g_V's record: the lobe decoded as the reader decodes it (its visibility at three lights,
+      // through the stored frame, against texel_visibility within the float rounding), the unit
+      // tangent, the gap as model::ClothBsdf reads it, the colour, the yarn and the cluster of the
+      // cell's first image.
+      const ControlVariateTexels::Exact& x = records.exact(t);
+      for (const ShadingFrame* frame : frames) {
+        const model::Vec3d z(x.axis[0], x.axis[1], x.axis[2]), w = frame->wi_light;
+        model::Vec3d s, u;
+        model::orthonormal_basis(z, s, u);
+        const model::Vec3d ax = s * double(x.rotation[0]) + u * double(x.rotation[1]);
+        const model::Vec3d ay = cross(z, ax);
+        const double v = dot(w, z) > 0.0
+                             ? x.amplitude * std::exp(-x.lambda * dot(w, ax) * dot(w, ax) -
+                                                      x.mu * dot(w, ay) * dot(w, ay))
+                             : 0.0;
+        EXPECT_NEAR(std::min(v, 1.0), texel_visibility(d, *frame, t), 1e-4);
+      }
+      const float* tangent = d.maps.tangent.data + 3 * t;
+      const model::Vec3d unit = normalize(model::Vec3d(tangent[0], tangent[1], tangent[2]));
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(x.tangent[c], (&unit.x)[c], 1e-6);
+        EXPECT_EQ(x.colour[c], d.maps.albedo.data[3 * t + c]);
+      }
+      EXPECT_EQ(x.gap, std::clamp(d.maps.gap[t], 0.0f, 1.0f));
+      EXPECT_EQ(x.yarn, d.maps.yarn_id[t]);
+      EXPECT_EQ(x.cluster, count > 0 ? d.image_cluster[first] : h.label);
       if (::testing::Test::HasFailure()) return;  // one texel's report is enough
     }
     EXPECT_GE(records.stride(),

@@ -43,10 +43,8 @@ EvalOptions forced(FootprintBase base, uint32_t rank = UINT32_MAX) {
   EvalOptions options;
   options.footprint_base = base;
   options.block_sum_rank = rank;
-  options.max_remainder_fraction = 1e300;  // never brute force: every footprint takes the form
   options.max_block_sum_bytes = 1e12;      // 16 x 16 blocks of 4 texels on the 64^2 fixtures
-  options.min_control_variate_tiles = 0.0;
-  options.min_control_variate_floats = 0.0;
+  options.min_control_variate_side = 0.0;  // never brute force: every footprint takes the form
   return options;
 }
 
@@ -77,7 +75,7 @@ TEST(Subperiod, BlockCoverAddsUpToTheFootprint) {
         ++without;
         ASSERT_EQ(cover.region_count, 1u);
         EXPECT_NEAR(cover.regions[0].area, w * h, 1e-12 * w * h);
-        EXPECT_EQ(cover.remainder, 1.0);
+        EXPECT_EQ(cover.remainder, 2.0);  // the form without a base (kWithoutBaseRemainder)
         continue;
       }
       ASSERT_EQ(cover.base, FootprintCover::Base::Blocks);
@@ -220,8 +218,7 @@ void expect_unbiased_below_a_period(const std::string& asset, const EvalOptions&
 
 TEST(Subperiod, IsUnbiasedBelowAPeriod) {
   EvalOptions shipped;  // the default choice, with the control variate on every footprint
-  shipped.min_control_variate_tiles = 0.0;
-  shipped.min_control_variate_floats = 0.0;
+  shipped.min_control_variate_side = 0.0;
   for (const std::string* asset : {&assets().twill, &assets().satin}) {
     expect_unbiased_below_a_period(*asset, forced(FootprintBase::Blocks), 41, "blocks");
     expect_unbiased_below_a_period(*asset, forced(FootprintBase::Blocks, 1), 42,
@@ -232,7 +229,8 @@ TEST(Subperiod, IsUnbiasedBelowAPeriod) {
 }
 
 // Threads of one yarn dyed differently (the striped twill: its warp ends in three colours, so its
-// warp clusters mix colours). Without a base, g carries each texel's own specular albedo; with one
+// warp clusters mix colours). Without a base the control variate is g_V, which carries each
+// texel's own specular albedo; with one
 // (the block form, forced, on a third of the tile; whole periods on two tiles by the default
 // cover; the correction in every band) the bins' sums hold the cluster's mean and the visibility
 // correction's g_V carries the texel's own. Every form stays unbiased there, and its variance stays

@@ -344,7 +344,7 @@ Scene lit_twill_plane(double tiles_per_unit) {
 }
 
 TEST(Render, ImagesAreIdenticalForAnyThreadCount) {
-  const Scene s = lit_twill_plane(1.5);
+  const Scene s = lit_twill_plane(0.6);  // pixels 1-2 texels wide
   RenderResult one, two;
   {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
@@ -361,10 +361,10 @@ TEST(Render, ImagesAreIdenticalForAnyThreadCount) {
 
 // A renderer reused for another method, spp and seed renders the image a new one renders (what its
 // evaluators built on earlier renders, of this method with another seed included, changes no bit),
-// and refuses evaluator options of its own. Near (1.5 tiles per unit: pixels a few texels wide,
+// and refuses evaluator options of its own. Near (0.6 tiles per unit: pixels 1-2 texels wide,
 // sampled without the control variate) and far (24: footprints of a tile and more, with it).
 TEST(Render, AReusedRendererRendersWhatANewOneRenders) {
-  for (const double tiles : {1.5, 24.0}) {
+  for (const double tiles : {0.6, 24.0}) {
     const Scene s = lit_twill_plane(tiles);
     RenderOptions first;
     first.method = eval::Method::Brute;
