@@ -34,9 +34,10 @@
 //   Multiscale      clustered control variates with each texel's low-rank visibility, at each
 //                   sample's own destination, whose mean over a block of whole periods or of whole
 //                   source blocks is exact (per-view-bin push-forward sums) and over the rest of
-//                   the footprint sampled cheaply: unbiased at every footprint size
+//                   the footprint sampled cheaply, or below a repeat each texel's own control
+//                   variate g_V by cheap samples alone: unbiased at every footprint size
 //                   (docs/evaluator.md, "Unbiased multi-scale", "Footprints below a period");
-//                   footprints below a tenth of a tile a side are sampled as brute force.
+//                   footprints below 2 texels a side are sampled as brute force.
 //   MultiscalePaper Eq. 8-10 as printed: one parallax shift per footprint, k-bar and G-bar at the
 //                   footprint, residual D (V - v_c) (biased where those approximations fail).
 //   Brute           the paper's "w/o multi-scale": stratified samples p in P, per-sample parallax,
@@ -4711,10 +4712,10 @@ enum class TableChoice : uint8_t {
 
 // The base region of the unbiased multi-scale form (EvalOptions::footprint_base).
 enum class FootprintBase : uint8_t {
-  Auto,          // per footprint, the form below that leaves the smaller remainder
+  Auto,          // per footprint, the base form that leaves the smaller remainder, or no base
   WholePeriods,  // whole tiles at the footprint's corner: exact for the full control variate
   Blocks,        // the rectangle of whole source blocks nearest to the footprint
-  None,          // no base: the integral of g over the footprint by cheap samples alone
+  None,          // no base: the integral of g_V over the footprint by cheap samples alone
 };
 
 struct EvalOptions {
@@ -4739,9 +4740,10 @@ struct EvalOptions {
   // estimate unbiased; at most 1024.
   uint32_t visibility_samples = 8;
   // Whether open() decides, per band of light elevation, if the visibility correction pays for
-  // this asset (a pilot of fixed seed at open: the correction where it at least roughly halves the
-  // residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
-  // visibility_samples > 0. Either keeps the estimate unbiased.
+  // this asset (a pilot of fixed seed at open: the correction where it removes at least a third
+  // of the residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
+  // visibility_samples > 0. Only the forms with a base have the correction. Either keeps the
+  // estimate unbiased.
   bool visibility_pilot = true;
   // The unbiased multi-scale form integrates its control variate exactly over whole periods or
   // whole source blocks of a footprint P when the effective remainder that base leaves to cheap
@@ -4758,8 +4760,9 @@ struct EvalOptions {
   // pay for", gives the measured crossover). 0: no bound.
   double min_control_variate_side = 2.0;
   // The base region of the unbiased multi-scale form (eval/footprint_cover.hpp): Auto takes, per
-  // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder;
-  // the others force one form (for studies: docs/evaluator.md, "Footprints below a period").
+  // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder,
+  // and no base above max_remainder_fraction; the others force one form (for studies:
+  // docs/evaluator.md, "Footprints below a period").
   FootprintBase footprint_base = FootprintBase::Auto;
   // The block form's per-bin sums (eval/subperiod_sums.hpp) over every view bin of the parallax
   // table together stay within this many bytes: the evaluator takes the finest block grid (at most
@@ -4794,8 +4797,7 @@ struct Counters {
   uint32_t visibility_samples = 0;  // multiscale: samples of the visibility correction
   bool direct = false;              // answered by the exact sum (footprint below direct_max_side)
   bool without_control_variate = false;  // multiscale: sampled as brute force (a footprint below
-                                         // EvalOptions::min_control_variate_tiles / _floats, or
-                                         // its remainder above max_remainder_fraction)
+                                         // EvalOptions::min_control_variate_side)
 };
 
 struct Estimate {
@@ -5565,8 +5567,8 @@ struct FootprintCover {
 FootprintCover no_base_cover(const Footprint& footprint) noexcept;
 
 // The cover of P (positive area) for `data`'s tables and options (EvalOptions::footprint_base):
-// the whole-period form, the block form when the evaluator has block sums, or the block form's
-// fallback without a base.
+// the whole-period form, the block form when the evaluator has block sums, or no base (above
+// EvalOptions::max_remainder_fraction, or forced).
 FootprintCover cover_footprint(const EvalData& data, const Footprint& footprint) noexcept;
 
 inline constexpr uint32_t kMaxRemainderSamples = 1u << 16;
@@ -5635,6 +5637,7 @@ void split_remainder_samples(const FootprintCover& cover, uint32_t m, uint32_t c
 // The stride is 24 + 4M + 2 (max count - 1) rounded up to 16 bytes; the array is 64-byte aligned.
 // Internal to the evaluator library (its layout may change; nothing on disk).
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -5667,12 +5670,27 @@ class ControlVariateTexels {
     uint16_t yarn;     // the texel's yarn index
     uint8_t cluster;   // the cluster whose yarn attenuation scales the specular lobe
     uint8_t padding;
+
+    // V(t, i) at the unit light direction `light` (the mirrored (i_x, i_y, |i_z|)): the lobe
+    // through the Duff basis (s, t) of its axis turned by psi, clamped to [0, 1]; no allocation.
+    double visibility(const model::Vec3d& light) const noexcept {
+      const model::Vec3d z(axis[0], axis[1], axis[2]);
+      if (!(dot(light, z) > 0.0)) return 0.0;
+      model::Vec3d s, t;
+      model::orthonormal_basis(z, s, t);
+      const double a = dot(light, s), b = dot(light, t);
+      const double vx = rotation[0] * a + rotation[1] * b, vy = rotation[0] * b - rotation[1] * a;
+      const double v =
+          double(amplitude) * std::exp(-double(lambda) * vx * vx - double(mu) * vy * vy);
+      return v > 1.0 ? 1.0 : v;
+    }
   };
   static_assert(sizeof(Exact) == 64);
 
   // Builds the records of every texel from `data`'s open views (the compressed specular tables
-  // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 9.4 MB
-  // for the 256^2 satin, rank 4, widest cell 53 images: 144 bytes a texel) or a value does not
+  // must be open). Returns false when the arrays cannot be allocated (N^2 * stride() bytes: 9.4 MB
+  // for the 256^2 satin, rank 4, widest cell 53 images: 144 bytes a texel; and N^2 * 64 bytes of
+  // g_V's records, 4.2 MB at N = 256) or a value does not
   // fit its field (more than 65 535 images or yarns, more than 256 clusters: the reader's own
   // limits are lower). Not thread-safe against readers; call once, before sharing the data.
   bool build(const EvalData& data) noexcept;
@@ -6911,16 +6929,16 @@ void brute_force(const EvalData& data, const ShadingFrame& frame, const Footprin
 
 
 // The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
-// each texel's low-rank visibility (and, without a base, its own specular albedo) at every
-// sample's own destination; its integral over the
+// each texel's low-rank visibility at every sample's own destination, its integral over the
 // cover's base region exact from the bin's tables (the whole-tile push-forward sums or the block
-// prefix sums), over the cover's regions from remainder_samples() cheap samples
+// prefix sums), over the cover's regions from remainder_samples() cheap samples, and the
+// visibility correction g_V - g where EvalData::corrects_visibility; without a base, g_V itself
+// (each texel's own visibility, fibre distribution and albedo) by cheap samples over P
 // (footprint_cover.hpp). P has positive area; the compressed specular tables are open. Errors:
 // Unsupported when the bin's sums cannot be allocated.
-// When `moments` is not null and the visibility correction runs, each residual point is added to it
-// for both forms of g, with a partner point drawn from moments->partner_rng (not null): only the
-// pilot's estimates (a cover without a base, no parallax) give it meaningful moments
-// (visibility_pilot.hpp).
+// When `moments` is not null, each residual point's f, g (as the forms with a base use it) and
+// g_V are added to it: only the pilot's estimates (a cover without a base, no parallax) give it
+// meaningful moments (visibility_pilot.hpp).
 struct ResidualMoments;
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
                                     const Footprint& footprint, const FootprintCover& cover,
@@ -7521,9 +7539,9 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   const bool point = !(w * h >= 1e-12);
   const bool direct =
       (point && method != Method::Brute) || (multiscale && w < direct_side && h < direct_side);
-  // The unbiased form needs the compressed tables' images, and a footprint that a block of whole
-  // periods covers up to max_remainder_fraction of its area: others are sampled exactly as brute
-  // force (the same random numbers: the view bin, then the points).
+  // The unbiased form needs the compressed tables' images, and a footprint of at least
+  // min_control_variate_side texels a side: smaller ones are sampled exactly as brute force (the
+  // same random numbers: the view bin, then the points).
   if (method == Method::Multiscale && !direct && !data_->specular.is_compressed())
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
                          "method multiscale needs compressed Integral-Radiance tables (the raw "
@@ -7914,8 +7932,8 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
   double best_cost = best.remainder;
   if (have_blocks) {
     const FootprintCover b = blocks(p, side, spread);
-    const double cost = b.base == FootprintCover::Base::Blocks ? b.remainder + kBlockBaseCost : 1.0;
-    if (cost < best_cost) {
+    const double cost = b.remainder + kBlockBaseCost;
+    if (b.base == FootprintCover::Base::Blocks && cost < best_cost) {
       best = b;
       best_cost = cost;
     }
@@ -8109,9 +8127,7 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 
 // What g needs per estimate (docs/evaluator.md, "Unbiased multi-scale"):
 //   g(t) = sum over the lobes asked for of
-//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table;
-//                                           without a base, alpha(t) (the texel's own specular
-//                                           albedo) in place of kbar_c
+//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table
 //     diffuse   |i_z| / pi T_sheen I(t) R(t) v(t)
 //     sheen     colour sheen(i, o) |i_z| v(t)
 //     delta     T_sheen (1 - I(t)) v(t)     (when i = -o)
@@ -8136,19 +8152,7 @@ struct PushforwardConstants : ActiveLobes {
 void exact_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
                    Rgb exact[model::kLobeCount]) {
   const ControlVariateTexels::Exact& x = data.cv_texels.exact(t);
-  const model::Vec3d z(x.axis[0], x.axis[1], x.axis[2]);
-  double visibility = 0.0;
-  const double vz = dot(k.light, z);
-  if (vz > 0.0) {
-    model::Vec3d s, u;
-    model::orthonormal_basis(z, s, u);
-    const double a = dot(k.light, s), b = dot(k.light, u);
-    const double c = x.rotation[0], sn = x.rotation[1];
-    const double vx = c * a + sn * b, vy = c * b - sn * a;
-    visibility =
-        double(x.amplitude) * std::exp(-double(x.lambda) * vx * vx - double(x.mu) * vy * vy);
-    visibility = visibility > 1.0 ? 1.0 : visibility;
-  }
+  const double visibility = x.visibility(k.light);
   const YarnShading& yarn = data.yarns[x.yarn];
   const double gap = x.gap;
   const Rgb colour(x.colour[0], x.colour[1], x.colour[2]);

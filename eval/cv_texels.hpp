@@ -26,10 +26,12 @@
 // Internal to the evaluator library (its layout may change; nothing on disk).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
 #include "model/memory.hpp"
+#include "model/vec.hpp"
 
 namespace clothbake::eval {
 
@@ -59,12 +61,27 @@ class ControlVariateTexels {
     uint16_t yarn;     // the texel's yarn index
     uint8_t cluster;   // the cluster whose yarn attenuation scales the specular lobe
     uint8_t padding;
+
+    // V(t, i) at the unit light direction `light` (the mirrored (i_x, i_y, |i_z|)): the lobe
+    // through the Duff basis (s, t) of its axis turned by psi, clamped to [0, 1]; no allocation.
+    double visibility(const model::Vec3d& light) const noexcept {
+      const model::Vec3d z(axis[0], axis[1], axis[2]);
+      if (!(dot(light, z) > 0.0)) return 0.0;
+      model::Vec3d s, t;
+      model::orthonormal_basis(z, s, t);
+      const double a = dot(light, s), b = dot(light, t);
+      const double vx = rotation[0] * a + rotation[1] * b, vy = rotation[0] * b - rotation[1] * a;
+      const double v =
+          double(amplitude) * std::exp(-double(lambda) * vx * vx - double(mu) * vy * vy);
+      return v > 1.0 ? 1.0 : v;
+    }
   };
   static_assert(sizeof(Exact) == 64);
 
   // Builds the records of every texel from `data`'s open views (the compressed specular tables
-  // must be open). Returns false when the array cannot be allocated (N^2 * stride() bytes: 9.4 MB
-  // for the 256^2 satin, rank 4, widest cell 53 images: 144 bytes a texel) or a value does not
+  // must be open). Returns false when the arrays cannot be allocated (N^2 * stride() bytes: 9.4 MB
+  // for the 256^2 satin, rank 4, widest cell 53 images: 144 bytes a texel; and N^2 * 64 bytes of
+  // g_V's records, 4.2 MB at N = 256) or a value does not
   // fit its field (more than 65 535 images or yarns, more than 256 clusters: the reader's own
   // limits are lower). Not thread-safe against readers; call once, before sharing the data.
   bool build(const EvalData& data) noexcept;

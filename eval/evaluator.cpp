@@ -429,9 +429,9 @@ Status Evaluator::estimate(const Footprint& footprint, const double wi[3], const
   const bool point = !(w * h >= 1e-12);
   const bool direct =
       (point && method != Method::Brute) || (multiscale && w < direct_side && h < direct_side);
-  // The unbiased form needs the compressed tables' images, and a footprint that a block of whole
-  // periods covers up to max_remainder_fraction of its area: others are sampled exactly as brute
-  // force (the same random numbers: the view bin, then the points).
+  // The unbiased form needs the compressed tables' images, and a footprint of at least
+  // min_control_variate_side texels a side: smaller ones are sampled exactly as brute force (the
+  // same random numbers: the view bin, then the points).
   if (method == Method::Multiscale && !direct && !data_->specular.is_compressed())
     return Status::error(ErrorCode::NotFound, Check::MissingSection,
                          "method multiscale needs compressed Integral-Radiance tables (the raw "

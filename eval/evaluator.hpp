@@ -16,9 +16,10 @@
 //   Multiscale      clustered control variates with each texel's low-rank visibility, at each
 //                   sample's own destination, whose mean over a block of whole periods or of whole
 //                   source blocks is exact (per-view-bin push-forward sums) and over the rest of
-//                   the footprint sampled cheaply: unbiased at every footprint size
+//                   the footprint sampled cheaply, or below a repeat each texel's own control
+//                   variate g_V by cheap samples alone: unbiased at every footprint size
 //                   (docs/evaluator.md, "Unbiased multi-scale", "Footprints below a period");
-//                   footprints below a tenth of a tile a side are sampled as brute force.
+//                   footprints below 2 texels a side are sampled as brute force.
 //   MultiscalePaper Eq. 8-10 as printed: one parallax shift per footprint, k-bar and G-bar at the
 //                   footprint, residual D (V - v_c) (biased where those approximations fail).
 //   Brute           the paper's "w/o multi-scale": stratified samples p in P, per-sample parallax,
@@ -92,10 +93,10 @@ enum class TableChoice : uint8_t {
 
 // The base region of the unbiased multi-scale form (EvalOptions::footprint_base).
 enum class FootprintBase : uint8_t {
-  Auto,          // per footprint, the form below that leaves the smaller remainder
+  Auto,          // per footprint, the base form that leaves the smaller remainder, or no base
   WholePeriods,  // whole tiles at the footprint's corner: exact for the full control variate
   Blocks,        // the rectangle of whole source blocks nearest to the footprint
-  None,          // no base: the integral of g over the footprint by cheap samples alone
+  None,          // no base: the integral of g_V over the footprint by cheap samples alone
 };
 
 struct EvalOptions {
@@ -120,9 +121,10 @@ struct EvalOptions {
   // estimate unbiased; at most 1024.
   uint32_t visibility_samples = 8;
   // Whether open() decides, per band of light elevation, if the visibility correction pays for
-  // this asset (a pilot of fixed seed at open: the correction where it at least roughly halves the
-  // residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
-  // visibility_samples > 0. Either keeps the estimate unbiased.
+  // this asset (a pilot of fixed seed at open: the correction where it removes at least a third
+  // of the residual's variance, docs/evaluator.md, "Where the correction pays"); false: wherever
+  // visibility_samples > 0. Only the forms with a base have the correction. Either keeps the
+  // estimate unbiased.
   bool visibility_pilot = true;
   // The unbiased multi-scale form integrates its control variate exactly over whole periods or
   // whole source blocks of a footprint P when the effective remainder that base leaves to cheap
@@ -139,8 +141,9 @@ struct EvalOptions {
   // pay for", gives the measured crossover). 0: no bound.
   double min_control_variate_side = 2.0;
   // The base region of the unbiased multi-scale form (eval/footprint_cover.hpp): Auto takes, per
-  // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder;
-  // the others force one form (for studies: docs/evaluator.md, "Footprints below a period").
+  // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder,
+  // and no base above max_remainder_fraction; the others force one form (for studies:
+  // docs/evaluator.md, "Footprints below a period").
   FootprintBase footprint_base = FootprintBase::Auto;
   // The block form's per-bin sums (eval/subperiod_sums.hpp) over every view bin of the parallax
   // table together stay within this many bytes: the evaluator takes the finest block grid (at most
@@ -175,8 +178,7 @@ struct Counters {
   uint32_t visibility_samples = 0;  // multiscale: samples of the visibility correction
   bool direct = false;              // answered by the exact sum (footprint below direct_max_side)
   bool without_control_variate = false;  // multiscale: sampled as brute force (a footprint below
-                                         // EvalOptions::min_control_variate_tiles / _floats, or
-                                         // its remainder above max_remainder_fraction)
+                                         // EvalOptions::min_control_variate_side)
 };
 
 struct Estimate {

@@ -156,8 +156,8 @@ FootprintCover cover_footprint(const EvalData& data, const Footprint& p) noexcep
   double best_cost = best.remainder;
   if (have_blocks) {
     const FootprintCover b = blocks(p, side, spread);
-    const double cost = b.base == FootprintCover::Base::Blocks ? b.remainder + kBlockBaseCost : 1.0;
-    if (cost < best_cost) {
+    const double cost = b.remainder + kBlockBaseCost;
+    if (b.base == FootprintCover::Base::Blocks && cost < best_cost) {
       best = b;
       best_cost = cost;
     }

@@ -85,8 +85,8 @@ struct FootprintCover {
 FootprintCover no_base_cover(const Footprint& footprint) noexcept;
 
 // The cover of P (positive area) for `data`'s tables and options (EvalOptions::footprint_base):
-// the whole-period form, the block form when the evaluator has block sums, or the block form's
-// fallback without a base.
+// the whole-period form, the block form when the evaluator has block sums, or no base (above
+// EvalOptions::max_remainder_fraction, or forced).
 FootprintCover cover_footprint(const EvalData& data, const Footprint& footprint) noexcept;
 
 inline constexpr uint32_t kMaxRemainderSamples = 1u << 16;

@@ -26,16 +26,16 @@ Status paper_control_variates(const EvalData& data, const ShadingFrame& frame,
 #endif
 
 // The unbiased form (Multiscale): one view bin drawn with its weight; the control variate g with
-// each texel's low-rank visibility (and, without a base, its own specular albedo) at every
-// sample's own destination; its integral over the
+// each texel's low-rank visibility at every sample's own destination, its integral over the
 // cover's base region exact from the bin's tables (the whole-tile push-forward sums or the block
-// prefix sums), over the cover's regions from remainder_samples() cheap samples
+// prefix sums), over the cover's regions from remainder_samples() cheap samples, and the
+// visibility correction g_V - g where EvalData::corrects_visibility; without a base, g_V itself
+// (each texel's own visibility, fibre distribution and albedo) by cheap samples over P
 // (footprint_cover.hpp). P has positive area; the compressed specular tables are open. Errors:
 // Unsupported when the bin's sums cannot be allocated.
-// When `moments` is not null and the visibility correction runs, each residual point is added to it
-// for both forms of g, with a partner point drawn from moments->partner_rng (not null): only the
-// pilot's estimates (a cover without a base, no parallax) give it meaningful moments
-// (visibility_pilot.hpp).
+// When `moments` is not null, each residual point's f, g (as the forms with a base use it) and
+// g_V are added to it: only the pilot's estimates (a cover without a base, no parallax) give it
+// meaningful moments (visibility_pilot.hpp).
 struct ResidualMoments;
 Status pushforward_control_variates(const EvalData& data, const ShadingFrame& frame,
                                     const Footprint& footprint, const FootprintCover& cover,

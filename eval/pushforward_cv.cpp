@@ -21,9 +21,7 @@ constexpr uint64_t kMaxVisibilitySamples = uint64_t(1) << 22;  // an estimate's,
 
 // What g needs per estimate (docs/evaluator.md, "Unbiased multi-scale"):
 //   g(t) = sum over the lobes asked for of
-//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table;
-//                                           without a base, alpha(t) (the texel's own specular
-//                                           albedo) in place of kbar_c
+//     specular  s_c T(t, h) v(t)            s_c = kbar_c G_y(c) |i_z| T_sheen (RGB), T the table
 //     diffuse   |i_z| / pi T_sheen I(t) R(t) v(t)
 //     sheen     colour sheen(i, o) |i_z| v(t)
 //     delta     T_sheen (1 - I(t)) v(t)     (when i = -o)
@@ -48,19 +46,7 @@ struct PushforwardConstants : ActiveLobes {
 void exact_variate(const EvalData& data, const PushforwardConstants& k, uint64_t t,
                    Rgb exact[model::kLobeCount]) {
   const ControlVariateTexels::Exact& x = data.cv_texels.exact(t);
-  const model::Vec3d z(x.axis[0], x.axis[1], x.axis[2]);
-  double visibility = 0.0;
-  const double vz = dot(k.light, z);
-  if (vz > 0.0) {
-    model::Vec3d s, u;
-    model::orthonormal_basis(z, s, u);
-    const double a = dot(k.light, s), b = dot(k.light, u);
-    const double c = x.rotation[0], sn = x.rotation[1];
-    const double vx = c * a + sn * b, vy = c * b - sn * a;
-    visibility =
-        double(x.amplitude) * std::exp(-double(x.lambda) * vx * vx - double(x.mu) * vy * vy);
-    visibility = visibility > 1.0 ? 1.0 : visibility;
-  }
+  const double visibility = x.visibility(k.light);
   const YarnShading& yarn = data.yarns[x.yarn];
   const double gap = x.gap;
   const Rgb colour(x.colour[0], x.colour[1], x.colour[2]);

@@ -12,11 +12,12 @@
 //                rectangle from the compressed tables' and the evaluator's summed-area tables),
 //                residual f(x'_k(p)) - g0(p + δ̄) at the same stratified points (this study's code)
 //   shifted-bin  the same with the drawn view bin's own mean offset δ̄_k
-//   samples      no base: the integral of g over P by the cheap samples alone (FootprintBase::None)
+//   samples      no base: the integral of g_V over P by the cheap samples alone
+//                (FootprintBase::None)
 //   blocks       the block form (FootprintBase::Blocks): exact over the whole source blocks nearest
 //                to P from the bin's block prefix sums, the rest by cheap samples
-//   shipped      the evaluator's default (per footprint the whole-period or the block form, brute
-//                force where neither leaves a remainder below EvalOptions::max_remainder_fraction)
+//   shipped      the evaluator's default (per footprint the whole-period or the block form, no
+//                base above EvalOptions::max_remainder_fraction, brute force below 2 texels)
 // A candidate's EvalOptions may follow its name, "name:key=value:...", keys visibility_samples,
 // visibility_pilot, remainder_sample_scale, block_sum_rank, min_control_variate_side,
 // max_remainder_fraction (e.g. shipped:max_remainder_fraction=0.35).
