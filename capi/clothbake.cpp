@@ -3981,9 +3981,6 @@ namespace clothbake::model {
 // R = 0.748 against 0.058, docs/sheen.md). Any other value behaves as Published.
 enum class SheenConvention : int { Published = 0, Converged = 1 };
 
-inline const char* sheen_convention_name(SheenConvention convention) {
-  return convention == SheenConvention::Converged ? "converged" : "published";
-}
 
 // LTC coefficients of one (cos theta_o, roughness): M^-1 = [[a, 0, b], [0, a, 0], [0, 0, 1]] in
 // the frame of wo, and the directional albedo R of the sheen layer (R in [0, 1], a > 0).
@@ -4198,13 +4195,6 @@ inline T spongecake_lambda(const FibreSggx<T>& d, const Vec3<T>& w) {
   return z > T(0) ? area / z : std::numeric_limits<T>::infinity();
 }
 
-// Unscattered transmittance e^{-T Lambda(w)} of the slab along w, in [0, 1] (1 for T = 0).
-template <class T>
-inline T spongecake_unscattered_transmittance(const FibreSggx<T>& d, T thickness,
-                                              const Vec3<T>& w) {
-  if (!spongecake_detail::valid_thickness(thickness)) return T(1);
-  return std::exp(-thickness * spongecake_lambda(d, w));
-}
 
 // Specular reflection f^{r,s} per unit albedo; 0 unless i and o are strictly on the same side.
 template <class T>
@@ -4278,13 +4268,6 @@ struct TexelParams {
   SheenConvention sheen_convention = SheenConvention::Published;
 };
 
-// max over channels of alpha + R_d + T_d - 1: <= 0 guarantees energy conservation of f^ (the
-// single-scattering albedo of the specular lobes never exceeds alpha).
-template <class T>
-inline T energy_excess(const TexelParams<T>& p) {
-  const Rgb<T> sum = p.specular_albedo + p.diffuse_reflectance + p.diffuse_transmittance;
-  return sum.max_component() - T(1);
-}
 
 enum class Lobe : int {
   SpecularReflection = 0,
@@ -4296,23 +4279,6 @@ enum class Lobe : int {
 };
 inline constexpr int kLobeCount = 6;
 
-inline const char* lobe_name(Lobe lobe) {
-  switch (lobe) {
-    case Lobe::SpecularReflection:
-      return "specular_reflection";
-    case Lobe::SpecularTransmission:
-      return "specular_transmission";
-    case Lobe::DiffuseReflection:
-      return "diffuse_reflection";
-    case Lobe::DiffuseTransmission:
-      return "diffuse_transmission";
-    case Lobe::DeltaTransmission:
-      return "delta_transmission";
-    case Lobe::Sheen:
-      return "sheen";
-  }
-  return "unknown";
-}
 
 // Every lobe of f = V f^ at one (i, o), RGB, per steradian, no cosine factor.
 template <class T>
@@ -4347,21 +4313,6 @@ struct LobeValues {
 enum class Technique : int { Sheen = 0, Specular, DiffuseReflection, DiffuseTransmission, Delta };
 inline constexpr int kTechniqueCount = 5;
 
-inline const char* technique_name(Technique t) {
-  switch (t) {
-    case Technique::Sheen:
-      return "sheen";
-    case Technique::Specular:
-      return "specular";
-    case Technique::DiffuseReflection:
-      return "diffuse_reflection";
-    case Technique::DiffuseTransmission:
-      return "diffuse_transmission";
-    case Technique::Delta:
-      return "delta_transmission";
-  }
-  return "unknown";
-}
 
 // Selection probabilities p_a of the techniques for one o (sum to 1, or all 0 if f^ = 0).
 template <class T>
@@ -12109,21 +12060,6 @@ inline ParallaxReferences parallax_references(uint32_t i, uint32_t j, uint32_t n
   return r;
 }
 
-// Marks in `mask` (n * n entries, non-zero = kept, bin (i, j) at j * n + i) every direction that
-// a kept one references, directly or through another: the directions a scene-planned hierarchical
-// table must store (level 2 first, then level 1, so that references of added level-1 bins are
-// added too).
-inline void close_under_parallax_references(uint8_t* mask, uint32_t n) noexcept {
-  for (int level = 2; level >= 1; --level)
-    for (uint32_t j = 0; j < n; ++j)
-      for (uint32_t i = 0; i < n; ++i) {
-        if (mask[uint64_t(j) * n + i] == 0) continue;
-        const ParallaxReferences r = parallax_references(i, j, n);
-        if (r.level != level) continue;
-        for (int e = 0; e < r.count; ++e)
-          mask[r.bin[e]] = 1;
-      }
-}
 
 // The reference prediction of one texel from k reference codes `c` with weights `m` for a
 // direction of weight `md` (file comment): ref(t), and the spread bucket.

@@ -68,6 +68,7 @@ struct TexelParams {
   SheenConvention sheen_convention = SheenConvention::Published;
 };
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the tools', not shading's (the single file leaves it out)
 // max over channels of alpha + R_d + T_d - 1: <= 0 guarantees energy conservation of f^ (the
 // single-scattering albedo of the specular lobes never exceeds alpha).
 template <class T>
@@ -75,6 +76,7 @@ inline T energy_excess(const TexelParams<T>& p) {
   const Rgb<T> sum = p.specular_albedo + p.diffuse_reflectance + p.diffuse_transmittance;
   return sum.max_component() - T(1);
 }
+#endif
 
 enum class Lobe : int {
   SpecularReflection = 0,
@@ -86,6 +88,7 @@ enum class Lobe : int {
 };
 inline constexpr int kLobeCount = 6;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the tools', not shading's (the single file leaves it out)
 inline const char* lobe_name(Lobe lobe) {
   switch (lobe) {
     case Lobe::SpecularReflection:
@@ -103,6 +106,7 @@ inline const char* lobe_name(Lobe lobe) {
   }
   return "unknown";
 }
+#endif
 
 // Every lobe of f = V f^ at one (i, o), RGB, per steradian, no cosine factor.
 template <class T>
@@ -137,6 +141,7 @@ struct LobeValues {
 enum class Technique : int { Sheen = 0, Specular, DiffuseReflection, DiffuseTransmission, Delta };
 inline constexpr int kTechniqueCount = 5;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the tools', not shading's (the single file leaves it out)
 inline const char* technique_name(Technique t) {
   switch (t) {
     case Technique::Sheen:
@@ -152,6 +157,7 @@ inline const char* technique_name(Technique t) {
   }
   return "unknown";
 }
+#endif
 
 // Selection probabilities p_a of the techniques for one o (sum to 1, or all 0 if f^ = 0).
 template <class T>

@@ -37,9 +37,11 @@ namespace clothbake::model {
 // R = 0.748 against 0.058, docs/sheen.md). Any other value behaves as Published.
 enum class SheenConvention : int { Published = 0, Converged = 1 };
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the tools', not shading's (the single file leaves it out)
 inline const char* sheen_convention_name(SheenConvention convention) {
   return convention == SheenConvention::Converged ? "converged" : "published";
 }
+#endif
 
 // LTC coefficients of one (cos theta_o, roughness): M^-1 = [[a, 0, b], [0, a, 0], [0, 0, 1]] in
 // the frame of wo, and the directional albedo R of the sheen layer (R in [0, 1], a > 0).

@@ -68,6 +68,7 @@ inline T spongecake_lambda(const FibreSggx<T>& d, const Vec3<T>& w) {
   return z > T(0) ? area / z : std::numeric_limits<T>::infinity();
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the reports', not shading's (the single file leaves it out)
 // Unscattered transmittance e^{-T Lambda(w)} of the slab along w, in [0, 1] (1 for T = 0).
 template <class T>
 inline T spongecake_unscattered_transmittance(const FibreSggx<T>& d, T thickness,
@@ -75,6 +76,7 @@ inline T spongecake_unscattered_transmittance(const FibreSggx<T>& d, T thickness
   if (!spongecake_detail::valid_thickness(thickness)) return T(1);
   return std::exp(-thickness * spongecake_lambda(d, w));
 }
+#endif
 
 // Specular reflection f^{r,s} per unit albedo; 0 unless i and o are strictly on the same side.
 template <class T>

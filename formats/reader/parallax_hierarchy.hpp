@@ -102,6 +102,7 @@ inline ParallaxReferences parallax_references(uint32_t i, uint32_t j, uint32_t n
   return r;
 }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the bake's, not shading's (the single file leaves it out)
 // Marks in `mask` (n * n entries, non-zero = kept, bin (i, j) at j * n + i) every direction that
 // a kept one references, directly or through another: the directions a scene-planned hierarchical
 // table must store (level 2 first, then level 1, so that references of added level-1 bins are
@@ -117,6 +118,7 @@ inline void close_under_parallax_references(uint8_t* mask, uint32_t n) noexcept 
           mask[r.bin[e]] = 1;
       }
 }
+#endif
 
 // The reference prediction of one texel from k reference codes `c` with weights `m` for a
 // direction of weight `md` (file comment): ref(t), and the spread bucket.
