@@ -6655,6 +6655,7 @@ namespace clothbake::eval {
 // three albedos, docs/evaluator.md "Texel parameters").
 struct YarnShading {
   double roughness = 0.3;
+  model::FibreSggx<double> sggx;  // its fibres' distribution (tangent +z): g_V sets the tangent
   double optical_thickness = 2.0;
   Rgb specular_albedo, diffuse_reflectance, diffuse_transmittance;
 };
@@ -7248,6 +7249,7 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
     const reader::YarnMaterialRecord& r = yarns[k];
     YarnShading& y = d->yarns[k];
     y.roughness = r.roughness;
+    y.sggx = model::FibreSggx<double>::make(model::Vec3d(0, 0, 1), r.roughness);
     y.optical_thickness = r.optical_thickness;
     y.specular_albedo = Rgb(r.specular_albedo[0], r.specular_albedo[1], r.specular_albedo[2]);
     y.diffuse_reflectance =
@@ -8108,15 +8110,8 @@ void exact_variate(const EvalData& data, const PushforwardConstants& k, uint64_t
   const double gap = x.gap;
   const Rgb colour(x.colour[0], x.colour[1], x.colour[2]);
   if (k.specular) {
-    model::FibreSggx<double> sggx;
+    model::FibreSggx<double> sggx = yarn.sggx;  // the yarn's roughness, the texel's tangent
     sggx.t = model::Vec3d(x.tangent[0], x.tangent[1], x.tangent[2]);
-    double sigma = yarn.roughness;
-    if (!(sigma >= model::kMinFibreRoughness<double>))
-      sigma = std::isnan(sigma) ? 1.0 : model::kMinFibreRoughness<double>;
-    if (sigma > 1.0) sigma = 1.0;
-    sggx.sigma2 = sigma * sigma;
-    sggx.one_minus_sigma2 = (1.0 - sigma) * (1.0 + sigma);
-    sggx.d_norm = sigma * sigma * sigma / model::kPi<double>;
     exact[int(k.specular_lobe)] += k.attenuation_scale[x.cluster] * yarn.specular_albedo * colour *
                                    (gap * sggx.D(k.h) * visibility);
   }
@@ -8651,7 +8646,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
                        without_base ? kExact | kMaps : kRecord | kExact | kMaps);
   // The rest of the integral of g by cheap samples, stratified over each region, each region's
   // mean times its area (footprint_cover.hpp): sign g over the whole-period form's rectangles (and
-  // over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
+  // g_V over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
   // strips.
   const uint32_t low_rank = with_blocks ? layout.rank : k.rank;
   const double side = with_blocks ? double(data.n / blocks) : 0.0;

@@ -29,6 +29,7 @@ namespace clothbake::eval {
 // three albedos, docs/evaluator.md "Texel parameters").
 struct YarnShading {
   double roughness = 0.3;
+  model::FibreSggx<double> sggx;  // its fibres' distribution (tangent +z): g_V sets the tangent
   double optical_thickness = 2.0;
   Rgb specular_albedo, diffuse_reflectance, diffuse_transmittance;
 };

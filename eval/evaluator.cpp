@@ -152,6 +152,7 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
     const reader::YarnMaterialRecord& r = yarns[k];
     YarnShading& y = d->yarns[k];
     y.roughness = r.roughness;
+    y.sggx = model::FibreSggx<double>::make(model::Vec3d(0, 0, 1), r.roughness);
     y.optical_thickness = r.optical_thickness;
     y.specular_albedo = Rgb(r.specular_albedo[0], r.specular_albedo[1], r.specular_albedo[2]);
     y.diffuse_reflectance =

@@ -51,15 +51,8 @@ void exact_variate(const EvalData& data, const PushforwardConstants& k, uint64_t
   const double gap = x.gap;
   const Rgb colour(x.colour[0], x.colour[1], x.colour[2]);
   if (k.specular) {
-    model::FibreSggx<double> sggx;
+    model::FibreSggx<double> sggx = yarn.sggx;  // the yarn's roughness, the texel's tangent
     sggx.t = model::Vec3d(x.tangent[0], x.tangent[1], x.tangent[2]);
-    double sigma = yarn.roughness;
-    if (!(sigma >= model::kMinFibreRoughness<double>))
-      sigma = std::isnan(sigma) ? 1.0 : model::kMinFibreRoughness<double>;
-    if (sigma > 1.0) sigma = 1.0;
-    sggx.sigma2 = sigma * sigma;
-    sggx.one_minus_sigma2 = (1.0 - sigma) * (1.0 + sigma);
-    sggx.d_norm = sigma * sigma * sigma / model::kPi<double>;
     exact[int(k.specular_lobe)] += k.attenuation_scale[x.cluster] * yarn.specular_albedo * colour *
                                    (gap * sggx.D(k.h) * visibility);
   }
@@ -594,7 +587,7 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
                        without_base ? kExact | kMaps : kRecord | kExact | kMaps);
   // The rest of the integral of g by cheap samples, stratified over each region, each region's
   // mean times its area (footprint_cover.hpp): sign g over the whole-period form's rectangles (and
-  // over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
+  // g_V over P without a base), g - g_r over the block form's interior, 1_P g - 1_A g_r over its
   // strips.
   const uint32_t low_rank = with_blocks ? layout.rank : k.rank;
   const double side = with_blocks ? double(data.n / blocks) : 0.0;
