@@ -8205,15 +8205,18 @@ struct PointBatch {
     points[count++] = {x, y, source};
   }
   // What of each destination to prefetch (Reads): its record of g, its record of g_V, the maps
-  // shade_texel reads besides (the tangent and the visibility lobe).
-  void resolve(const EvalData& data, const BinShift& shift, unsigned reads) noexcept {
+  // shade_texel reads besides (the tangent and the visibility lobe); `first_reads` for the first
+  // `first` points (an early batch's residual points), `reads` for the rest.
+  void resolve(const EvalData& data, const BinShift& shift, unsigned reads,
+               unsigned first_reads = 0, uint32_t first = 0) noexcept {
     for (uint32_t i = 0; i < count; ++i) {
+      const unsigned what = i < first ? first_reads : reads;
       int64_t tx = 0, ty = 0;
       shifted_destination(shift, points[i].source, points[i].x, points[i].y, &tx, &ty);
       destination[i] = data.texel(tx, ty);
-      if (reads & kRecord) prefetch_record(data, destination[i]);
-      if (reads & kExact) prefetch(&data.cv_texels.exact(destination[i]));
-      if (reads & kMaps) {
+      if (what & kRecord) prefetch_record(data, destination[i]);
+      if (what & kExact) prefetch(&data.cv_texels.exact(destination[i]));
+      if (what & kMaps) {
         prefetch(data.maps.tangent.data + 3 * destination[i]);
         prefetch(data.visibility.record_address(destination[i]));
       }
@@ -8572,8 +8575,10 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
   if (k.delta) k.delta_scale = t_sheen;
 
-  // The records asked for before the base is computed.
-  early.resolve(data, shift, without_base ? kExact : kRecord);
+  // The records asked for before the base is computed (the residual's points: what shade_texel,
+  // g and g_V read).
+  early.resolve(data, shift, without_base ? kExact : kRecord,
+                without_base ? kExact | kMaps : kRecord | kExact | kMaps, spp);
 
   if (k.specular && needs_g) {
     const reader::CompressedRadianceTables& tables = data.specular.compressed;
