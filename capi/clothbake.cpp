@@ -7008,6 +7008,8 @@ bool ControlVariateTexels::build(const EvalData& data) noexcept {
     x.mu = float(asg.mu);
     x.amplitude = float(asg.amplitude);
     const float* tangent = data.maps.tangent.data + 3 * t;
+    // The tangent as model::FibreSggx takes it (unit; +z where zero or not finite); the
+    // roughness is the yarn's (YarnShading::sggx), any value here.
     const model::FibreSggx<double> sggx =
         model::FibreSggx<double>::make(model::Vec3d(tangent[0], tangent[1], tangent[2]), 0.5);
     x.tangent[0] = float(sggx.t.x);
@@ -8184,11 +8186,12 @@ inline void prefetch_record(const EvalData& data, uint64_t t) noexcept {
   prefetch(record + stride - 1);
 }
 
-// Up to kCapacity sample points of one view bin in two stages, so that their cache misses overlap:
-// add() keeps a point and prefetches its source texel's parallax code; resolve() computes every
-// kept point's destination texel and prefetches its record. The caller evaluates afterwards.
+// What a sample point's evaluation reads, to prefetch (PointBatch::resolve).
 enum Reads : unsigned { kRecord = 1, kExact = 2, kMaps = 4 };
 
+// Up to kCapacity sample points of one view bin in two stages, so that their cache misses overlap:
+// add() keeps a point and prefetches its source texel's parallax code; resolve() computes every
+// kept point's destination texel and prefetches what it reads. The caller evaluates afterwards.
 template <uint32_t kCapacity>
 struct PointBatch {
   struct Point {

@@ -79,6 +79,8 @@ bool ControlVariateTexels::build(const EvalData& data) noexcept {
     x.mu = float(asg.mu);
     x.amplitude = float(asg.amplitude);
     const float* tangent = data.maps.tangent.data + 3 * t;
+    // The tangent as model::FibreSggx takes it (unit; +z where zero or not finite); the
+    // roughness is the yarn's (YarnShading::sggx), any value here.
     const model::FibreSggx<double> sggx =
         model::FibreSggx<double>::make(model::Vec3d(tangent[0], tangent[1], tangent[2]), 0.5);
     x.tangent[0] = float(sggx.t.x);

@@ -125,11 +125,12 @@ inline void prefetch_record(const EvalData& data, uint64_t t) noexcept {
   prefetch(record + stride - 1);
 }
 
-// Up to kCapacity sample points of one view bin in two stages, so that their cache misses overlap:
-// add() keeps a point and prefetches its source texel's parallax code; resolve() computes every
-// kept point's destination texel and prefetches its record. The caller evaluates afterwards.
+// What a sample point's evaluation reads, to prefetch (PointBatch::resolve).
 enum Reads : unsigned { kRecord = 1, kExact = 2, kMaps = 4 };
 
+// Up to kCapacity sample points of one view bin in two stages, so that their cache misses overlap:
+// add() keeps a point and prefetches its source texel's parallax code; resolve() computes every
+// kept point's destination texel and prefetches what it reads. The caller evaluates afterwards.
 template <uint32_t kCapacity>
 struct PointBatch {
   struct Point {

@@ -273,7 +273,6 @@ Candidate make_candidate(const std::string& spec) {
   const std::string name = spec.substr(0, spec.find(':'));
   if (name == "periods") {
     c.options.footprint_base = FootprintBase::WholePeriods;
-    c.options.max_remainder_fraction = 1e300;
     c.options.min_control_variate_side = 0.0;
   } else if (name == "shifted") {
     c.kind = 1;
@@ -281,11 +280,9 @@ Candidate make_candidate(const std::string& spec) {
     c.kind = 2;
   } else if (name == "samples") {
     c.options.footprint_base = FootprintBase::None;
-    c.options.max_remainder_fraction = 1e300;
     c.options.min_control_variate_side = 0.0;
   } else if (name == "blocks") {
     c.options.footprint_base = FootprintBase::Blocks;
-    c.options.max_remainder_fraction = 1e300;
     c.options.min_control_variate_side = 0.0;
   } else if (name != "shipped") {
     usage("unknown candidate " + name + " (" + kAllCandidates + ")");
