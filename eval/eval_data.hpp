@@ -103,6 +103,15 @@ struct EvalData {
     return options.visibility_samples > 0 &&
            visibility_pays[band < kVisibilityBands ? band : kVisibilityBands - 1];
   }
+  // Per band of min(|i_z|, |o_z|): whether g_V takes each texel's own specular attenuation rather
+  // than its yarn's (EvalOptions::attenuation_pilot; visibility_pilot.cpp's run_attenuation_pilot
+  // decides at open; the project's tests and studies may set it).
+  static constexpr int kAttenuationBands = 4;
+  bool attenuation_pays[kAttenuationBands] = {false, false, false, false};
+  bool texel_attenuation(double min_cos) const {
+    const int band = int(min_cos * kAttenuationBands);
+    return attenuation_pays[band < kAttenuationBands ? band : kAttenuationBands - 1];
+  }
   uint32_t visibility_rank() const {
     return basis.is_open() ? basis.rank() : 0;
   }

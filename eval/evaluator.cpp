@@ -360,6 +360,8 @@ Status Evaluator::open(const reader::Asset& asset, const EvalOptions& options) n
                              "cannot allocate the block sums' bookkeeping");
       break;
     }
+    // g_V's attenuation first: the visibility pilot then measures the g_V the estimates will use.
+    if (d->options.attenuation_pilot) run_attenuation_pilot(d.get());
     if (d->options.visibility_samples > 0 && d->options.visibility_pilot)
       run_visibility_pilot(d.get());
   }

@@ -140,6 +140,12 @@ struct EvalOptions {
   // per-estimate cost does not pay (docs/evaluator.md, "Footprints the control variate does not
   // pay for", gives the measured crossover). 0: no bound.
   double min_control_variate_side = 2.0;
+  // The specular attenuation of the control variate g_V in reflection (docs/evaluator.md, "The
+  // attenuation g_V takes"): true: per band of min(|i_z|, |o_z|), its yarn's (the yarn's fibre
+  // turned normal to h, as g's) or each texel's own (f's, Eq. 10 at the texel's tangent: a closer
+  // g_V that costs about a quarter more per estimate without a base), as a pilot at open measures
+  // pays; false: its yarn's everywhere. Either keeps the estimate unbiased.
+  bool attenuation_pilot = true;
   // The base region of the unbiased multi-scale form (eval/footprint_cover.hpp): Auto takes, per
   // footprint, whichever of whole periods and whole source blocks leaves the smaller remainder,
   // and no base above max_remainder_fraction; the others force one form (for studies:

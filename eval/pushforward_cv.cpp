@@ -38,7 +38,28 @@ struct PushforwardConstants : ActiveLobes {
   const double* image_at_h = nullptr;
   // g_V's: the light direction of the visibility look-ups and h (ShadingFrame's).
   model::Vec3d light, h;
+  // g_V with each texel's own attenuation (EvalOptions::own_attenuation_cos): wi, wo and
+  // T_sheen |i_z|, the factor of f's specular lobe besides the texel's albedo, gap, V and f_s.
+  bool own_attenuation = false;
+  model::Vec3d wi, wo, h_unit;
+  double iz = 0.0, oz = 0.0, inv_cosines = 0.0;  // |i_z|, |o_z|, 1 / (|i_z| |o_z|)
+  Rgb own_scale;
 };
+
+// f_s per unit albedo in reflection (Eq. 10 at the texel's tangent: spongecake_reflection's value
+// for unit wi, wo), with |i_z|, |o_z| and the unit half vector from k and, for unit t and w,
+// sigma(w) = sqrt(1 - (1 - sigma^2) (t.w)^2) and D(h) = d_norm / q^2.
+inline double own_specular(const PushforwardConstants& k, const YarnShading& yarn,
+                           const model::FibreSggx<double>& sggx) {
+  const double ci = dot(sggx.t, k.wi), co = dot(sggx.t, k.wo), ch = dot(sggx.t, k.h_unit);
+  const double si = std::sqrt(1.0 - sggx.one_minus_sigma2 * ci * ci);
+  const double so = std::sqrt(1.0 - sggx.one_minus_sigma2 * co * co);
+  const double q = sggx.sigma2 + sggx.one_minus_sigma2 * (ch * ch), denom = si * k.oz + so * k.iz;
+  // 1 - e^-tau (0 without a slab): g_V need not match f to the last bit (any g_V keeps the
+  // estimate unbiased), and exp is several times cheaper than expm1 here.
+  const double tau = std::max(yarn.optical_thickness, 0.0) * denom * k.inv_cosines;
+  return sggx.d_norm * (tau < 1e-4 ? tau : 1.0 - std::exp(-tau)) / (4.0 * q * q * denom);
+}
 
 // g_V at texel index t (< N^2), added to exact[]: g with the texel's own visibility V(t, i), its
 // own I(t) D_t(h) in place of the table value and its own specular albedo, from its one-line
@@ -53,8 +74,10 @@ void exact_variate(const EvalData& data, const PushforwardConstants& k, uint64_t
   if (k.specular) {
     model::FibreSggx<double> sggx = yarn.sggx;  // the yarn's roughness, the texel's tangent
     sggx.t = model::Vec3d(x.tangent[0], x.tangent[1], x.tangent[2]);
-    exact[int(k.specular_lobe)] += k.attenuation_scale[x.cluster] * yarn.specular_albedo * colour *
-                                   (gap * sggx.D(k.h) * visibility);
+    const double specular = k.own_attenuation ? own_specular(k, yarn, sggx) : sggx.D(k.h);
+    exact[int(k.specular_lobe)] +=
+        (k.own_attenuation ? k.own_scale : k.attenuation_scale[x.cluster]) * yarn.specular_albedo *
+        colour * (gap * specular * visibility);
   }
   if (k.diffuse) {
     const Rgb albedo = (k.diffuse_lobe == Lobe::DiffuseReflection ? yarn.diffuse_reflectance
@@ -513,6 +536,16 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
       k.attenuation_scale[c] = t_sheen * (g * cos_i);
     }
   }
+  // (In reflection |i_z|, |o_z| and h_z are positive.)
+  k.own_attenuation = k.specular && reflect &&
+                      data.texel_attenuation(std::min(std::abs(frame.wi.z), std::abs(frame.wo.z)));
+  k.wi = frame.wi;
+  k.wo = frame.wo;
+  k.iz = std::abs(frame.wi.z);
+  k.oz = std::abs(frame.wo.z);
+  k.inv_cosines = 1.0 / (k.iz * k.oz);
+  k.h_unit = frame.h / length(frame.h);
+  k.own_scale = t_sheen * cos_i;
   if (k.diffuse) k.diffuse_scale = t_sheen * (cos_i * model::kInvPi<double>);
   if (k.sheen) k.sheen_scale = any_texel.eval(frame.wi, frame.wo, 1.0).sheen * cos_i;
   if (k.delta) k.delta_scale = t_sheen;

@@ -172,14 +172,19 @@ struct DirectionGrid {
     v = std::clamp((b + 1) / 2, T(0), T(1));
   }
 
-  int bin_count() const { return n * n; }
   int bin_index(int i, int j) const { return j * n + i; }
-  // Solid angle of every bin, in steradians.
-  T bin_solid_angle() const { return 2 * kPi<T> * (T(1) - min_cos) / T(n * n); }
   Vec3<T> bin_center(int i, int j) const {
     return direction((T(i) + T(0.5)) / T(n), (T(j) + T(0.5)) / T(n));
   }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the bake's and the tools', not shading's
+  int bin_count() const {
+    return n * n;
+  }
+  // Solid angle of every bin, in steradians.
+  T bin_solid_angle() const {
+    return 2 * kPi<T> * (T(1) - min_cos) / T(n * n);
+  }
   // The bin that contains direction d (directions below the cap: the nearest rim bin).
   int bin_of(const Vec3<T>& d) const {
     T u, v;
@@ -188,6 +193,7 @@ struct DirectionGrid {
     int j = std::min(int(v * T(n)), n - 1);
     return bin_index(i, j);
   }
+#endif
 
   // Bilinear weights over the 4 bin centres nearest to d in the square; clamped at the border
   // (a direction outside the outermost bin centres takes the border bins' values).

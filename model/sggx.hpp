@@ -48,11 +48,13 @@ namespace clothbake::model {
 template <class T>
 inline constexpr T kMinFibreRoughness = T(1e-4);
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // reference and tests only
 // A symmetric 3x3 matrix (reference and tests only; the distribution never forms S^-1).
 template <class T>
 struct SymMat3 {
   T xx, yy, zz, xy, xz, yz;
 };
+#endif
 
 // One texel's fibre-like SGGX distribution with its constants precomputed (cheap to evaluate).
 template <class T>
@@ -83,8 +85,11 @@ struct FibreSggx {
     return d;
   }
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // reference and tests only
   // sqrt(det S) = sigma.
-  T sqrt_det() const { return sigma; }
+  T sqrt_det() const {
+    return sigma;
+  }
 
   // S itself, for reference and tests.
   SymMat3<T> matrix() const {
@@ -100,6 +105,7 @@ struct FibreSggx {
     return {T(1) + k * t.x * t.x, T(1) + k * t.y * t.y, T(1) + k * t.z * t.z,
             k * t.x * t.y,        k * t.x * t.z,        k * t.y * t.z};
   }
+#endif
 
   // D(m / |m|) for any non-zero m (per steradian, >= 0, at most 1 / (pi sigma)). Returns 0 for the
   // zero vector (the half vector of exactly opposite directions).
@@ -112,18 +118,19 @@ struct FibreSggx {
     return d_norm * ratio * ratio;
   }
 
-  // D(m) for a unit vector m: the form the batched loops use (model/sggx_batch.hpp).
-  T D_unit(const Vec3<T>& m) const {
-    const T c = dot(t, m);
-    const T q = sigma2 + one_minus_sigma2 * (c * c);
-    return d_norm / (q * q);
-  }
-
   // Projected area sigma(w) = sqrt(w^T S w), in [sigma |w|, |w|]; homogeneous of degree 1.
   T projected_area(const Vec3<T>& w) const {
     const T c = dot(t, w);
     const Vec3<T> x = cross(t, w);
     return std::sqrt(sigma2 * (c * c) + dot(x, x));
+  }
+
+#ifndef CLOTHBAKE_SINGLE_FILE  // the batched loops' and the tests', not shading's
+  // D(m) for a unit vector m: the form the batched loops use (model/sggx_batch.hpp).
+  T D_unit(const Vec3<T>& m) const {
+    const T c = dot(t, m);
+    const T q = sigma2 + one_minus_sigma2 * (c * c);
+    return d_norm / (q * q);
   }
 
   // Visible-normal density D_w(m) = <w, m>^+ D(m) / sigma(w) for unit w and m, per steradian of m.
@@ -134,9 +141,12 @@ struct FibreSggx {
     if (!(area > T(0))) return T(0);
     return wm * D(m) / area;
   }
+#endif
 
   // S^1/2 v = v + (sigma - 1) (t.v) t.
-  Vec3<T> apply_sqrt_s(const Vec3<T>& v) const { return v + t * ((sigma - T(1)) * dot(t, v)); }
+  Vec3<T> apply_sqrt_s(const Vec3<T>& v) const {
+    return v + t * ((sigma - T(1)) * dot(t, v));
+  }
 
   // Draws a unit normal m from D_w (unit w) with uniform numbers u1, u2 in [0, 1]; w.m >= 0.
   Vec3<T> sample_vndf(const Vec3<T>& w, T u1, T u2) const {

@@ -20,7 +20,8 @@
 //                base above EvalOptions::max_remainder_fraction, brute force below 2 texels)
 // A candidate's EvalOptions may follow its name, "name:key=value:...", keys visibility_samples,
 // visibility_pilot, remainder_sample_scale, block_sum_rank, min_control_variate_side,
-// max_remainder_fraction (e.g. shipped:max_remainder_fraction=0.35).
+// max_remainder_fraction, attenuation_pilot (0: g_V's yarn attenuation everywhere) and
+// texel_attenuation (1: the texel's own everywhere) (e.g. shipped:max_remainder_fraction=0.35).
 //
 // For each size: K footprints (sides size x N, aspect 1:2 .. 2:1), random positions; directions
 // random on the upper hemisphere with cos >= 0.2 (--order random), or K/16 rows of 16 abutting
@@ -237,6 +238,7 @@ struct Candidate {
   std::string name;
   int kind = 0;  // 0: an evaluator's Multiscale, 1: shifted, 2: shifted-bin
   EvalOptions options;
+  bool texel_attenuation = false;  // g_V's attenuation the texel's own in every band
 };
 
 const char* kAllCandidates = "periods,shifted,shifted-bin,samples,blocks,shipped";
@@ -263,6 +265,10 @@ void set_option(Candidate& c, const std::string& setting) {
     o.min_control_variate_side = value;
   else if (key == "max_remainder_fraction")
     o.max_remainder_fraction = value;
+  else if (key == "attenuation_pilot")
+    o.attenuation_pilot = value != 0.0;
+  else if (key == "texel_attenuation")  // set in every band after open (EvalData's decision)
+    c.texel_attenuation = value != 0.0;
   else
     usage("unknown candidate option " + key);
 }
@@ -395,8 +401,13 @@ int main(int argc, char** argv) {
     if (!(s = base.open(asset)).ok()) usage(path + ": " + s.message());
     std::vector<Evaluator> evaluators(candidates.size());
     for (size_t c = 0; c < candidates.size(); ++c)
-      if (candidates[c].kind == 0 && !(s = evaluators[c].open(asset, candidates[c].options)).ok())
-        usage(path + ": " + s.message());
+      if (candidates[c].kind == 0) {
+        if (!(s = evaluators[c].open(asset, candidates[c].options)).ok())
+          usage(path + ": " + s.message());
+        if (candidates[c].texel_attenuation)
+          for (bool& pays : const_cast<EvalData*>(evaluator_data(evaluators[c]))->attenuation_pays)
+            pays = true;
+      }
     const EvalData& data = *evaluator_data(base);
     const double n = data.n;
     const std::string name =
@@ -406,6 +417,15 @@ int main(int argc, char** argv) {
         "repeats\n",
         path.c_str(), n, data.cluster_count(), data.subperiod.blocks(),
         scanline ? "scanline" : "random", footprints, repeats);
+    // The pilots' decisions at open, per band (lowest first): the visibility correction, and g_V's
+    // attenuation (t: the texel's own, y: the yarn's).
+    std::printf("# pilots: correction ");
+    for (bool pays : data.visibility_pays)
+      std::printf("%c", pays ? '1' : '0');
+    std::printf(", attenuation ");
+    for (bool pays : data.attenuation_pays)
+      std::printf("%c", pays ? 't' : 'y');
+    std::printf("\n");
     std::printf(
         "| repeats a side | candidate | relMSE at 2 spp | us / estimate | speedup in time | in "
         "samples | brute force |\n");

@@ -39,11 +39,13 @@ struct ValidationSummary {
 // (each failure is a finding). `callback` may be null.
 ValidationSummary validate_asset(const Asset& asset, FindingCallback callback, void* user) noexcept;
 
+#ifndef CLOTHBAKE_SINGLE_FILE  // the tools' listing
 // Convenience: reports the open() failure of a file as a finding (for a uniform listing).
 inline ValidationSummary report_open_failure(const Status& status, FindingCallback callback,
                                              void* user) noexcept {
   if (callback) callback(user, status.check(), kNoSection, status.message());
   return ValidationSummary{1, 0};
 }
+#endif
 
 }  // namespace clothbake::reader

@@ -457,6 +457,103 @@ TEST(Multiscale, VisibilityPilotKeepsTheCorrectionWhereItPays) {
   EXPECT_GE(dropped, 2);
 }
 
+// g_V's attenuation pilot: per band of min(|i_z|, |o_z|), with more pairs and repeats than the
+// pilot's (96 x 16 against 24 x 8, the same footprint sizes, common random numbers), the summed
+// relative variance of forced Texel estimates times 1.25 against forced Yarn ones; where that ratio
+// is clear (below 0.6 or above 1.5) the pilot must have chosen the same. The plumbing: with a
+// band's decision set either way, the piloted evaluator's estimates are the forced evaluator's, bit
+// for bit, at a pair in the band.
+TEST(Multiscale, AttenuationPilotChoosesWhereItPays) {
+  reader::Asset asset;
+  ASSERT_TRUE(asset.open_file(assets().satin.c_str()).ok());
+  EvalOptions options;
+  options.tables = TableChoice::Compressed;
+  Evaluator piloted, yarn, texel;
+  ASSERT_TRUE(piloted.open(asset, options).ok());
+  options.attenuation_pilot = false;  // the yarn's everywhere
+  ASSERT_TRUE(yarn.open(asset, options).ok());
+  ASSERT_TRUE(texel.open(asset, options).ok());
+  for (bool& pays : const_cast<EvalData*>(evaluator_data(texel))->attenuation_pays)
+    pays = true;
+  const EvalData& pilot = *evaluator_data(piloted);
+  const EvalData* forced[2] = {evaluator_data(yarn), evaluator_data(texel)};
+  const uint32_t n = pilot.n;
+  Rng rng(78);
+  int clear = 0;
+  for (int band = 0; band < EvalData::kAttenuationBands; ++band) {
+    const double z0 = std::max(0.05, double(band) / EvalData::kAttenuationBands);
+    const double z1 = double(band + 1) / EvalData::kAttenuationBands;
+    double wi[3], wo[3], weighted[2] = {0.0, 0.0};
+    for (int e = 0; e < 96; ++e) {
+      const double za = z0 + (z1 - z0) * rng.uniform(), zb = z0 + (1.0 - z0) * rng.uniform();
+      const double pa = 6.283185307179586 * rng.uniform(), pb = 6.283185307179586 * rng.uniform();
+      const bool light_first = rng.uniform() < 0.5;
+      double* a = light_first ? wi : wo;
+      double* b = light_first ? wo : wi;
+      a[0] = std::sqrt(1 - za * za) * std::cos(pa), a[1] = std::sqrt(1 - za * za) * std::sin(pa);
+      a[2] = za;
+      b[0] = std::sqrt(1 - zb * zb) * std::cos(pb), b[1] = std::sqrt(1 - zb * zb) * std::sin(pb);
+      b[2] = zb;
+      const double side = n * (e % 3 == 0 ? 0.15 : e % 3 == 1 ? 0.3 : 0.5);
+      const double x = n * rng.uniform(), y = n * rng.uniform();
+      const Footprint p{x, y, x + side, y + side};
+      double sum[2] = {0.0, 0.0}, square[2] = {0.0, 0.0};
+      const Rng points = rng;
+      for (int own = 0; own < 2; ++own) {
+        ShadingFrame frame;
+        Status status;
+        ASSERT_TRUE(make_frame(*forced[own], wi, wo, kAllLobes, &frame, &status));
+        rng = points;
+        for (int r = 0; r < 16; ++r) {
+          Estimate estimate;
+          ASSERT_TRUE(eval::pushforward_control_variates(*forced[own], frame, p,
+                                                         eval::no_base_cover(p), 2, rng, &estimate)
+                          .ok());
+          double value = 0.0;
+          for (const Rgb& lobe : estimate.lobes)
+            value += lobe.mean();
+          sum[own] += value;
+          square[own] += value * value;
+        }
+      }
+      const double mean = (sum[0] + sum[1]) / 32.0;
+      if (!(mean > 0.0)) continue;
+      for (int own = 0; own < 2; ++own)
+        weighted[own] += (square[own] - sum[own] * sum[own] / 16.0) / (15.0 * mean * mean);
+    }
+    const double ratio = 1.25 * weighted[1] / weighted[0];
+    const bool chosen = pilot.attenuation_pays[band];
+    std::printf("min(|i_z|, |o_z|) band %d: measured ratio %.3f, pilot takes the %s's\n", band,
+                ratio, chosen ? "texel" : "yarn");
+    if (ratio < 0.6) {
+      EXPECT_TRUE(chosen) << band;
+      ++clear;
+    }
+    if (ratio > 1.5) {
+      EXPECT_FALSE(chosen) << band;
+      ++clear;
+    }
+    // The plumbing, at the band's last pair.
+    EvalData& decisions = const_cast<EvalData&>(pilot);
+    const Footprint small{5.5, 7.25, 17.5, 19.25};
+    for (const bool own : {false, true}) {
+      decisions.attenuation_pays[band] = own;
+      for (uint64_t seed = 1; seed <= 3; ++seed) {
+        Rng a(seed), b(seed);
+        Estimate with, expected;
+        ASSERT_TRUE(
+            piloted.estimate(small, wi, wo, Method::Multiscale, 2, a, kAllLobes, &with).ok());
+        ASSERT_TRUE((own ? texel : yarn)
+                        .estimate(small, wi, wo, Method::Multiscale, 2, b, kAllLobes, &expected)
+                        .ok());
+        EXPECT_EQ(with.value.g, expected.value.g) << band << " " << own;
+      }
+    }
+    decisions.attenuation_pays[band] = chosen;
+  }
+  EXPECT_GE(clear, 1);
+}
+
 // A remainder so thin that the sample count formula asks for one cheap sample (|B|/|P| = 1.5 % at
 // 1 spp) while both of B's rectangles have an area: each still gets one (with one in the column
 // only, the row's integral of g was dropped: a bias of about half the remainder's share).

@@ -14,7 +14,9 @@
 
 #include "eval/eval_data.hpp"
 #include "eval/footprint_cover.hpp"
+#include "eval/methods.hpp"
 #include "eval/texel_shading.hpp"
+#include "eval/visibility_pilot.hpp"
 #include "tests/eval/eval_fixtures.hpp"
 #include "tests/eval/eval_stats.hpp"
 
@@ -37,6 +39,12 @@ std::unique_ptr<Opened> open_with(const std::string& path, const EvalOptions& op
   s = o->evaluator.open(o->asset, options);
   EXPECT_TRUE(s.ok()) << s.message();
   return o;
+}
+
+// g_V's attenuation the texel's own in every band (the pilot's decision, set after open).
+void set_texel_attenuation(const Opened& o) {
+  for (bool& pays : const_cast<EvalData*>(evaluator_data(o.evaluator))->attenuation_pays)
+    pays = true;
 }
 
 EvalOptions forced(FootprintBase base, uint32_t rank = UINT32_MAX) {
@@ -203,12 +211,14 @@ TEST(Subperiod, BlockSumsAreTheMovedBlocks) {
 // reference, reflection and transmission, the twill and the satin. Slack 2e-5 relative: the block
 // sums are stored as float.
 void expect_unbiased_below_a_period(const std::string& asset, const EvalOptions& options,
-                                    uint64_t seed, const char* what) {
+                                    uint64_t seed, const char* what,
+                                    bool texel_attenuation = false) {
   const Footprint footprints[] = {{5.3, 7.7, 9.9, 13.1},
                                   {10.2, 3.4, 31.9, 20.0},
                                   {50.5, -6.3, 81.0, 33.3},
                                   {-20.6, 12.1, 29.5, 61.7}};
   auto o = open_with(asset, options);
+  if (texel_attenuation) set_texel_attenuation(*o);
   for (const Directions& dirs : kConfigurations)
     for (const Footprint& p : footprints) {
       const Stats st = repeat(o->evaluator, p, dirs.wi, dirs.wo, Method::Multiscale, 2, 4000, seed);
@@ -225,6 +235,10 @@ TEST(Subperiod, IsUnbiasedBelowAPeriod) {
                                    "blocks of rank 1");
     expect_unbiased_below_a_period(*asset, forced(FootprintBase::None), 43, "no base");
     expect_unbiased_below_a_period(*asset, shipped, 44, "the default cover");
+    expect_unbiased_below_a_period(*asset, forced(FootprintBase::None), 46,
+                                   "no base, the texel's attenuation", true);
+    expect_unbiased_below_a_period(*asset, shipped, 47,
+                                   "the default cover, the texel's attenuation", true);
   }
 }
 
@@ -356,6 +370,48 @@ TEST(Subperiod, WithoutABaseAnyControlVariateIsUnbiased) {
     std::printf("no base, g_V spoilt: variance %.1f times the shipped g_V's\n", ratio);
     EXPECT_GT(ratio, 4.0);
     EXPECT_EQ(again.mean.mean(), good.mean.mean());
+  }
+}
+
+// With each texel's own attenuation, g_V's specular reflection is f's (Eq. 10 at the texel's
+// tangent, the texel's visibility, albedo and gap) up to the float rounding of its record: the
+// residual f - g_V of the form without a base vanishes, at grazing pairs as at normal ones, where
+// the yarn's attenuation leaves a residual (measured: docs/evaluator.md, "The attenuation g_V
+// takes").
+TEST(Subperiod, TexelAttenuationMakesGVTheSpecularReflection) {
+  EvalOptions options = forced(FootprintBase::None);
+  options.attenuation_pilot = false;  // the yarn's
+  auto texel = open_with(assets().satin, options);
+  set_texel_attenuation(*texel);
+  auto yarn = open_with(assets().satin, options);
+  const Footprint p{10.2, 3.4, 31.9, 20.0};
+  const double pairs[][6] = {{0.3, 0.2, 0.9, -0.4, 0.1, 0.85},    // near the normal
+                             {0.95, 0.0, 0.15, -0.3, 0.93, 0.2},  // grazing light and view
+                             {-0.6, 0.7, 0.39, 0.98, 0.0, 0.2}};  // grazing view
+  for (const auto& pair : pairs) {
+    double variance[2], residual[2];
+    for (int own = 0; own < 2; ++own) {
+      const EvalData& d = *evaluator_data((own ? texel : yarn)->evaluator);
+      ShadingFrame frame;
+      Status status;
+      ASSERT_TRUE(make_frame(d, pair, pair + 3, lobe_bit(model::Lobe::SpecularReflection), &frame,
+                             &status));
+      Rng rng(9);
+      Estimate estimate;
+      ResidualMoments moments;
+      ASSERT_TRUE(
+          pushforward_control_variates(d, frame, p, no_base_cover(p), 256, rng, &estimate, &moments)
+              .ok());
+      variance[own] = moments.variance(ResidualMoments::kCorrectedResidual);  // f - g_V
+      residual[own] = moments.variance(ResidualMoments::kResidual);           // f - g
+    }
+    std::printf(
+        "o_z %.2f, i_z %.2f: var(f - g_V) / var(f - g) %.3g with the yarn's attenuation, "
+        "%.3g with the texel's\n",
+        pair[5], pair[2], variance[0] / residual[0], variance[1] / residual[1]);
+    EXPECT_GT(residual[1], 0.0);
+    EXPECT_LT(variance[1], 1e-9 * residual[1]);
+    EXPECT_GT(variance[0], 1e3 * variance[1]);
   }
 }
 
