@@ -28,11 +28,16 @@
 namespace clothbake::render {
 namespace {
 
-// The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges): on the
-// far satin sphere 8 x 8 point rays took half the time of 8 x 8 rays with footprints for a third
-// more 2-spp error (0.00137 against 0.00100), and 12 x 12 or 16 x 16 gained nothing in time at
-// equal error (within the runs' spread).
-constexpr uint64_t kEdgeStrata = 8;
+// The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges). An
+// edge pixel's error is mostly the texture's point-sample noise (a control variate for the
+// coverage alone, the centre's footprint estimate on rays that hit its object, changed nothing),
+// and with the interior's estimate now far below it, edges carried most of a scene's error: 12 x
+// 12 against 8 x 8 took the goose-eye cushion from 3.5x to 16.6x brute-path's speed at equal
+// error, the room from 15.6x to 17.2x, the chair 20.1x to 20.7x and the far satin sphere 27.5x to
+// 28.4x; 16 x 16 lost on the sphere (21.6x) and the chair (17.3x) (docs/performance.md, "Edge
+// pixels' strata"). Earlier, on the far satin sphere, 8 x 8 point rays took half the time of 8 x 8
+// rays with footprints for a third more 2-spp error.
+constexpr uint64_t kEdgeStrata = 12;
 // Its rays per spp beyond those: with 16, 32 or 64 the error-time curves of the satin sphere and
 // the room lay on one frontier from 4 to 256 spp; with spp rays (a side of sqrt(spp)) the edges
 // held the error at its 2-spp value up to 64 spp (docs/performance.md, "Scenes against the
@@ -394,7 +399,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     }
     if (interior.empty() || interior[pixel])
       return shade_ray(px + 0.5, py + 0.5, spp, false, pass_options.method, rng, pass == 0);
-    // An edge pixel: s x s stratified rays, s = max(8, ceil(sqrt(32 spp))): 32 point rays per
+    // An edge pixel: s x s stratified rays, s = max(12, ceil(sqrt(32 spp))): 32 point rays per
     // spp keep its error falling with spp as the interior's does (with sqrt(spp) a side it stayed
     // at its 8 x 8 error up to 64 spp; docs/performance.md). Its value jumps between
     // surfaces (or light and shadow) across the pixel, or its directions turn, so the centre's

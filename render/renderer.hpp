@@ -39,7 +39,7 @@ struct RenderOptions {
   bool path_traced = false;
   // Footprint methods: a pixel on a silhouette, a shadow edge or a turn of the view across cloth
   // (Renderer::interior_pixels() 0) is path traced, as `path_traced` renders every pixel, from
-  // s x s camera rays stratified over its area, s = max(8, ceil(sqrt(32 spp))), each evaluated at
+  // s x s camera rays stratified over its area, s = max(12, ceil(sqrt(32 spp))), each evaluated at
   // its hit's point with one brute-force sample (the reference method: exactly), instead of from
   // its centre's footprint, so that it converges to the pixel's area average as path tracing does
   // (docs/rendering.md, "Edge pixels"). The edge test is part of each render's time. false: every

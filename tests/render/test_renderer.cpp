@@ -270,7 +270,7 @@ TEST(Render, InteriorPixelsLeaveOutWhereTheViewTurnsOnCloth) {
 }
 
 // Edge pixels converge to what path tracing does: a twill sphere under a point light, its edge
-// pixels (silhouettes and the ring where the view turns) from multiscale at 2 spp (8 x 8
+// pixels (silhouettes and the ring where the view turns) from multiscale at 2 spp (12 x 12
 // stratified rays evaluated at points) against path-traced brute force at 64 spp, 8 seeds each.
 // Per edge pixel p the means A_p, B_p and the variances of those means v_p (from the seeds): with
 // equal expectations sum (A_p - B_p)^2 / sum (v_A,p + v_B,p) is near 1 (its numerator alone,
