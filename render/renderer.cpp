@@ -28,16 +28,19 @@
 namespace clothbake::render {
 namespace {
 
-// The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges). An
-// edge pixel's error is mostly the texture's point-sample noise (a control variate for the
-// coverage alone, the centre's footprint estimate on rays that hit its object, changed nothing),
-// and with the interior's estimate now far below it, edges carried most of a scene's error: 12 x
-// 12 against 8 x 8 took the goose-eye cushion from 3.5x to 16.6x brute-path's speed at equal
-// error, the room from 15.6x to 17.2x, the chair 20.1x to 20.7x and the far satin sphere 27.5x to
-// 28.4x; 16 x 16 lost on the sphere (21.6x) and the chair (17.3x) (docs/performance.md, "Edge
-// pixels' strata"). Earlier, on the far satin sphere, 8 x 8 point rays took half the time of 8 x 8
-// rays with footprints for a third more 2-spp error.
-constexpr uint64_t kEdgeStrata = 12;
+// The least strata a side of an edge pixel's path-traced rays (RenderOptions::jitter_edges), on a
+// boundary (a silhouette or a shadow edge: Renderer::pixel_kinds) and where only the view turns.
+// A boundary pixel's error is mostly the texture's point-sample noise on either side (a control
+// variate for the coverage alone, the centre's footprint estimate on the rays that hit its object,
+// changed nothing), and with the interior's estimate far below it the boundaries carried most of a
+// scene's error: 12 x 12 there took the goose-eye cushion from 3.5x to 16.6x brute-path's speed at
+// equal error, the room from 15.6x to 17.2x, the chair from 20.1x to 20.7x and the far satin
+// sphere from 27.5x to 28.4x; 16 x 16 lost on the sphere (21.6x) and the chair (17.3x), and 12 x
+// 12 on the view's turns too cost the far satin sphere two thirds more time for a fifth less
+// error (25.3-26.7x) (docs/performance.md, "Edge pixels' strata"). Earlier, on the far satin
+// sphere, 8 x 8 point rays took half the time of 8 x 8 rays with footprints for a third more
+// 2-spp error.
+constexpr uint64_t kBoundaryStrata = 12, kViewTurnStrata = 8;
 // Its rays per spp beyond those: with 16, 32 or 64 the error-time curves of the satin sphere and
 // the room lay on one frontier from 4 to 256 spp; with spp rays (a side of sqrt(spp)) the edges
 // held the error at its 2-spp value up to 64 spp (docs/performance.md, "Scenes against the
@@ -47,6 +50,8 @@ constexpr double kEdgeRaysPerSpp = 32;
 // largest (Renderer::interior_pixels): below it, the centre's directions misstate the pixel's
 // average (docs/rendering.md, "Edge pixels").
 constexpr double kInteriorCosineRatio = 0.7;
+// Renderer::pixel_kinds' codes.
+constexpr uint8_t kBoundaryPixel = 0, kInteriorPixel = 1, kViewTurnPixel = 2;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr eval::LobeMask kDeltaBit = eval::lobe_bit(model::Lobe::DeltaTransmission);
@@ -162,6 +167,13 @@ PixelFootprint Renderer::pixel_footprint(int px, int py) const {
 }
 
 std::vector<uint8_t> Renderer::interior_pixels() const {
+  std::vector<uint8_t> mask = pixel_kinds();
+  for (uint8_t& m : mask)
+    m = m == kInteriorPixel;
+  return mask;
+}
+
+std::vector<uint8_t> Renderer::pixel_kinds() const {
   const int w = impl_->camera.width(), h = impl_->camera.height();
   // What a point of the image sees: the object hit (-1: none) and, per point or directional light
   // (the first 64), whether it is shadowed there; at the (w + 1) x (h + 1) pixel corners each
@@ -210,7 +222,9 @@ std::vector<uint8_t> Renderer::interior_pixels() const {
       // Lambertian object is shaded at the centre's hit whatever the view).
       const bool cloth = c.object >= 0 && impl_->materials[std::size_t(c.object)].cloth;
       mask[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
-          interior && (!cloth || least >= kInteriorCosineRatio * most);
+          !interior
+              ? kBoundaryPixel
+              : (!cloth || least >= kInteriorCosineRatio * most ? kInteriorPixel : kViewTurnPixel);
     }
   });
   return mask;
@@ -382,7 +396,7 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
   // rays (RenderOptions::jitter_edges). Computed in every render: its time is the render's.
   const std::vector<uint8_t> interior =
       !pass_options.path_traced && pass_options.jitter_edges && !impl.planned
-          ? interior_pixels()
+          ? pixel_kinds()
           : std::vector<uint8_t>();
   // One pixel of pass `pass`: the pixel centre's footprint, or jittered rays each evaluated at its
   // hit's point (path tracing: spp rays; an edge pixel: s x s stratified rays).
@@ -397,9 +411,10 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
       }
       return sum / double(spp);
     }
-    if (interior.empty() || interior[pixel])
+    if (interior.empty() || interior[pixel] == kInteriorPixel)
       return shade_ray(px + 0.5, py + 0.5, spp, false, pass_options.method, rng, pass == 0);
-    // An edge pixel: s x s stratified rays, s = max(12, ceil(sqrt(32 spp))): 32 point rays per
+    // An edge pixel: s x s stratified rays, s = max(12 on a boundary, 8 on a view's turn,
+    // ceil(sqrt(32 spp))): 32 point rays per
     // spp keep its error falling with spp as the interior's does (with sqrt(spp) a side it stayed
     // at its 8 x 8 error up to 64 spp; docs/performance.md). Its value jumps between
     // surfaces (or light and shadow) across the pixel, or its directions turn, so the centre's
@@ -408,8 +423,9 @@ RenderResult Renderer::render(const RenderOptions& pass_options,
     // ray is evaluated at its point: a footprint per ray lowered the error a little at several
     // times the cost (docs/performance.md). 64-bit: s reaches 65 536 at the largest spp.
     if (pass == 0) edge_pixels.fetch_add(1, std::memory_order_relaxed);
-    const uint64_t s = std::max<uint64_t>(
-        kEdgeStrata, uint64_t(std::ceil(std::sqrt(kEdgeRaysPerSpp * double(spp)))));
+    const uint64_t s =
+        std::max<uint64_t>(interior[pixel] == kBoundaryPixel ? kBoundaryStrata : kViewTurnStrata,
+                           uint64_t(std::ceil(std::sqrt(kEdgeRaysPerSpp * double(spp)))));
     // Each stratum its own generator, so that what one ray's shading draws (which depends on the
     // scene: a black backdrop skips the gaps' lobe) does not move the next ray's samples.
     Rgb sum;

@@ -39,7 +39,8 @@ struct RenderOptions {
   bool path_traced = false;
   // Footprint methods: a pixel on a silhouette, a shadow edge or a turn of the view across cloth
   // (Renderer::interior_pixels() 0) is path traced, as `path_traced` renders every pixel, from
-  // s x s camera rays stratified over its area, s = max(12, ceil(sqrt(32 spp))), each evaluated at
+  // s x s camera rays stratified over its area, s = max(12 on a silhouette or shadow edge, 8 where
+  // only the view turns, ceil(sqrt(32 spp))), each evaluated at
   // its hit's point with one brute-force sample (the reference method: exactly), instead of from
   // its centre's footprint, so that it converges to the pixel's area average as path tracing does
   // (docs/rendering.md, "Edge pixels"). The edge test is part of each render's time. false: every
@@ -134,6 +135,11 @@ class Renderer {
   // pixels"; changes of the light's direction across a pixel are not tested). Traces (1 + lights)
   // rays per pixel and corner, in parallel (TBB); allocates the mask.
   std::vector<uint8_t> interior_pixels() const;
+  // The same test in three kinds of pixel: 1 interior; 0 a boundary (the centre and a corner see
+  // different objects or shadow states: a silhouette or a shadow edge); 2 a view's turn (one
+  // surface and shadow state, but the cosines differ beyond the ratio). The renderer takes more
+  // strata on a boundary (docs/rendering.md, "Edge pixels"). Traces and allocates as above.
+  std::vector<uint8_t> pixel_kinds() const;
 
   const Scene& scene() const { return scene_; }
 
