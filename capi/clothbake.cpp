@@ -8719,8 +8719,10 @@ Status pushforward_control_variates(const EvalData& data, const ShadingFrame& fr
   Rgb correction[model::kLobeCount];
   uint32_t corrections = 0;
   if (correct_visibility) {
-    corrections = uint32_t(
-        std::min<uint64_t>(uint64_t(data.options.visibility_samples) * spp, kMaxVisibilitySamples));
+    // Where g_V takes the texel's own attenuation, f - g_V vanishes and the correction carries all
+    // of f - g: twice the samples there (docs/evaluator.md, step 6).
+    const uint64_t kappa = uint64_t(data.options.visibility_samples) * (k.own_attenuation ? 2 : 1);
+    corrections = uint32_t(std::min<uint64_t>(kappa * spp, kMaxVisibilitySamples));
     visit_destinations(
         data, shift, p, corrections, rng,
         [&](uint64_t t, double, double) {

@@ -334,6 +334,16 @@ TEST(Multiscale, VisibilityCorrectionIsUnbiasedAndTightensGrazingLight) {
                             kAllLobes, &e)
                     .ok());
     EXPECT_EQ(e.counters.visibility_samples, settings[k] * 3);
+    // Where g_V takes the texel's own attenuation (the 64^2 satin's pilot takes it at the grazing
+    // light's band), twice the samples.
+    const bool texel = evaluator_data(ev)->texel_attenuation(grazing_wi[2]);
+    ASSERT_TRUE(
+        ev.estimate(footprints[0], grazing_wi, mirror_wo, Method::Multiscale, 3, rng, kAllLobes, &e)
+            .ok());
+    EXPECT_EQ(e.counters.visibility_samples, settings[k] * 3 * (texel ? 2 : 1));
+    if (k == 2) {
+      EXPECT_TRUE(texel);
+    }
   }
   const double grazing_ratio = (sd[0][0] * sd[0][0]) / (sd[2][0] * sd[2][0]);
   std::printf(
