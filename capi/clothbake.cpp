@@ -4657,7 +4657,7 @@ struct EvalOptions {
   // without a base, whose control variate g_V (each texel's own visibility, fibre distribution and
   // albedo) follows f more closely than any g with one but is integrated by cheap samples alone.
   // Any value keeps the estimate unbiased; docs/evaluator.md gives the measured choice.
-  double max_remainder_fraction = 0.75;
+  double max_remainder_fraction = 0.6;
   // Footprints whose geometric mean side (the square root of their area) is below this many
   // texels are sampled as brute force by the unbiased multi-scale form: over so few texels brute
   // force's stratified samples already see most of the integrand, and the control variate's
