@@ -420,15 +420,22 @@ TEST_P(ExampleScenePlan, IsWithinItsBudget) {
       // docs/scene-plans.md). Over this test's ~100 pixels the two relMSE estimates then scatter
       // by tens of per cent, so only a gross loss is an error here; the expected pictures are
       // compared above, within the budget. A coarser parallax precision may spend a sixteenth of
-      // the budget (reports::planned_parallax_error), which the planned render may add.
+      // the budget (reports::planned_parallax_error), which the planned render may add. With
+      // fewer visibility directions the planned asset is another model (every texel's ASG
+      // refitted): its picture differs from the full one by up to planned_vs_full (within the
+      // budget, above) whatever the noise, and once the full render's noise fell below that
+      // difference (the far satin sphere: full 0.00015 against the reference, planned against
+      // full 0.00098, planned 0.00124; docs/scene-plans.md) the difference is what separates them.
       bool fewer_visibility_directions = false;
       for (const auto& what : f["left_out"])
         fewer_visibility_directions |=
             what.get<std::string>().find("visibility light directions") != std::string::npos;
+      const double refitted =
+          fewer_visibility_directions ? f["relmse"]["planned_vs_full"].get<double>() : 0.0;
       EXPECT_LE(f["relmse"]["planned_vs_reference"].get<double>(),
                 f["relmse"]["full_vs_reference"].get<double>() *
                         (fewer_visibility_directions ? 3.0 : 1.1) +
-                    f["budget"].get<double>() / 16)
+                    refitted + f["budget"].get<double>() / 16)
           << name << ": " << f.dump();
       EXPECT_TRUE(f["relmse"].contains("full_vs_reference"));
       EXPECT_TRUE(f["relmse"].contains("planned_vs_reference"));
