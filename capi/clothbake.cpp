@@ -7115,7 +7115,7 @@ void run_visibility_pilot(EvalData* data) noexcept;
 // with each texel's own (docs/evaluator.md, "The attenuation g_V takes"). A band takes the texel's
 // own when the sum over its pairs of the estimates' sample variances relative to the squared pooled
 // mean, times 1.25 (its cost), is below the yarn's; the yarn's when fewer than a quarter of the
-// pairs had a positive mean or an estimate fails. Deterministic for an asset and its options; 10-20
+// pairs had a positive mean or an estimate fails. Deterministic for an asset and its options; 8-16
 // ms on the 256^2 example bakes; allocates only what the estimates allocate. Not thread safe.
 void run_attenuation_pilot(EvalData* data) noexcept;
 
@@ -8075,7 +8075,7 @@ struct PushforwardConstants : ActiveLobes {
   const double* image_at_h = nullptr;
   // g_V's: the light direction of the visibility look-ups and h (ShadingFrame's).
   model::Vec3d light, h;
-  // g_V with each texel's own attenuation (EvalOptions::own_attenuation_cos): wi, wo and
+  // g_V with each texel's own attenuation (EvalData::texel_attenuation): wi, wo and
   // T_sheen |i_z|, the factor of f's specular lobe besides the texel's albedo, gap, V and f_s.
   bool own_attenuation = false;
   model::Vec3d wi, wo, h_unit;
@@ -8092,9 +8092,11 @@ inline double own_specular(const PushforwardConstants& k, const YarnShading& yar
   const double si = std::sqrt(1.0 - sggx.one_minus_sigma2 * ci * ci);
   const double so = std::sqrt(1.0 - sggx.one_minus_sigma2 * co * co);
   const double q = sggx.sigma2 + sggx.one_minus_sigma2 * (ch * ch), denom = si * k.oz + so * k.iz;
-  // 1 - e^-tau (0 without a slab): g_V need not match f to the last bit (any g_V keeps the
-  // estimate unbiased), and exp is several times cheaper than expm1 here.
-  const double tau = std::max(yarn.optical_thickness, 0.0) * denom * k.inv_cosines;
+  // 1 - e^-tau (0 without a slab, as spongecake_reflection reads a thickness <= 0 or NaN): g_V need
+  // not match f to the last bit (any g_V keeps the estimate unbiased), and exp is several times
+  // cheaper than expm1 here.
+  const double thickness = yarn.optical_thickness > 0.0 ? yarn.optical_thickness : 0.0;
+  const double tau = thickness * denom * k.inv_cosines;
   return sggx.d_norm * (tau < 1e-4 ? tau : 1.0 - std::exp(-tau)) / (4.0 * q * q * denom);
 }
 

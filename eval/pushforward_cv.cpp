@@ -38,7 +38,7 @@ struct PushforwardConstants : ActiveLobes {
   const double* image_at_h = nullptr;
   // g_V's: the light direction of the visibility look-ups and h (ShadingFrame's).
   model::Vec3d light, h;
-  // g_V with each texel's own attenuation (EvalOptions::own_attenuation_cos): wi, wo and
+  // g_V with each texel's own attenuation (EvalData::texel_attenuation): wi, wo and
   // T_sheen |i_z|, the factor of f's specular lobe besides the texel's albedo, gap, V and f_s.
   bool own_attenuation = false;
   model::Vec3d wi, wo, h_unit;
@@ -55,9 +55,11 @@ inline double own_specular(const PushforwardConstants& k, const YarnShading& yar
   const double si = std::sqrt(1.0 - sggx.one_minus_sigma2 * ci * ci);
   const double so = std::sqrt(1.0 - sggx.one_minus_sigma2 * co * co);
   const double q = sggx.sigma2 + sggx.one_minus_sigma2 * (ch * ch), denom = si * k.oz + so * k.iz;
-  // 1 - e^-tau (0 without a slab): g_V need not match f to the last bit (any g_V keeps the
-  // estimate unbiased), and exp is several times cheaper than expm1 here.
-  const double tau = std::max(yarn.optical_thickness, 0.0) * denom * k.inv_cosines;
+  // 1 - e^-tau (0 without a slab, as spongecake_reflection reads a thickness <= 0 or NaN): g_V need
+  // not match f to the last bit (any g_V keeps the estimate unbiased), and exp is several times
+  // cheaper than expm1 here.
+  const double thickness = yarn.optical_thickness > 0.0 ? yarn.optical_thickness : 0.0;
+  const double tau = thickness * denom * k.inv_cosines;
   return sggx.d_norm * (tau < 1e-4 ? tau : 1.0 - std::exp(-tau)) / (4.0 * q * q * denom);
 }
 

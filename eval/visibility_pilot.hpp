@@ -45,7 +45,7 @@ void run_visibility_pilot(EvalData* data) noexcept;
 // with each texel's own (docs/evaluator.md, "The attenuation g_V takes"). A band takes the texel's
 // own when the sum over its pairs of the estimates' sample variances relative to the squared pooled
 // mean, times 1.25 (its cost), is below the yarn's; the yarn's when fewer than a quarter of the
-// pairs had a positive mean or an estimate fails. Deterministic for an asset and its options; 10-20
+// pairs had a positive mean or an estimate fails. Deterministic for an asset and its options; 8-16
 // ms on the 256^2 example bakes; allocates only what the estimates allocate. Not thread safe.
 void run_attenuation_pilot(EvalData* data) noexcept;
 
