@@ -37,7 +37,7 @@ namespace {
 // equal error, the room from 15.6x to 17.2x, the chair from 20.1x to 20.7x and the far satin
 // sphere from 27.5x to 28.4x; 16 x 16 lost on the sphere (21.6x) and the chair (17.3x), and 12 x
 // 12 on the view's turns too cost the far satin sphere two thirds more time for a fifth less
-// error (25.3-26.7x) (docs/performance.md, "Edge pixels' strata"). Earlier, on the far satin
+// error (25.3-26.7x) (docs/performance.md, "Edges' strata"). Earlier, on the far satin
 // sphere, 8 x 8 point rays took half the time of 8 x 8 rays with footprints for a third more
 // 2-spp error.
 constexpr uint64_t kBoundaryStrata = 12, kViewTurnStrata = 8;
